@@ -1,0 +1,1 @@
+"""Design of experiments and statistics for calibration; knows nothing of DEM."""

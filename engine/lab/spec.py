@@ -1,0 +1,61 @@
+"""Job specification for virtual laboratory runs: plain data, stored and replayable.
+
+A ``JobSpec`` is what the service queues, what ``demcal run SPEC`` reads and
+what designs vary (the design factors are field names of ``MicroParameters``).
+"""
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+TestName = Literal["fill", "cct", "dst", "aor", "anchor", "battery"]
+Fidelity = Literal["screening", "thesis"]
+
+
+class MicroParameters(BaseModel):
+    """DEM micro parameters, SI. Defaults: the thesis's calibrated set (Table 4.9)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    particle_density_kg_m3: float = Field(2500.0, gt=0)
+    particle_stiffness_n_per_m: float = Field(1.72e6, gt=0, description="kp, PFC-style per-entity normal stiffness")
+    wall_stiffness_n_per_m: float = Field(1.0e7, gt=0, description="kw, PFC-style per-entity normal stiffness")
+    shear_to_normal_stiffness_ratio: float = Field(1.0, gt=0)
+    friction_pp: float = Field(0.86, ge=0, description="inter-particle Coulomb friction coefficient")
+    friction_pw: float = Field(0.62, ge=0, description="particle-wall Coulomb friction coefficient")
+    damping_ratio: float = Field(0.8, ge=0, lt=1, description="critical viscous damping ratio")
+    local_damping: float = Field(0.0, ge=0, lt=1)
+    particle_radius_m: float | None = Field(
+        None, gt=0, description="screening fidelity only: mono-sized sphere radius (default 0.02 m)"
+    )
+    effects: dict[str, dict[str, Any]] = Field(
+        default_factory=dict,
+        description="optional contact effects by registered name, e.g. {'rolling_epsd2': {'rolling_friction': 0.1}}",
+    )
+
+
+class TestOptions(BaseModel):
+    """Per-test controls; unset values take the fidelity's defaults."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    dst_normal_stresses_pa: list[float] | None = None
+    cct_max_stress_pa: float | None = None
+    cct_cycles: int | None = Field(None, ge=1)
+    speed_factor: float = Field(1.0, gt=0, description="test speed / lab speed for CCT and DST")
+    max_inertial_number: float = Field(1e-2, gt=0)
+    include_aor: bool = False
+    include_anchor: bool = False
+    anchor_packing_height_m: float | None = None
+    anchor_pull_speed_m_s: float | None = None
+
+
+class JobSpec(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    test: TestName = "battery"
+    fidelity: Fidelity = "screening"
+    seed: int = Field(0, ge=0)
+    parameters: MicroParameters = Field(default_factory=MicroParameters)
+    options: TestOptions = Field(default_factory=TestOptions)

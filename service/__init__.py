@@ -1,0 +1,1 @@
+"""demcal's REST service, job queue, campaigns and CLI."""
