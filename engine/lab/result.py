@@ -84,3 +84,7 @@ class LabResult(BaseModel):
             ):
                 return prop.value
         raise KeyError(f"no property {test}/{quantity} with condition {condition}")
+
+
+class Cancelled(Exception):
+    """Raised by a running test when its ``should_cancel`` callback answers True."""
