@@ -1,0 +1,61 @@
+"""Bulk density, porosity and voids ratio of a levelled packing (thesis section 4.5).
+
+The thesis measures height from the highest sphere top, takes the bulk volume as A*H, nets
+the clump lens overlaps out of the solid volume and mass (Eqs. 4.9-4.10), then applies
+Eq. 4.2 (rho_b = m_b / V_b), Eq. 4.4 (e = rho_p / rho_b - 1) and Eq. 4.7 (n = e / (e + 1)).
+Porosity is returned as a fraction (SI), not in percent.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def lens_volume(radius_1_m: float, radius_2_m: float, centre_distance_m: float) -> float:
+    """Volume of the lens shared by two overlapping spheres (thesis Eq. 4.9).
+
+    Zero when the spheres do not overlap; the smaller sphere's volume when one contains the other.
+    """
+    r1, r2, d = float(radius_1_m), float(radius_2_m), float(centre_distance_m)
+    if d >= r1 + r2:
+        return 0.0
+    if d <= abs(r1 - r2):
+        r = min(r1, r2)
+        return 4.0 / 3.0 * np.pi * r**3
+    return (
+        np.pi / (12.0 * d) * (r1 + r2 - d) ** 2
+        * (d**2 + 2 * d * r2 - 3 * r2**2 + 2 * d * r1 + 6 * r2 * r1 - 3 * r1**2)
+    )
+
+
+@dataclass(frozen=True)
+class PackingState:
+    """What the fill reducer needs from a packing: solid volume net of lenses, height, area."""
+
+    solid_volume_m3: float
+    particle_density_kg_m3: float
+    packing_height_m: float
+    container_area_m2: float
+    particle_count: int
+
+
+def bulk_properties(state: PackingState) -> dict[str, float]:
+    """Thesis Eqs. 4.2, 4.4, 4.7 on one packing; keys are result.QUANTITIES['fill'] names."""
+    if state.packing_height_m <= 0 or state.container_area_m2 <= 0:
+        raise ValueError("packing height and container area must be positive")
+    bulk_volume_m3 = state.container_area_m2 * state.packing_height_m
+    bulk_mass_kg = state.solid_volume_m3 * state.particle_density_kg_m3
+    bulk_density = bulk_mass_kg / bulk_volume_m3
+    if bulk_density <= 0:
+        raise ValueError("empty packing: no solid volume below the packing height")
+    voids_ratio = state.particle_density_kg_m3 / bulk_density - 1.0
+    porosity = voids_ratio / (voids_ratio + 1.0)
+    return {
+        "bulk_density_kg_m3": bulk_density,
+        "porosity": porosity,
+        "voids_ratio": voids_ratio,
+        "packing_height_m": state.packing_height_m,
+        "bulk_mass_kg": bulk_mass_kg,
+        "particle_count": float(state.particle_count),
+    }
