@@ -1,0 +1,1 @@
+"""Alembic schema history for demcal (configured in code by ``service.migrate``)."""

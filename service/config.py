@@ -1,0 +1,65 @@
+"""One settings object for the service, read from ``DEMCAL_*`` environment variables.
+
+Why one object: the API, the workers (separate processes), the Dask dispatcher and
+the background thread must agree on the database URL, lease timings and limits; a
+worker process started by ``demcal serve`` inherits them through the environment.
+"""
+from __future__ import annotations
+
+import os
+from functools import lru_cache
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+DEFAULT_DATA_DIR = Path("demcal-data")
+
+
+def default_database_url() -> str:
+    """SQLite file under ``./demcal-data`` so ``demcal serve`` works on a fresh machine."""
+    return f"sqlite:///{(DEFAULT_DATA_DIR / 'demcal.db').as_posix()}"
+
+
+class Settings(BaseModel):
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+    database_url: str = Field(default_factory=default_database_url)
+    host: str = "127.0.0.1"
+    port: int = Field(8000, ge=0, le=65535)
+    workers: int | None = Field(None, ge=0, description="local worker processes; None = one per core")
+    token: str | None = Field(None, description="bearer token for write endpoints (required off loopback)")
+    lease_s: float = Field(30.0, gt=0, description="a claimed job is lost unless heartbeated within this")
+    heartbeat_s: float = Field(5.0, gt=0)
+    poll_interval_s: float = Field(0.5, gt=0, description="idle worker wait between claim attempts")
+    max_attempts: int = Field(3, ge=1, description="claims per job before a lost lease fails it")
+    tick_interval_s: float = Field(2.0, gt=0, description="campaign runner / scheduler period")
+    dask_scheduler: str | None = None
+    max_particles: int = Field(200_000, ge=1)
+    max_simulated_time_s: float = Field(3600.0, gt=0)
+    max_queued_jobs_per_client: int = Field(10_000, ge=1)
+    start_workers: bool = True
+    start_background: bool = True
+    seed_materials: bool = True
+
+
+ENV_PREFIX = "DEMCAL_"
+
+
+def settings_from_env(environ: dict[str, str] | None = None, **overrides) -> Settings:
+    """Build Settings from DEMCAL_<FIELD> variables, then explicit overrides (CLI flags)."""
+    env = os.environ if environ is None else environ
+    values: dict[str, object] = {}
+    for name in Settings.model_fields:
+        raw = env.get(ENV_PREFIX + name.upper())
+        if raw is not None and raw != "":
+            values[name] = raw
+    values.update({k: v for k, v in overrides.items() if v is not None})
+    return Settings(**values)
+
+
+@lru_cache(maxsize=1)
+def get_settings() -> Settings:
+    return settings_from_env()
+
+
+__all__ = ["Settings", "settings_from_env", "get_settings", "ValidationError", "default_database_url"]

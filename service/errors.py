@@ -1,0 +1,120 @@
+"""API errors that name the offending field, rendered like FastAPI's own 422 body.
+
+Every error, ours or FastAPI's validation error, has the shape
+``{"detail": [{"loc": [...], "msg": ..., "type": ...}]}`` so a client has one
+place to look for which field was wrong.
+"""
+from __future__ import annotations
+
+import logging
+
+from fastapi import FastAPI, Request
+from fastapi.encoders import jsonable_encoder
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from pydantic import ValidationError
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+log = logging.getLogger(__name__)
+
+
+class ApiError(Exception):
+    status_code = 400
+    error_type = "bad_request"
+
+    def __init__(self, status_code: int, message: str, field: str | list | None = None):
+        super().__init__(message)
+        self.status_code = status_code
+        self.message = message
+        self.field = field
+
+    def loc(self) -> list:
+        """``"parameters.friction_pp"`` -> ``["body", "parameters", "friction_pp"]``; lists pass through."""
+        if self.field is None:
+            return []
+        if isinstance(self.field, (list, tuple)):
+            return list(self.field)
+        parts = str(self.field).split(".")
+        return parts if parts[0] in ("body", "path", "query", "header") else ["body", *parts]
+
+    def detail(self) -> list[dict]:
+        return [{"loc": self.loc(), "msg": self.message, "type": self.error_type}]
+
+
+class NotFound(ApiError):
+    status_code = 404
+
+    def __init__(self, message: str, field: str | list | None = None):
+        super().__init__(404, message, field)
+    error_type = "not_found"
+
+
+class Conflict(ApiError):
+    status_code = 409
+
+    def __init__(self, message: str, field: str | list | None = None):
+        super().__init__(409, message, field)
+    error_type = "conflict"
+
+
+class Invalid(ApiError):
+    status_code = 422
+
+    def __init__(self, message: str, field: str | list | None = None):
+        super().__init__(422, message, field)
+    error_type = "value_error"
+
+
+class TooMany(ApiError):
+    status_code = 429
+
+    def __init__(self, message: str, field: str | list | None = None):
+        super().__init__(429, message, field)
+    error_type = "too_many"
+
+
+class Unauthorized(ApiError):
+    status_code = 401
+
+    def __init__(self, message: str, field: str | list | None = None):
+        super().__init__(401, message, field)
+    error_type = "unauthorized"
+
+
+def _validation_detail(exc: ValidationError, prefix: tuple = ("body",)) -> list[dict]:
+    return [
+        {"loc": [*prefix, *err.get("loc", ())], "msg": err.get("msg", ""), "type": err.get("type", "value_error")}
+        for err in exc.errors(include_url=False)
+    ]
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(ApiError)
+    async def _api_error(_request: Request, exc: ApiError):
+        headers = {"WWW-Authenticate": "Bearer"} if exc.status_code == 401 else None
+        return JSONResponse({"detail": exc.detail()}, status_code=exc.status_code, headers=headers)
+
+    @app.exception_handler(RequestValidationError)
+    async def _request_validation(_request: Request, exc: RequestValidationError):
+        detail = [
+            {"loc": list(err.get("loc", ())), "msg": err.get("msg", ""), "type": err.get("type", "value_error")}
+            for err in exc.errors()
+        ]
+        return JSONResponse({"detail": jsonable_encoder(detail)}, status_code=422)
+
+    @app.exception_handler(ValidationError)
+    async def _model_validation(_request: Request, exc: ValidationError):
+        # pydantic errors raised by service code (e.g. a stored template re-validated).
+        return JSONResponse({"detail": jsonable_encoder(_validation_detail(exc))}, status_code=422)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http_error(_request: Request, exc: StarletteHTTPException):
+        detail = exc.detail if isinstance(exc.detail, list) else [
+            {"loc": [], "msg": str(exc.detail), "type": "http_error"}]
+        return JSONResponse({"detail": detail}, status_code=exc.status_code, headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(Exception)
+    async def _unexpected(_request: Request, exc: Exception):
+        log.exception("unhandled error", exc_info=exc)
+        return JSONResponse({"detail": [{"loc": [], "msg": "internal server error", "type": "internal"}]},
+                            status_code=500)
