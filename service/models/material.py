@@ -6,18 +6,13 @@ target by its standard uncertainty, and that comes from the scatter of replicate
 from __future__ import annotations
 
 import math
-from datetime import datetime, timezone
+from datetime import datetime
 from typing import Any
 
 from sqlalchemy import JSON, Boolean, DateTime, Float, ForeignKey, Integer, String, Text
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
-from service.models.base import Base
-
-
-def utcnow() -> datetime:
-    """Naive UTC: SQLite drops tz info, so every S2 table stores naive UTC."""
-    return datetime.now(timezone.utc).replace(tzinfo=None)
+from service.models.base import Base, utcnow
 
 
 class Material(Base):
@@ -28,6 +23,8 @@ class Material(Base):
     description: Mapped[str] = mapped_column(Text, default="", nullable=False)
     source: Mapped[str] = mapped_column(Text, default="", nullable=False)
     bundled: Mapped[bool] = mapped_column(Boolean, default=False, nullable=False)
+    # Parameters measured directly (particle density, wall friction ...), usable as priors.
+    direct_estimates: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict, nullable=False)
     created_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, nullable=False)
     updated_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, onupdate=utcnow, nullable=False)
 

@@ -1,0 +1,85 @@
+"""Materials and measurements endpoints. Values go in with any accepted unit, come out SI."""
+from __future__ import annotations
+
+from fastapi import APIRouter, Depends, Response
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from service.db import get_session
+from service.errors import Conflict, NotFound
+from service.materials.schemas import MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
+from service.materials.store import add_measurement, create_material, find_by_name, get_material, list_materials, material_dict
+from service.materials.units import accepted_units
+from engine.lab.result import QUANTITIES
+from service.models.campaign import Campaign
+from service.models.material import Measurement
+
+router = APIRouter(prefix="/materials", tags=["materials"])
+
+
+def _material_or_404(session: Session, material_id: int):
+    material = get_material(session, material_id)
+    if material is None:
+        raise NotFound(f"material {material_id} not found", ["path", "material_id"])
+    return material
+
+
+@router.get("/quantities", summary="Canonical tests, quantities, SI units and accepted input units")
+def quantities() -> dict:
+    return {test: {q: {"si_unit": u, "accepted_units": accepted_units(u)} for q, u in qs.items()}
+            for test, qs in QUANTITIES.items()}
+
+
+@router.get("", response_model=list[MaterialOut], summary="List materials with their measurements")
+def list_all(session: Session = Depends(get_session)):
+    return [material_dict(m) for m in list_materials(session)]
+
+
+@router.post("", response_model=MaterialOut, status_code=201, summary="Create a material (optionally with measurements)")
+def create(body: MaterialIn, session: Session = Depends(get_session)):
+    if find_by_name(session, body.name) is not None:
+        raise Conflict(f"a material named {body.name!r} exists", "name")
+    material = create_material(session, body)
+    session.commit()
+    return material_dict(_material_or_404(session, material.id))
+
+
+@router.get("/{material_id}", response_model=MaterialOut)
+def show(material_id: int, session: Session = Depends(get_session)):
+    return material_dict(_material_or_404(session, material_id))
+
+
+@router.delete("/{material_id}", status_code=204, summary="Delete a material no campaign uses")
+def delete(material_id: int, session: Session = Depends(get_session)):
+    material = _material_or_404(session, material_id)
+    if session.scalar(select(Campaign.id).where(Campaign.material_id == material_id).limit(1)) is not None:
+        raise Conflict(f"material {material_id} is used by campaigns; it cannot be deleted", ["path", "material_id"])
+    session.delete(material)
+    session.commit()
+    return Response(status_code=204)
+
+
+@router.get("/{material_id}/measurements", response_model=list[MeasurementOut])
+def list_measurements(material_id: int, session: Session = Depends(get_session)):
+    return [m.as_dict() for m in _material_or_404(session, material_id).measurements]
+
+
+@router.post("/{material_id}/measurements", response_model=MeasurementOut, status_code=201,
+             summary="Add a measurement (replicates in any accepted unit; stored SI)")
+def add(material_id: int, body: MeasurementIn, session: Session = Depends(get_session)):
+    material = _material_or_404(session, material_id)
+    row = add_measurement(session, material, body)
+    session.commit()
+    return row.as_dict()
+
+
+@router.delete("/{material_id}/measurements/{measurement_id}", status_code=204)
+def delete_measurement(material_id: int, measurement_id: int, session: Session = Depends(get_session)):
+    _material_or_404(session, material_id)
+    row = session.get(Measurement, measurement_id)
+    if row is None or row.material_id != material_id:
+        raise NotFound(f"measurement {measurement_id} not found in material {material_id}",
+                       ["path", "measurement_id"])
+    session.delete(row)
+    session.commit()
+    return Response(status_code=204)

@@ -1,0 +1,51 @@
+"""Unit conversion at the API edge: users send kPa, MPa, deg, %, mm; we store SI.
+
+Each canonical quantity has one SI unit (``engine.lab.result.QUANTITIES``);
+a condition's SI unit is read from its name's suffix (``normal_stress_pa``).
+"""
+from __future__ import annotations
+
+import math
+
+# SI unit -> {accepted input unit: factor to SI}
+_FACTORS: dict[str, dict[str, float]] = {
+    "Pa": {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9},
+    "N/m": {"N/m": 1.0, "kN/m": 1e3, "MN/m": 1e6},
+    "N": {"N": 1.0, "kN": 1e3},
+    "kg/m3": {"kg/m3": 1.0, "g/cm3": 1e3, "t/m3": 1e3},
+    "kg": {"kg": 1.0, "g": 1e-3, "t": 1e3},
+    "m": {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
+    "m/s": {"m/s": 1.0, "mm/s": 1e-3},
+    "deg": {"deg": 1.0, "rad": 180.0 / math.pi},
+    "1": {"1": 1.0, "%": 1e-2},
+}
+_ALIASES = {"kg/m^3": "kg/m3", "kg/m³": "kg/m3", "°": "deg", "degree": "deg", "degrees": "deg",
+            "pct": "%", "percent": "%", "": "1", "-": "1"}
+
+# Condition names end with their SI unit; longest suffix first.
+_CONDITION_SUFFIXES = (("_m_s", "m/s"), ("_pa", "Pa"), ("_deg", "deg"), ("_kg", "kg"), ("_m", "m"),
+                       ("_n", "N"))
+
+
+class UnitError(ValueError):
+    pass
+
+
+def accepted_units(si_unit: str) -> list[str]:
+    return list(_FACTORS.get(si_unit, {si_unit: 1.0}))
+
+
+def to_si(value: float, unit: str, si_unit: str) -> float:
+    """Convert ``value`` given in ``unit`` to ``si_unit``; UnitError if they do not fit."""
+    unit = _ALIASES.get(unit, unit)
+    table = _FACTORS.get(si_unit, {si_unit: 1.0})
+    if unit not in table:
+        raise UnitError(f"unit {unit!r} cannot express {si_unit!r}; use one of {sorted(table)}")
+    return float(value) * table[unit]
+
+
+def condition_si_unit(name: str) -> str:
+    for suffix, unit in _CONDITION_SUFFIXES:
+        if name.endswith(suffix):
+            return unit
+    raise UnitError(f"condition {name!r} must end with its SI unit, e.g. normal_stress_pa, pull_speed_m_s")
