@@ -43,8 +43,24 @@ class TestOptions(BaseModel):
     dst_normal_stresses_pa: list[float] | None = None
     cct_max_stress_pa: float | None = None
     cct_cycles: int | None = Field(None, ge=1)
-    speed_factor: float = Field(1.0, gt=0, description="test speed / lab speed for CCT and DST")
+    speed_factor: float | None = Field(
+        None, gt=0,
+        description="test speed / lab speed for CCT and DST; unset: the fidelity's default (docs/lab.md)",
+    )
     max_inertial_number: float = Field(1e-2, gt=0)
+    inertial_number_action: Literal["warn", "refuse"] = Field(
+        "warn", description="above max_inertial_number: add a provenance warning, or raise (refuse the run)"
+    )
+    shear_distance_m: float | None = Field(None, gt=0, description="DST shear travel; unset: the fidelity's")
+    residual_window_strain: tuple[float, float] = Field(
+        (0.08, 0.10), description="DST shear-strain window for residual stresses and dilatancy"
+    )
+    moving_average_span: int = Field(21, ge=1, description="DST smoothing span, points (odd)")
+    aor_lift_speed_m_s: float | None = Field(None, gt=0)
+    aor_bucket_friction: float | None = Field(None, ge=0, description="particle-bucket friction (plastic 0.67)")
+    aor_floor_friction: float | None = Field(None, ge=0, description="particle-floor friction (plywood 0.86)")
+    anchor_friction: float | None = Field(None, ge=0, description="particle-anchor friction (bare steel 0.54)")
+    anchor_bin_width_m: float | None = Field(None, gt=0, description="square bin side; unset: the fidelity's")
     include_aor: bool = False
     include_anchor: bool = False
     anchor_packing_height_m: float | None = None
