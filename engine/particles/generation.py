@@ -353,3 +353,19 @@ def lattice(template: ClumpTemplate, region: Region, count: int | None = None, s
         quat /= np.linalg.norm(quat, axis=1, keepdims=True)
     return Packing(templates=[template], template_index=np.zeros(n, np.int64), positions_m=pts, orientations=quat,
                    meta={"region": region, "method": "lattice", "spacing_m": a})
+
+
+def generate(mix, region: Region, seed=None, count: int | None = None, solid_volume_m3: float | None = None,
+             **insert_options) -> Packing:
+    """Sample bodies from a ``distributions.ShapeMix`` and insert them at random in ``region``.
+
+    One Generator drives both the sizes/shapes and the placement, so ``seed``
+    alone reproduces the packing. ``meta['component_index']`` tells each body's shape component.
+    """
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    templates, component = mix.sample(rng, count=count, solid_volume_m3=solid_volume_m3)
+    if not templates:
+        raise ValueError("the shape mix produced no bodies (count 0?)")
+    packing = insert_random(templates, np.arange(len(templates)), region, seed=rng, **insert_options)
+    packing.meta["component_index"] = component
+    return packing
