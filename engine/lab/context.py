@@ -1,0 +1,116 @@
+"""What every procedure of one job shares: its spec and preset, callbacks, counters, warnings."""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+from engine.lab.presets import Fidelity, fidelity
+from engine.lab.result import Cancelled
+from engine.lab.spec import JobSpec
+
+
+class QuasiStaticError(ValueError):
+    """The test ran faster than the quasi-static limit and the spec asked to refuse such runs."""
+
+
+@dataclass
+class RunContext:
+    spec: JobSpec
+    preset: Fidelity
+    progress: Callable[[float, str], None] | None = None
+    should_cancel: Callable[[], bool] | None = None
+    steps: int = 0
+    particle_steps: int = 0
+    simulated_time_s: float = 0.0
+    max_inertial_number: float | None = None
+    warnings: list[str] = field(default_factory=list)
+    started: float = field(default_factory=time.perf_counter)
+    # progress of the whole job is split among phases: [lo, hi) of the current phase
+    _span: tuple[float, float] = (0.0, 1.0)
+    _last_progress: float = -1.0
+
+    @classmethod
+    def from_spec(cls, spec: JobSpec, progress=None, should_cancel=None) -> "RunContext":
+        return cls(spec, fidelity(spec.fidelity, spec.parameters.particle_radius_m), progress, should_cancel)
+
+    # ----------------------------------------------------------------- options with preset defaults
+    @property
+    def speed_factor(self) -> float:
+        o = self.spec.options.speed_factor
+        return float(o) if o is not None else self.preset.default_speed_factor
+
+    @property
+    def lid_speed_m_s(self) -> float:
+        return self.preset.lab_lid_speed_m_s * self.speed_factor
+
+    @property
+    def shear_speed_m_s(self) -> float:
+        return self.preset.lab_shear_speed_m_s * self.speed_factor
+
+    @property
+    def cct_max_stress_pa(self) -> float:
+        o = self.spec.options.cct_max_stress_pa
+        return float(o) if o is not None else self.preset.cct_max_stress_pa
+
+    @property
+    def cct_cycles(self) -> int:
+        o = self.spec.options.cct_cycles
+        return int(o) if o is not None else self.preset.cct_cycles
+
+    @property
+    def dst_normal_stresses_pa(self) -> list[float]:
+        o = self.spec.options.dst_normal_stresses_pa
+        stresses = list(o) if o else list(self.preset.dst_normal_stresses_pa)
+        if any(s <= 0 for s in stresses):
+            raise ValueError("options.dst_normal_stresses_pa: every normal stress must be positive")
+        return stresses
+
+    @property
+    def shear_distance_m(self) -> float:
+        o = self.spec.options.shear_distance_m
+        return float(o) if o is not None else self.preset.shear_distance_m
+
+    # ----------------------------------------------------------------- callbacks
+    def phase(self, lo: float, hi: float) -> None:
+        self._span = (lo, hi)
+
+    def report(self, fraction_of_phase: float, phase: str) -> None:
+        if self.should_cancel is not None and self.should_cancel():
+            raise Cancelled(f"cancelled during {phase}")
+        if self.progress is None:
+            return
+        lo, hi = self._span
+        f = lo + (hi - lo) * min(max(fraction_of_phase, 0.0), 1.0)
+        if f - self._last_progress >= 0.01 or f >= 1.0:
+            self._last_progress = f
+            self.progress(f, phase)
+
+    def count(self, steps: int, n_bodies: int, dt_s: float) -> None:
+        self.steps += steps
+        self.particle_steps += steps * n_bodies
+        self.simulated_time_s += steps * dt_s
+
+    def inertial_number(self, value: float, where: str) -> None:
+        """Record an inertial number; warn or refuse above the spec's limit (once per test)."""
+        if not math.isfinite(value):
+            return
+        if self.max_inertial_number is None or value > self.max_inertial_number:
+            self.max_inertial_number = value
+        limit = self.spec.options.max_inertial_number
+        if value > limit:
+            msg = (f"{where}: inertial number {value:.2e} exceeds the quasi-static limit {limit:.1e}; "
+                   f"lower options.speed_factor (now {self.speed_factor:g})")
+            if self.spec.options.inertial_number_action == "refuse":
+                raise QuasiStaticError(msg)
+            if not any(w.startswith(where + ":") for w in self.warnings):
+                self.warnings.append(msg)
+
+    def warn(self, message: str) -> None:
+        if message not in self.warnings:
+            self.warnings.append(message)
+
+    @property
+    def wall_time_s(self) -> float:
+        return time.perf_counter() - self.started
