@@ -18,7 +18,8 @@ from service.db import make_engine
 
 def alembic_config(database_url: str, connection=None) -> Config:
     config = Config()
-    config.set_main_option("script_location", str(Path(migrations.__file__).resolve().parent))
+    # __path__, not __file__: an editable install may expose migrations/ as a namespace package.
+    config.set_main_option("script_location", str(Path(next(iter(migrations.__path__))).resolve()))
     config.set_main_option("sqlalchemy.url", database_url.replace("%", "%%"))
     if connection is not None:
         config.attributes["connection"] = connection

@@ -1,0 +1,37 @@
+"""Liveness and readiness in one call: database reachable, schema revision, queue depth, executors."""
+from __future__ import annotations
+
+from fastapi import APIRouter, Depends, Request
+from fastapi.responses import JSONResponse
+from sqlalchemy import text
+from sqlalchemy.orm import Session
+
+from service import queue
+from service.db import get_session
+
+router = APIRouter(tags=["health"])
+
+
+def _version() -> str:
+    try:
+        from importlib.metadata import version
+
+        return version("demcal")
+    except Exception:
+        return "unknown"
+
+
+@router.get("/health", summary="Service health: database, schema, queue, workers")
+def health(request: Request, session: Session = Depends(get_session)):
+    body = {"status": "ok", "version": _version(), "executor": getattr(request.app.state, "executor", "none")}
+    pool = getattr(request.app.state, "worker_pool", None)
+    body["local_workers_alive"] = pool.alive() if pool is not None else 0
+    try:
+        session.execute(text("SELECT 1"))
+        body["database"] = "ok"
+        body["schema_revision"] = session.execute(text("SELECT version_num FROM alembic_version")).scalar()
+        body["jobs"] = queue.queue_counts(session)
+    except Exception as exc:  # report, do not raise: health must answer even when storage is down
+        body.update(status="error", database=f"unavailable: {type(exc).__name__}")
+        return JSONResponse(body, status_code=503)
+    return body

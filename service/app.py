@@ -1,0 +1,129 @@
+"""The FastAPI application: settings in, routers under /api/v1, executors and ticks in the lifespan.
+
+Start-up order matters: the schema is upgraded before anything touches it, the
+bundled material is seeded, then the executors (local worker processes or a Dask
+dispatcher) and the background ticker start; shutdown reverses it, handing
+running jobs back to the queue.
+"""
+from __future__ import annotations
+
+import importlib
+import logging
+import os
+import threading
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI
+
+from service.config import Settings, get_settings
+from service.db import make_engine, make_session_factory
+from service.errors import install_error_handlers
+from service.security import check_bind, install_token_guard
+
+log = logging.getLogger(__name__)
+API_PREFIX = "/api/v1"
+ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules")
+
+
+def _optional(module: str):
+    """Import a module another part provides; only its absence (not its bugs) is tolerated."""
+    try:
+        return importlib.import_module(module)
+    except ModuleNotFoundError as exc:
+        if exc.name and module.startswith(exc.name):
+            log.warning("%s is not available yet; skipped", module)
+            return None
+        raise
+
+
+def _seed(session_factory) -> None:
+    materials = _optional("service.materials")
+    if materials is None:
+        return
+    with session_factory() as session:
+        materials.seed_bundled_materials(session)
+
+
+def _start_executor(app: FastAPI, settings: Settings, session_factory) -> None:
+    app.state.executor, app.state.worker_pool, app.state.dispatcher = "none", None, None
+    if not settings.start_workers or settings.workers == 0:
+        return
+    if settings.dask_scheduler:
+        from service.workers.dask_executor import DaskDispatcher
+
+        dispatcher = DaskDispatcher(session_factory, settings, settings.dask_scheduler)
+        thread = threading.Thread(target=dispatcher.run, name="demcal-dask-dispatcher", daemon=True)
+        thread.start()
+        app.state.executor, app.state.dispatcher, app.state.dispatcher_thread = "dask", dispatcher, thread
+        return
+    from service.workers.process import LocalWorkerPool
+
+    pool = LocalWorkerPool(settings, settings.workers or os.cpu_count() or 1)
+    pool.start()
+    app.state.executor, app.state.worker_pool = "local", pool
+
+
+def _stop_executor(app: FastAPI) -> None:
+    if app.state.worker_pool is not None:
+        app.state.worker_pool.stop()
+    if app.state.dispatcher is not None:
+        app.state.dispatcher.stop.set()
+        app.state.dispatcher_thread.join(30)
+
+
+def _background(app: FastAPI, settings: Settings, session_factory):
+    from service.background import BackgroundTicker, default_ticks
+
+    ticks = []
+    try:
+        ticks = default_ticks(session_factory, settings)
+    except ModuleNotFoundError as exc:
+        log.warning("campaign runner / scheduler not available yet (%s); ticks skipped", exc.name)
+    if app.state.worker_pool is not None:
+        ticks.append(("worker-pool", app.state.worker_pool.supervise))
+    ticker = BackgroundTicker(settings.tick_interval_s, ticks)
+    ticker.start()
+    return ticker
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    settings = settings or get_settings()
+    check_bind(settings)
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        from service.migrate import upgrade
+
+        upgrade(settings.database_url)
+        if settings.seed_materials:
+            _seed(app.state.session_factory)
+        _start_executor(app, settings, app.state.session_factory)
+        ticker = _background(app, settings, app.state.session_factory) if settings.start_background else None
+        try:
+            yield
+        finally:
+            if ticker is not None:
+                ticker.stop()
+            _stop_executor(app)
+            app.state.engine.dispose()
+
+    app = FastAPI(
+        title="demcal", version="0.1.0", lifespan=lifespan,
+        description="Calibration service for DEM models of bulk materials: materials and measurements, "
+                    "queued DEM jobs, designs, calibration campaigns and schedules.",
+        openapi_url=f"{API_PREFIX}/openapi.json", docs_url=f"{API_PREFIX}/docs", redoc_url=None,
+    )
+    app.state.settings = settings
+    app.state.engine = make_engine(settings.database_url)
+    app.state.session_factory = make_session_factory(app.state.engine, settings)
+    app.state.executor, app.state.worker_pool, app.state.dispatcher = "none", None, None
+    install_error_handlers(app)
+    install_token_guard(app, settings)
+    for name in ROUTERS:
+        module = _optional(f"service.api.{name}")
+        if module is not None:
+            app.include_router(module.router, prefix=API_PREFIX)
+    web = _optional("service.web")
+    if web is not None:
+        web.mount(app)
+    return app

@@ -1,0 +1,124 @@
+"""``demcal``: serve the API, run workers, upgrade the database, and the other parts' commands."""
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import os
+import sys
+from pathlib import Path
+
+from pydantic import ValidationError
+
+from service.config import settings_from_env
+
+# (module, what it adds): each provides register(subparsers).
+PLUGINS = (
+    ("doe.cli", "demcal doe ..."),
+    ("engine.lab.cli", "demcal run SPEC"),
+    ("service.cli_campaigns", "demcal material/campaign/schedule ..."),
+)
+
+
+def database_url(value: str | None) -> str | None:
+    """``--db`` takes a SQLAlchemy URL or, for convenience, a SQLite file path."""
+    if value is None or "://" in value:
+        return value
+    return f"sqlite:///{Path(value).expanduser().resolve().as_posix()}"
+
+
+def _settings(args: argparse.Namespace, **extra):
+    try:
+        return settings_from_env(database_url=database_url(getattr(args, "db", None)), **extra)
+    except ValidationError as exc:
+        fields = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in exc.errors())
+        raise SystemExit(f"demcal: invalid setting ({fields})") from None
+
+
+def _logging() -> None:
+    logging.basicConfig(level=os.environ.get("DEMCAL_LOG_LEVEL", "INFO"),
+                        format="%(asctime)s %(process)d %(name)s %(levelname)s %(message)s")
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    from service.app import create_app
+
+    settings = _settings(args, host=args.host, port=args.port, workers=args.workers,
+                         dask_scheduler=args.dask_scheduler)
+    _logging()
+    app = create_app(settings)  # refuses a non-loopback host without a token
+    uvicorn.run(app, host=settings.host, port=settings.port, log_level=os.environ.get("DEMCAL_LOG_LEVEL", "info").lower())
+    return 0
+
+
+def cmd_worker(args: argparse.Namespace) -> int:
+    from service.workers.process import run_worker
+
+    settings = _settings(args, dask_scheduler=args.dask_scheduler)
+    _logging()
+    return run_worker(settings)
+
+
+def cmd_db_upgrade(args: argparse.Namespace) -> int:
+    from service.migrate import upgrade
+
+    settings = _settings(args)
+    try:
+        revision = upgrade(settings.database_url, args.revision)
+    except Exception as exc:  # unreachable server, unknown revision: say so, no traceback
+        print(f"demcal db upgrade: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 1
+    print(f"database {settings.database_url} is at revision {revision}")
+    return 0
+
+
+def _db_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--db", metavar="URL", help="SQLAlchemy URL or SQLite file "
+                        "(default: $DEMCAL_DATABASE_URL or ./demcal-data/demcal.db)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="demcal", description="demcal: calibration service for DEM models")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    serve = sub.add_parser("serve", help="run the API with local workers (or a Dask dispatcher)")
+    serve.add_argument("--host", help="bind address (default 127.0.0.1; others need DEMCAL_TOKEN)")
+    serve.add_argument("--port", type=int, help="port (default 8000)")
+    serve.add_argument("--workers", type=int, help="local worker processes (default: one per core; 0: none)")
+    serve.add_argument("--dask-scheduler", metavar="ADDRESS", help="run jobs on this Dask cluster, e.g. tcp://host:8786")
+    _db_option(serve)
+    serve.set_defaults(func=cmd_serve)
+
+    worker = sub.add_parser("worker", help="run one standalone worker against the same database")
+    worker.add_argument("--dask-scheduler", metavar="ADDRESS", help="dispatch claimed jobs to this Dask cluster")
+    _db_option(worker)
+    worker.set_defaults(func=cmd_worker)
+
+    db = sub.add_parser("db", help="database schema")
+    db_sub = db.add_subparsers(dest="db_command", required=True, metavar="ACTION")
+    up = db_sub.add_parser("upgrade", help="apply Alembic migrations")
+    up.add_argument("--revision", default="head", help="target revision (default head)")
+    _db_option(up)
+    up.set_defaults(func=cmd_db_upgrade)
+
+    for module_name, what in PLUGINS:
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name and module_name.startswith(exc.name):
+                print(f"demcal: {what} unavailable ({module_name} not installed)", file=sys.stderr)
+                continue
+            raise
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return int(args.func(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

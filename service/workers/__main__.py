@@ -1,0 +1,5 @@
+import sys
+
+from service.workers.process import main
+
+sys.exit(main())

@@ -1,0 +1,109 @@
+"""Worker processes: the standalone entry point and the pool ``demcal serve`` supervises.
+
+Workers are separate processes (not threads) because a DEM job holds a core for
+a long time and numba kernels hold the GIL; they share nothing with the API but
+the database URL and the ``DEMCAL_*`` settings passed through the environment.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import subprocess
+import sys
+import time
+
+from service.config import Settings, settings_from_env
+from service.db import make_engine, make_session_factory
+
+log = logging.getLogger(__name__)
+
+
+def settings_env(settings: Settings) -> dict[str, str]:
+    """The environment a child process needs to rebuild ``settings``."""
+    env = dict(os.environ)
+    for name, value in settings.model_dump().items():
+        key = "DEMCAL_" + name.upper()
+        if value is None:
+            env.pop(key, None)
+        else:
+            env[key] = str(value)
+    return env
+
+
+def run_worker(settings: Settings) -> int:
+    """Run one worker (or a Dask dispatcher) until SIGTERM/SIGINT; the current job is handed back."""
+    engine = make_engine(settings.database_url)
+    session_factory = make_session_factory(engine, settings)
+    if settings.dask_scheduler:
+        from service.workers.dask_executor import DaskDispatcher
+
+        runner = DaskDispatcher(session_factory, settings, settings.dask_scheduler)
+    else:
+        from service.workers.local import Worker
+
+        runner = Worker(session_factory, settings)
+
+    def _stop(_signum, _frame):
+        runner.stop.set()
+
+    signal.signal(signal.SIGTERM, _stop)
+    signal.signal(signal.SIGINT, _stop)
+    log.info("worker %s polling %s", getattr(runner, "worker_id", "?"), settings.database_url)
+    try:
+        runner.run()
+    finally:
+        engine.dispose()
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m service.workers", description="run one demcal worker")
+    parser.add_argument("--db", help="SQLAlchemy URL (default: DEMCAL_DATABASE_URL or ./demcal-data/demcal.db)")
+    parser.add_argument("--dask-scheduler", help="dispatch to this Dask scheduler instead of running locally")
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=os.environ.get("DEMCAL_LOG_LEVEL", "INFO"),
+                        format="%(asctime)s %(process)d %(name)s %(levelname)s %(message)s")
+    return run_worker(settings_from_env(database_url=args.db, dask_scheduler=args.dask_scheduler))
+
+
+class LocalWorkerPool:
+    """Starts ``count`` worker processes, restarts any that die, stops them on shutdown."""
+
+    def __init__(self, settings: Settings, count: int):
+        self.settings, self.count = settings, count
+        self.processes: list[subprocess.Popen] = []
+        self.stopping = False
+
+    def _spawn(self) -> subprocess.Popen:
+        return subprocess.Popen([sys.executable, "-m", "service.workers"], env=settings_env(self.settings))
+
+    def start(self) -> None:
+        self.processes = [self._spawn() for _ in range(self.count)]
+
+    def supervise(self) -> None:
+        if self.stopping:
+            return
+        for i, proc in enumerate(self.processes):
+            if proc.poll() is not None:
+                log.warning("worker pid %s exited with %s; starting a new one", proc.pid, proc.returncode)
+                self.processes[i] = self._spawn()
+
+    def alive(self) -> int:
+        return sum(proc.poll() is None for proc in self.processes)
+
+    def stop(self, timeout_s: float = 10.0) -> None:
+        self.stopping = True
+        for proc in self.processes:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGTERM)
+        deadline = time.monotonic() + timeout_s
+        for proc in self.processes:
+            try:
+                proc.wait(max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+        self.processes = []
