@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
 from engine.lab.result import QUANTITIES
 from service.errors import Invalid
@@ -42,12 +42,16 @@ class MeasurementIn(BaseModel):
             raise ValueError("values must be finite numbers")
         return values
 
-    @model_validator(mode="after")
-    def _check_quantity(self) -> "MeasurementIn":
-        names = QUANTITIES[self.test]
-        if self.quantity not in names:
-            raise ValueError(f"quantity {self.quantity!r} is not measured by {self.test!r}; one of {sorted(names)}")
-        return self
+    @field_validator("quantity")
+    @classmethod
+    def _check_quantity(cls, quantity: str, info: ValidationInfo) -> str:
+        test = info.data.get("test")
+        if test is None:  # the test itself was wrong; that error names it
+            return quantity
+        names = QUANTITIES[test]
+        if quantity not in names:
+            raise ValueError(f"quantity {quantity!r} is not measured by {test!r}; one of {sorted(names)}")
+        return quantity
 
     def to_si(self) -> dict[str, Any]:
         """SI fields for the ORM row; UnitError names the offending field in its args."""

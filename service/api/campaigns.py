@@ -1,0 +1,112 @@
+"""Campaign endpoints: create, start/pause/resume (409 when illegal), and every product of a run."""
+from __future__ import annotations
+
+from typing import Literal
+
+from fastapi import APIRouter, Depends, Header, Query
+from sqlalchemy.orm import Session
+
+from service.campaigns.schemas import CampaignCreate
+from service.campaigns.store import (campaign_summary, create_campaign, get_campaign, iteration, iteration_view,
+                                     list_campaigns, transition)
+from service.db import get_session
+from service.errors import Conflict
+
+router = APIRouter(prefix="/campaigns", tags=["campaigns"])
+
+Status = Literal["draft", "running", "paused", "completed", "failed"]
+
+
+@router.post("", status_code=201, summary="Create a campaign (draft) for a material")
+def create(body: CampaignCreate, session: Session = Depends(get_session),
+           x_client_id: str | None = Header(None)) -> dict:
+    return campaign_summary(create_campaign(session, body, client_id=x_client_id or "anonymous"))
+
+
+@router.get("", summary="List campaigns, newest first")
+def list_all(status: Status | None = Query(None), session: Session = Depends(get_session)) -> list[dict]:
+    return [campaign_summary(c) for c in list_campaigns(session, status)]
+
+
+@router.get("/{campaign_id}", summary="Status: state, iteration, phase, run counts")
+def status(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+    return campaign_summary(get_campaign(session, campaign_id))
+
+
+@router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)")
+def start(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+    return campaign_summary(transition(session, campaign_id, "start"))
+
+
+@router.post("/{campaign_id}/pause", summary="running -> paused (409 otherwise); queued batteries keep running")
+def pause(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+    return campaign_summary(transition(session, campaign_id, "pause"))
+
+
+@router.post("/{campaign_id}/resume", summary="paused -> running (409 otherwise)")
+def resume(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+    return campaign_summary(transition(session, campaign_id, "resume"))
+
+
+@router.get("/{campaign_id}/iterations", summary="All iterations with their parameters, design, runs and report")
+def iterations(campaign_id: int, session: Session = Depends(get_session)) -> list[dict]:
+    return [iteration_view(it) for it in get_campaign(session, campaign_id).iterations]
+
+
+def _product(session: Session, campaign_id: int, number: int | None, attr: str, label: str):
+    campaign = get_campaign(session, campaign_id)
+    it = iteration(session, campaign, number)
+    value = getattr(it, attr)
+    if value is None:
+        raise Conflict(f"campaign {campaign_id} iteration {it.number} has no {label} yet (phase {it.phase}, "
+                       f"status {campaign.status})", ["path", "campaign_id"])
+    return campaign, it, value
+
+
+IterationQ = Query(None, ge=1, description="iteration number; default the current one")
+
+
+@router.get("/{campaign_id}/iterations/{number}", summary="One iteration")
+def one_iteration(campaign_id: int, number: int, session: Session = Depends(get_session)) -> dict:
+    campaign = get_campaign(session, campaign_id)
+    if not any(it.number == number for it in campaign.iterations):
+        from service.errors import NotFound
+        raise NotFound(f"campaign {campaign_id} has no iteration {number}", ["path", "number"])
+    return iteration_view(iteration(session, campaign, number))
+
+
+@router.get("/{campaign_id}/design", summary="The iteration's design: table, aliases, resolution")
+def design(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    _, it, value = _product(session, campaign_id, number, "design", "design")
+    return {"iteration": it.number, **{k: v for k, v in value.items() if k != "doe"}}
+
+
+@router.get("/{campaign_id}/models", summary="Fitted model per target response, with ANOVA")
+def models(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    _, it, value = _product(session, campaign_id, number, "models", "fitted models")
+    return {"iteration": it.number, "models": value}
+
+
+@router.get("/{campaign_id}/optimum", summary="Optimised parameters, predictions with intervals, reachability")
+def optimum(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    _, it, value = _product(session, campaign_id, number, "optimum", "optimum")
+    return {"iteration": it.number, **value}
+
+
+@router.get("/{campaign_id}/confirmation", summary="Confirmation battery at the optimum")
+def confirmation(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    campaign = get_campaign(session, campaign_id)
+    it = iteration(session, campaign, number)
+    run = next((r for r in it.runs if r.kind == "confirmation"), None)
+    if run is None:
+        raise Conflict(f"campaign {campaign_id} iteration {it.number} has no confirmation run yet "
+                       f"(phase {it.phase})", ["path", "campaign_id"])
+    return {"iteration": it.number, "job_id": run.job_id, "status": run.status, "seed": run.seed,
+            "parameters": run.natural, "coded": run.coded, "responses": run.responses, "error": run.error}
+
+
+@router.get("/{campaign_id}/report", summary="Per target: measured, predicted (interval), confirmed, residual, reachability")
+def report(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    campaign, it, value = _product(session, campaign_id, number, "report", "report")
+    return {"campaign_id": campaign.id, "name": campaign.name, "material_id": campaign.material_id,
+            "iteration": it.number, "evaluator": campaign.evaluator, "fidelity": campaign.fidelity, **value}

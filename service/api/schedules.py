@@ -1,0 +1,54 @@
+"""Schedule endpoints: cron (UTC) + campaign template, with a preview of upcoming firings."""
+from __future__ import annotations
+
+from fastapi import APIRouter, Depends, Query, Response
+from sqlalchemy.orm import Session
+
+from service.db import get_session
+from service.errors import Invalid
+from service.schedules.cron import CronError, parse_cron
+from service.schedules.scheduler import naive_utc
+from service.schedules.store import (ScheduleIn, ScheduleUpdate, create_schedule, delete_schedule, firing_view,
+                                     get_schedule, list_schedules, schedule_view, update_schedule)
+
+router = APIRouter(prefix="/schedules", tags=["schedules"])
+
+
+@router.get("/cron-preview", summary="Check a cron expression and list its next firings (UTC)")
+def cron_preview(expr: str = Query(..., description="e.g. '0 2 * * *'"), count: int = Query(5, ge=1, le=50)) -> dict:
+    try:
+        cron = parse_cron(expr)
+    except CronError as exc:
+        raise Invalid(str(exc), ["query", "expr"]) from exc
+    return {"expr": expr, "next": [t.isoformat() + "Z" for t in cron.upcoming(naive_utc(None), count)]}
+
+
+@router.post("", status_code=201, summary="Create a schedule")
+def create(body: ScheduleIn, session: Session = Depends(get_session)) -> dict:
+    return schedule_view(create_schedule(session, body))
+
+
+@router.get("", summary="List schedules")
+def list_all(session: Session = Depends(get_session)) -> list[dict]:
+    return [schedule_view(s, firings=3) for s in list_schedules(session)]
+
+
+@router.get("/{schedule_id}")
+def show(schedule_id: int, session: Session = Depends(get_session)) -> dict:
+    return schedule_view(get_schedule(session, schedule_id))
+
+
+@router.patch("/{schedule_id}", summary="Change cron, enable/disable, policy")
+def patch(schedule_id: int, body: ScheduleUpdate, session: Session = Depends(get_session)) -> dict:
+    return schedule_view(update_schedule(session, schedule_id, body))
+
+
+@router.delete("/{schedule_id}", status_code=204)
+def delete(schedule_id: int, session: Session = Depends(get_session)):
+    delete_schedule(session, schedule_id)
+    return Response(status_code=204)
+
+
+@router.get("/{schedule_id}/firings", summary="Every due time handled: campaign started or why skipped")
+def firings(schedule_id: int, session: Session = Depends(get_session)) -> list[dict]:
+    return [firing_view(f) for f in get_schedule(session, schedule_id).firings]

@@ -1,0 +1,231 @@
+"""Drives running campaigns one step at a time from the database alone.
+
+``CampaignRunner(session_factory, settings).tick()`` is called every second or so by
+the service's background thread. Each call reads where every running campaign
+is, does the next step(s) and commits after each one, so a restart (or a crash
+between two steps) resumes where the database says: nothing lives in memory.
+Job submission uses an idempotency key per run, so a step repeated after a
+crash finds the job it already queued instead of queuing a twin.
+
+Phases of an iteration: design -> batteries -> analysis -> confirmation -> report -> done.
+Paused campaigns are skipped; their queued batteries keep running in the queue
+and are picked up on resume.
+"""
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from sqlalchemy import select, update
+from sqlalchemy.orm import Session
+
+from engine.lab.spec import JobSpec, MicroParameters, TestOptions
+from service.campaigns import analysis
+from service.campaigns.design import build_design, design_view
+from service.campaigns.report import build_report
+from service.campaigns.responses import responses_of
+from service.campaigns.schemas import CampaignCreate
+from service.errors import ApiError, TooMany
+from service.models.base import utcnow
+from service.models.campaign import Campaign, CampaignIteration, CampaignRun
+from service.models.job import Job
+
+log = logging.getLogger(__name__)
+
+MAX_STEPS_PER_TICK = 8
+_SEED_MAX = 2**31 - 1
+
+
+class CampaignFailed(Exception):
+    """A step cannot succeed (a battery failed, no target can be modelled): the campaign fails."""
+
+
+class CampaignRunner:
+    def __init__(self, session_factory, settings=None):
+        self.session_factory = session_factory
+        self.settings = settings
+
+    def tick(self) -> int:
+        """Advance every running campaign; returns how many steps were taken."""
+        with self.session_factory() as session:
+            ids = list(session.scalars(select(Campaign.id).where(Campaign.status == "running").order_by(Campaign.id)))
+        steps = 0
+        for campaign_id in ids:
+            try:
+                steps += self.advance(campaign_id)
+            except CampaignFailed as exc:
+                self._fail(campaign_id, str(exc))
+            except Exception as exc:  # a bug must not stop the other campaigns
+                log.exception("campaign %s: step failed", campaign_id)
+                self._fail(campaign_id, f"internal error: {type(exc).__name__}: {exc}")
+        return steps
+
+    def advance(self, campaign_id: int) -> int:
+        steps = 0
+        for _ in range(MAX_STEPS_PER_TICK):
+            with self.session_factory() as session:  # fresh session: every step sees the database as it is
+                campaign = session.get(Campaign, campaign_id)
+                if campaign is None or campaign.status != "running":
+                    break
+                if not self._step(session, campaign):
+                    break
+            steps += 1
+        return steps
+
+    # -- one step --------------------------------------------------------------------------
+    def _step(self, session: Session, campaign: Campaign) -> bool:
+        """Do the next thing for this campaign; False when it must wait (for jobs)."""
+        config = CampaignCreate.model_validate(campaign.config)
+        it = next((i for i in campaign.iterations if i.number == campaign.current_iteration), None)
+        if it is None:
+            self._new_iteration(session, campaign, config)
+            return True
+        if it.phase == "design":
+            return self._design(session, campaign, config, it)
+        if it.phase == "batteries":
+            return self._batteries(session, campaign, config, it, kind="design", next_phase="analysis")
+        if it.phase == "analysis":
+            return self._analysis(session, campaign, config, it)
+        if it.phase == "confirmation":
+            return self._batteries(session, campaign, config, it, kind="confirmation", next_phase="report")
+        if it.phase == "report":
+            return self._report(session, campaign, config, it)
+        return False
+
+    def _new_iteration(self, session: Session, campaign: Campaign, config: CampaignCreate) -> None:
+        number = campaign.current_iteration + 1
+        fixed = dict(config.fixed_parameters)
+        session.add(CampaignIteration(
+            campaign_id=campaign.id, number=number, phase="design",
+            parameters={"factors": [f.model_dump() for f in config.factors],
+                        "fixed": {k: v for k, v in fixed.items() if k != "effects"},
+                        "effects": fixed.get("effects", {}), "options": dict(config.options),
+                        "evaluator": config.evaluator, "fidelity": config.fidelity},
+        ))
+        campaign.current_iteration = number
+        session.commit()
+
+    def _set_phase(self, session: Session, it: CampaignIteration, old: str, new: str, **values: Any) -> bool:
+        """Conditional phase change: a second runner that raced us loses and rolls back."""
+        won = session.execute(update(CampaignIteration).where(
+            CampaignIteration.id == it.id, CampaignIteration.phase == old).values(phase=new, **values)
+            .execution_options(synchronize_session=False)).rowcount
+        if not won:
+            session.rollback()
+            return False
+        session.commit()
+        session.refresh(it)
+        return True
+
+    def _design(self, session, campaign, config, it) -> bool:
+        seed = (config.seed + 7919 * (it.number - 1)) % _SEED_MAX
+        design = build_design(config.factors, config.design, seed)
+        view = design_view(design)
+        for row in view["runs"]:
+            session.add(CampaignRun(
+                iteration_id=it.id, kind="design", std_order=row["std_order"], run_order=row["run_order"],
+                is_centre=row["point_type"] == "center", coded=row["coded"], natural=row["natural"],
+                seed=row["seed"], status="pending"))
+        return self._set_phase(session, it, "design", "batteries", design=view)
+
+    # -- batteries ---------------------------------------------------------------------------
+    def _spec(self, config: CampaignCreate, run: CampaignRun) -> JobSpec:
+        parameters = MicroParameters.model_validate({**config.fixed_parameters, **run.natural})
+        return JobSpec(test="battery", fidelity=config.fidelity, seed=run.seed, parameters=parameters,
+                       options=TestOptions.model_validate(config.options))
+
+    def _submit(self, session, campaign, config, run) -> bool:
+        from service.queue import submit_job
+
+        try:
+            job = submit_job(session, self._spec(config, run), evaluator=config.evaluator,
+                             priority=config.priority, idempotency_key=f"campaign:{campaign.id}:run:{run.id}",
+                             client_id=campaign.client_id, campaign_id=campaign.id)
+        except TooMany:
+            session.rollback()
+            return False  # the client's queue is full: try again next tick
+        except ApiError as exc:
+            session.rollback()
+            raise CampaignFailed(f"run {run.std_order} ({run.kind}) cannot be queued: {exc.message}") from exc
+        run.job_id = job.id
+        run.status = "queued"
+        session.commit()
+        return True
+
+    def _batteries(self, session, campaign, config, it, *, kind: str, next_phase: str) -> bool:
+        runs = [r for r in it.runs if r.kind == kind]
+        progressed = False
+        for run in runs:
+            if run.job_id is None:
+                if not self._submit(session, campaign, config, run):
+                    return progressed
+                progressed = True
+        pending = [r for r in runs if r.status not in ("succeeded",)]
+        if pending:
+            jobs = {j.id: j for j in session.scalars(
+                select(Job).where(Job.id.in_([r.job_id for r in pending])).execution_options(populate_existing=True))}
+            for run in pending:
+                job = jobs.get(run.job_id)
+                if job is None:
+                    raise CampaignFailed(f"job {run.job_id} of run {run.std_order} ({kind}) vanished from the queue")
+                if job.status == "succeeded":
+                    run.responses = responses_of(job.result or {})
+                    run.status = "succeeded"
+                    progressed = True
+                elif job.status in ("failed", "cancelled"):
+                    run.status = job.status
+                    run.error = job.error
+                    session.commit()
+                    raise CampaignFailed(f"{kind} run {run.std_order} (job {job.id}) {job.status}: {job.error}")
+                elif run.status != job.status:
+                    run.status = job.status
+            session.commit()
+        if all(r.status == "succeeded" for r in runs):
+            return self._set_phase(session, it, it.phase, next_phase)
+        return False
+
+    # -- analysis and report -----------------------------------------------------------------
+    def _targets(self, session, campaign, config):
+        from service.materials.store import get_material
+        from service.campaigns.responses import select_targets
+
+        material = get_material(session, campaign.material_id)
+        wanted = [t.model_dump() for t in config.targets] if config.targets is not None else None
+        return select_targets(material.measurements if material else [], wanted)
+
+    def _analysis(self, session, campaign, config, it) -> bool:
+        runs = [r for r in it.runs if r.kind == "design"]
+        targets = self._targets(session, campaign, config)
+        result = analysis.analyse(config, it.design["doe"], runs, targets)
+        opt = result["optimum"]
+        taken = {r.seed for r in it.runs}
+        seed = (config.seed + 1_000_003 * it.number) % _SEED_MAX
+        while seed in taken:
+            seed = (seed + 1) % _SEED_MAX
+        session.add(CampaignRun(iteration_id=it.id, kind="confirmation", std_order=0, run_order=0,
+                                is_centre=False, coded=opt["coded"], natural=opt["parameters"],
+                                seed=seed, status="pending"))
+        return self._set_phase(session, it, "analysis", "confirmation", models=result["models"], optimum=opt)
+
+    def _report(self, session, campaign, config, it) -> bool:
+        targets = self._targets(session, campaign, config)
+        confirmation = next(r for r in it.runs if r.kind == "confirmation")
+        design_runs = [r for r in it.runs if r.kind == "design"]
+        report = build_report(config, it.models, it.optimum, confirmation, design_runs, targets)
+        now = utcnow()
+        if not self._set_phase(session, it, "report", "done", report=report,
+                               confirmation={"job_id": confirmation.job_id, "seed": confirmation.seed,
+                                             "parameters": confirmation.natural,
+                                             "responses": confirmation.responses},
+                               finished_at=now):
+            return False
+        campaign.status = "completed"
+        campaign.finished_at = now
+        session.commit()
+        return True
+
+    def _fail(self, campaign_id: int, message: str) -> None:
+        with self.session_factory() as session:
+            session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == "running")
+                            .values(status="failed", error=message[:20000], finished_at=utcnow()))
+            session.commit()

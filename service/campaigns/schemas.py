@@ -1,0 +1,142 @@
+"""Campaign configuration as users send it; validated once, stored as JSON, re-read by the runner."""
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+
+from engine.lab.result import QUANTITIES
+from engine.lab.spec import MicroParameters, TestOptions
+
+# Design factors must be scalar MicroParameters fields (the lab varies those).
+FACTOR_NAMES = tuple(
+    name for name, info in MicroParameters.model_fields.items() if name not in ("effects",)
+)
+
+
+class FactorIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    name: str
+    low: float
+    high: float
+    unit: str = ""
+    log: bool = False
+
+    @model_validator(mode="after")
+    def _levels(self) -> "FactorIn":
+        if not self.low < self.high:
+            raise ValueError(f"low ({self.low:g}) must be below high ({self.high:g})")
+        if self.log and self.low <= 0:
+            raise ValueError("a log-scale factor needs positive levels")
+        return self
+
+
+class DesignIn(BaseModel):
+    """Two-level design: full factorial or a fraction from explicit generators, plus centre runs."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    type: Literal["full", "fractional"] = "full"
+    generators: list[str] | None = Field(
+        None, description="fractional only, e.g. ['D=ABC'] for the thesis's 2^(4-1) design (Table A.8)"
+    )
+    centre_runs: int = Field(3, ge=0, le=50, description="centre replicates, each with its own seed")
+    replicates: int = Field(1, ge=1, le=10)
+    randomise: bool = True
+
+    @model_validator(mode="after")
+    def _generators(self) -> "DesignIn":
+        if self.type == "fractional" and not self.generators:
+            raise ValueError("a fractional design needs generators, e.g. ['D=ABC']")
+        if self.type == "full" and self.generators:
+            raise ValueError("generators apply to fractional designs only")
+        return self
+
+
+class DesignPreviewIn(DesignIn):
+    """A design preview is DEM-agnostic: any factor names."""
+
+    factors: list[FactorIn] = Field(..., min_length=1, max_length=15)
+    seed: int = Field(0, ge=0)
+
+
+class TargetIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    test: str
+    quantity: str
+    condition: dict[str, float] = Field(default_factory=dict)
+
+    @field_validator("test")
+    @classmethod
+    def _known_test(cls, test: str) -> str:
+        if test not in QUANTITIES:
+            raise ValueError(f"unknown test {test!r}; one of {sorted(QUANTITIES)}")
+        return test
+
+    @field_validator("quantity")
+    @classmethod
+    def _known_quantity(cls, quantity: str, info: ValidationInfo) -> str:
+        test = info.data.get("test")
+        if test is not None and quantity not in QUANTITIES[test]:
+            raise ValueError(f"{test!r} has no quantity {quantity!r}; one of {sorted(QUANTITIES[test])}")
+        return quantity
+
+
+class CampaignCreate(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(..., min_length=1, max_length=200)
+    material_id: int = Field(..., ge=1)
+    evaluator: Literal["analytic", "dem"] = "analytic"
+    fidelity: Literal["screening", "thesis"] = "screening"
+    factors: list[FactorIn] = Field(..., min_length=1, max_length=8)
+    design: DesignIn = Field(default_factory=DesignIn)
+    targets: list[TargetIn] | None = Field(
+        None, description="measurements to calibrate against; default every measurement the battery simulates"
+    )
+    fixed_parameters: dict[str, Any] = Field(
+        default_factory=dict, description="MicroParameters held fixed (and contact effects) for every run"
+    )
+    options: dict[str, Any] = Field(default_factory=dict, description="TestOptions of every battery")
+    default_relative_uncertainty: float = Field(
+        0.05, gt=0, le=1,
+        description="standard uncertainty assumed, relative to the mean, for a target published without replicates",
+    )
+    allow_extrapolation: bool = False
+    seed: int = Field(0, ge=0, le=2**31 - 1_000_000)
+    priority: int = 0
+
+    @field_validator("factors")
+    @classmethod
+    def _factor_names(cls, factors: list[FactorIn]) -> list[FactorIn]:
+        names = [f.name for f in factors]
+        for name in names:
+            if name not in FACTOR_NAMES:
+                raise ValueError(f"factor {name!r} is not a micro parameter; one of {list(FACTOR_NAMES)}")
+        if len(set(names)) != len(names):
+            raise ValueError("factor names repeat")
+        return factors
+
+    @field_validator("fixed_parameters")
+    @classmethod
+    def _fixed(cls, fixed: dict[str, Any]) -> dict[str, Any]:
+        MicroParameters.model_validate(fixed)  # raises with the field named
+        return fixed
+
+    @field_validator("options")
+    @classmethod
+    def _options(cls, options: dict[str, Any]) -> dict[str, Any]:
+        TestOptions.model_validate(options)
+        return options
+
+    @model_validator(mode="after")
+    def _no_overlap(self) -> "CampaignCreate":
+        overlap = {f.name for f in self.factors} & set(self.fixed_parameters)
+        if overlap:
+            raise ValueError(f"{sorted(overlap)} are both factors and fixed parameters")
+        for factor in self.factors:  # each corner must be a valid micro parameter set
+            for level in (factor.low, factor.high):
+                MicroParameters.model_validate({**self.fixed_parameters, factor.name: level})
+        return self

@@ -1,0 +1,114 @@
+"""Campaign service layer: creation, legal state changes, and JSON views for the API.
+
+State machine (status): draft -start-> running -pause-> paused -resume-> running
+-> completed | failed. Anything else is a 409. Inside 'running', the current
+iteration's ``phase`` says what the runner does next (see ``runner``).
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from service.campaigns.schemas import CampaignCreate
+from service.errors import Conflict, NotFound
+from service.materials.store import get_material
+from service.models.base import utcnow
+from service.models.campaign import Campaign, CampaignIteration
+
+TRANSITIONS = {"start": ({"draft"}, "running"), "pause": ({"running"}, "paused"), "resume": ({"paused"}, "running")}
+
+
+def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = "anonymous",
+                    schedule_id: int | None = None) -> Campaign:
+    if get_material(session, body.material_id) is None:
+        raise NotFound(f"material {body.material_id} not found", "material_id")
+    campaign = Campaign(name=body.name, material_id=body.material_id, status="draft", evaluator=body.evaluator,
+                        fidelity=body.fidelity, config=body.model_dump(mode="json"), current_iteration=0,
+                        schedule_id=schedule_id, client_id=client_id)
+    session.add(campaign)
+    session.commit()
+    return campaign
+
+
+def get_campaign(session: Session, campaign_id: int) -> Campaign:
+    campaign = session.get(Campaign, campaign_id, populate_existing=True)
+    if campaign is None:
+        raise NotFound(f"campaign {campaign_id} not found", ["path", "campaign_id"])
+    return campaign
+
+
+def list_campaigns(session: Session, status: str | None = None) -> list[Campaign]:
+    stmt = select(Campaign).order_by(Campaign.id.desc())
+    if status:
+        stmt = stmt.where(Campaign.status == status)
+    return list(session.scalars(stmt))
+
+
+def transition(session: Session, campaign_id: int, action: str) -> Campaign:
+    """Apply start/pause/resume with a conditional UPDATE, so racing clients get one winner."""
+    allowed, target = TRANSITIONS[action]
+    campaign = get_campaign(session, campaign_id)
+    if campaign.status not in allowed:
+        raise Conflict(f"cannot {action} campaign {campaign_id}: it is {campaign.status} "
+                       f"(allowed from {', '.join(sorted(allowed))})", ["path", "campaign_id"])
+    values: dict[str, Any] = {"status": target, "updated_at": utcnow()}
+    if action == "start":
+        values["started_at"] = utcnow()
+    from sqlalchemy import update
+    won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == campaign.status)
+                          .values(**values).execution_options(synchronize_session=False)).rowcount
+    session.commit()
+    if not won:
+        raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])
+    return get_campaign(session, campaign_id)
+
+
+def iteration(session: Session, campaign: Campaign, number: int | None = None) -> CampaignIteration:
+    number = number or campaign.current_iteration
+    for it in campaign.iterations:
+        if it.number == number:
+            return it
+    raise NotFound(f"campaign {campaign.id} has no iteration {number or 1} yet", ["path", "campaign_id"])
+
+
+def campaign_summary(campaign: Campaign) -> dict[str, Any]:
+    current = next((it for it in campaign.iterations if it.number == campaign.current_iteration), None)
+    runs = current.runs if current else []
+    done = sum(1 for r in runs if r.status == "succeeded")
+    return {
+        "id": campaign.id, "name": campaign.name, "material_id": campaign.material_id, "status": campaign.status,
+        "evaluator": campaign.evaluator, "fidelity": campaign.fidelity,
+        "current_iteration": campaign.current_iteration, "phase": current.phase if current else None,
+        "runs_total": len(runs), "runs_succeeded": done,
+        "runs_failed": sum(1 for r in runs if r.status in ("failed", "cancelled")),
+        "error": campaign.error, "schedule_id": campaign.schedule_id,
+        "created_at": _iso(campaign.created_at), "started_at": _iso(campaign.started_at),
+        "finished_at": _iso(campaign.finished_at), "config": campaign.config,
+    }
+
+
+def run_view(run) -> dict[str, Any]:
+    return {"id": run.id, "kind": run.kind, "std_order": run.std_order, "run_order": run.run_order,
+            "is_centre": run.is_centre, "coded": run.coded, "natural": run.natural, "seed": run.seed,
+            "job_id": run.job_id, "status": run.status, "responses": run.responses, "error": run.error}
+
+
+def iteration_view(it: CampaignIteration, *, with_runs: bool = True) -> dict[str, Any]:
+    out = {"number": it.number, "phase": it.phase, "parameters": it.parameters,
+           "design": _design_summary(it.design), "created_at": _iso(it.created_at),
+           "finished_at": _iso(it.finished_at), "report": it.report}
+    if with_runs:
+        out["runs"] = [run_view(r) for r in it.runs]
+    return out
+
+
+def _design_summary(design: dict | None) -> dict | None:
+    if design is None:
+        return None
+    return {k: v for k, v in design.items() if k != "doe"}
+
+
+def _iso(value) -> str | None:
+    return value.isoformat() + "Z" if value is not None else None

@@ -1,0 +1,106 @@
+"""Schedules service layer: validation of cron and template, create/update/delete, views."""
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from service.campaigns.schemas import CampaignCreate
+from service.errors import Invalid, NotFound
+from service.materials.store import get_material
+from service.models.schedule import Schedule, ScheduleFiring
+from service.schedules.cron import CronError, parse_cron
+from service.schedules.scheduler import naive_utc
+
+
+class ScheduleIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(..., min_length=1, max_length=200)
+    cron: str = Field(..., description="5 fields, UTC: minute hour day-of-month month day-of-week; or @daily ...")
+    template: CampaignCreate = Field(..., description="the campaign each firing creates and starts")
+    only_if_new_measurements: bool = Field(False, description="fire only when the material has new measurements")
+    enabled: bool = True
+    missed_run_policy: Literal["coalesce", "skip"] = "coalesce"
+
+
+class ScheduleUpdate(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    cron: str | None = None
+    enabled: bool | None = None
+    only_if_new_measurements: bool | None = None
+    missed_run_policy: Literal["coalesce", "skip"] | None = None
+
+
+def _cron(expression: str):
+    try:
+        return parse_cron(expression)
+    except CronError as exc:
+        raise Invalid(str(exc), "cron") from exc
+
+
+def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = None) -> Schedule:
+    cron = _cron(body.cron)
+    if get_material(session, body.template.material_id) is None:
+        raise NotFound(f"material {body.template.material_id} not found", "template.material_id")
+    schedule = Schedule(name=body.name, cron=body.cron, template=body.template.model_dump(mode="json"),
+                        only_if_new_measurements=body.only_if_new_measurements, enabled=body.enabled,
+                        missed_run_policy=body.missed_run_policy, next_run_at=cron.next_after(naive_utc(now)))
+    session.add(schedule)
+    session.commit()
+    return schedule
+
+
+def get_schedule(session: Session, schedule_id: int) -> Schedule:
+    schedule = session.get(Schedule, schedule_id, populate_existing=True)
+    if schedule is None:
+        raise NotFound(f"schedule {schedule_id} not found", ["path", "schedule_id"])
+    return schedule
+
+
+def list_schedules(session: Session) -> list[Schedule]:
+    return list(session.scalars(select(Schedule).order_by(Schedule.id)))
+
+
+def update_schedule(session: Session, schedule_id: int, body: ScheduleUpdate, now: datetime | None = None) -> Schedule:
+    schedule = get_schedule(session, schedule_id)
+    if body.cron is not None:
+        schedule.next_run_at = _cron(body.cron).next_after(naive_utc(now))
+        schedule.cron = body.cron
+    if body.enabled is not None:
+        if body.enabled and not schedule.enabled:  # re-enabled: no catch-up for the disabled period
+            schedule.next_run_at = _cron(schedule.cron).next_after(naive_utc(now))
+        schedule.enabled = body.enabled
+    if body.only_if_new_measurements is not None:
+        schedule.only_if_new_measurements = body.only_if_new_measurements
+    if body.missed_run_policy is not None:
+        schedule.missed_run_policy = body.missed_run_policy
+    session.commit()
+    return schedule
+
+
+def delete_schedule(session: Session, schedule_id: int) -> None:
+    session.delete(get_schedule(session, schedule_id))
+    session.commit()
+
+
+def firing_view(f: ScheduleFiring) -> dict[str, Any]:
+    return {"id": f.id, "due_at": _iso(f.due_at), "fired_at": _iso(f.fired_at), "missed_count": f.missed_count,
+            "campaign_id": f.campaign_id, "skipped_reason": f.skipped_reason}
+
+
+def schedule_view(s: Schedule, firings: int = 10) -> dict[str, Any]:
+    return {"id": s.id, "name": s.name, "cron": s.cron, "enabled": s.enabled,
+            "only_if_new_measurements": s.only_if_new_measurements, "missed_run_policy": s.missed_run_policy,
+            "next_run_at": _iso(s.next_run_at), "last_run_at": _iso(s.last_run_at),
+            "last_campaign_id": s.last_campaign_id, "template": s.template,
+            "material_id": (s.template or {}).get("material_id"),
+            "recent_firings": [firing_view(f) for f in s.firings[-firings:]] if firings else []}
+
+
+def _iso(value) -> str | None:
+    return value.isoformat() + "Z" if value is not None else None
