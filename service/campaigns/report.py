@@ -16,7 +16,7 @@ from service.campaigns.responses import find_response
 REACHABLE_LIMIT = 3.0
 
 
-def build_report(config, models: dict, optimum: dict, confirmation, design_runs, targets) -> dict[str, Any]:
+def build_report(config, models: dict, optimum: dict, confirmation, targets, next_step: dict | None) -> dict[str, Any]:
     confirmed_responses = confirmation.responses or {}
     by_target = {t["measurement_id"]: t for t in optimum.get("targets", [])}
     rows = []
@@ -77,5 +77,5 @@ def build_report(config, models: dict, optimum: dict, confirmation, design_runs,
         "confirmation_outside_interval": [r["response"] for r in outside],
         "max_abs_standardised_residual": max((abs(r["standardised_residual"]) for r in calibrated
                                               if r["standardised_residual"] is not None), default=None),
-        "next_step": optimum.get("next_step"),
+        "next_step": next_step,
     }

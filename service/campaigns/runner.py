@@ -196,7 +196,10 @@ class CampaignRunner:
     def _analysis(self, session, campaign, config, it) -> bool:
         runs = [r for r in it.runs if r.kind == "design"]
         targets = self._targets(session, campaign, config)
-        result = analysis.analyse(config, it.design["doe"], runs, targets)
+        try:
+            result = analysis.analyse(config, it.design["doe"], runs, targets)
+        except analysis.AnalysisError as exc:
+            raise CampaignFailed(f"iteration {it.number}: {exc}") from exc
         opt = result["optimum"]
         taken = {r.seed for r in it.runs}
         seed = (config.seed + 1_000_003 * it.number) % _SEED_MAX
@@ -211,7 +214,9 @@ class CampaignRunner:
         targets = self._targets(session, campaign, config)
         confirmation = next(r for r in it.runs if r.kind == "confirmation")
         design_runs = [r for r in it.runs if r.kind == "design"]
-        report = build_report(config, it.models, it.optimum, confirmation, design_runs, targets)
+        observed = {name: resp["value"] for name, resp in (confirmation.responses or {}).items()}
+        next_step = analysis.confirmation_check(config, it.design["doe"], design_runs, targets, it.optimum, observed)
+        report = build_report(config, it.models, it.optimum, confirmation, targets, next_step)
         now = utcnow()
         if not self._set_phase(session, it, "report", "done", report=report,
                                confirmation={"job_id": confirmation.job_id, "seed": confirmation.seed,

@@ -5,6 +5,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
+from doe.constraints import parse_constraint
+from doe.factors import DoeError
 from engine.lab.result import QUANTITIES
 from engine.lab.spec import MicroParameters, TestOptions
 
@@ -84,6 +86,15 @@ class TargetIn(BaseModel):
         return quantity
 
 
+class PriorIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    parameter: str
+    value: float
+    uncertainty: float = Field(..., gt=0)
+    source: str = ""
+
+
 class CampaignCreate(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
@@ -103,6 +114,12 @@ class CampaignCreate(BaseModel):
     default_relative_uncertainty: float = Field(
         0.05, gt=0, le=1,
         description="standard uncertainty assumed, relative to the mean, for a target published without replicates",
+    )
+    constraints: list[str] = Field(
+        default_factory=list, description="linear constraints on factors, e.g. 'friction_pw <= friction_pp'"
+    )
+    priors: list[PriorIn] = Field(
+        default_factory=list, description="directly measured factors (e.g. particle density) with uncertainty"
     )
     allow_extrapolation: bool = False
     seed: int = Field(0, ge=0, le=2**31 - 1_000_000)
@@ -136,6 +153,18 @@ class CampaignCreate(BaseModel):
         overlap = {f.name for f in self.factors} & set(self.fixed_parameters)
         if overlap:
             raise ValueError(f"{sorted(overlap)} are both factors and fixed parameters")
+        names = {f.name for f in self.factors}
+        for index, text in enumerate(self.constraints):
+            try:
+                constraint = parse_constraint(text)
+            except DoeError as exc:
+                raise ValueError(f"constraints[{index}]: {exc}") from None
+            unknown = set(constraint.parameters) - names
+            if unknown:
+                raise ValueError(f"constraints[{index}] uses {sorted(unknown)}, which are not factors")
+        for prior in self.priors:
+            if prior.parameter not in names:
+                raise ValueError(f"prior on {prior.parameter!r}: only factors can have priors")
         for factor in self.factors:  # each corner must be a valid micro parameter set
             for level in (factor.low, factor.high):
                 MicroParameters.model_validate({**self.fixed_parameters, factor.name: level})
