@@ -1,0 +1,107 @@
+"""Fixtures for the service tests: a fresh database per test, in-process app, real servers."""
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+from fastapi.testclient import TestClient
+
+from service.app import create_app
+from service.config import Settings
+from service.db import make_engine, make_session_factory
+from service.migrate import upgrade
+
+
+@pytest.fixture
+def db_url(tmp_path: Path) -> str:
+    return f"sqlite:///{(tmp_path / 'demcal.db').as_posix()}"
+
+
+@pytest.fixture
+def settings(db_url: str) -> Settings:
+    """No executors or ticks: tests drive workers themselves, deterministically."""
+    return Settings(database_url=db_url, start_workers=False, start_background=False, seed_materials=False,
+                    lease_s=2.0, heartbeat_s=0.2, poll_interval_s=0.05)
+
+
+@pytest.fixture
+def session_factory(settings: Settings):
+    upgrade(settings.database_url)
+    engine = make_engine(settings.database_url)
+    yield make_session_factory(engine, settings)
+    engine.dispose()
+
+
+@pytest.fixture
+def client(settings: Settings):
+    with TestClient(create_app(settings)) as test_client:
+        yield test_client
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def service_env(db_url: str, **extra: str) -> dict[str, str]:
+    env = dict(os.environ)
+    env.update({"DEMCAL_DATABASE_URL": db_url, "DEMCAL_SEED_MATERIALS": "false", "DEMCAL_LOG_LEVEL": "WARNING",
+                "PYTHONUNBUFFERED": "1"})
+    env.update(extra)
+    return env
+
+
+def demcal_cmd(*args: str) -> list[str]:
+    """``demcal ...`` through the interpreter running the tests (no PATH assumptions)."""
+    return [sys.executable, "-m", "service.cli", *args]
+
+
+def wait_healthy(base_url: str, proc: subprocess.Popen, timeout_s: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            raise RuntimeError(f"server exited with {proc.returncode}")
+        try:
+            if httpx.get(f"{base_url}/api/v1/health", timeout=1.0).status_code == 200:
+                return
+        except httpx.HTTPError:
+            pass
+        time.sleep(0.1)
+    raise TimeoutError("server did not become healthy")
+
+
+def stop_process(proc: subprocess.Popen, timeout_s: float = 15.0) -> None:
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(timeout_s)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+@pytest.fixture
+def live_server(db_url: str):
+    """``demcal serve`` as a real process (uvicorn on loopback); yields (base_url, env, proc)."""
+    servers: list[subprocess.Popen] = []
+
+    def start(workers: int = 0, **env_extra: str):
+        port = free_port()
+        env = service_env(db_url, **env_extra)
+        proc = subprocess.Popen(demcal_cmd("serve", "--port", str(port), "--workers", str(workers)), env=env)
+        servers.append(proc)
+        base_url = f"http://127.0.0.1:{port}"
+        wait_healthy(base_url, proc)
+        return base_url, env, proc
+
+    yield start
+    for proc in servers:
+        stop_process(proc)
