@@ -116,9 +116,13 @@ def _sort_key(mask: int, generated: int):
     return (word_order(mask), word_order(mask & generated), word_label(mask))
 
 
-def alias_structure(coded_factorial: np.ndarray, generated: int = 0, letters: str = LETTERS,
+def alias_structure(coded_factorial: np.ndarray, generated: int | None = None, letters: str = LETTERS,
                     max_display_order: int | None = None) -> AliasStructure:
-    """Alias chains of the +-1 runs in `coded_factorial` (rows may repeat)."""
+    """Alias chains of the +-1 runs in `coded_factorial` (rows may repeat).
+
+    `generated` is the bitmask of factors set by generators; None infers it as the
+    last letter of each defining word, which is how standard fractions are built.
+    """
     pts = np.asarray(coded_factorial, dtype=float)
     if pts.ndim != 2 or pts.shape[0] == 0:
         raise DoeError("alias structure needs at least one factorial run")
@@ -138,6 +142,10 @@ def alias_structure(coded_factorial: np.ndarray, generated: int = 0, letters: st
         sign = int(col[np.argmax(col != 0)])  # normalise so the first entry is +1
         key = (col * sign).astype(np.int8).tobytes()
         groups.setdefault(key, []).append((m, sign))
+    if generated is None:
+        generated = 0
+        for m, _ in identity:
+            generated |= 1 << (m.bit_length() - 1)
     chains = []
     for members in groups.values():
         members.sort(key=lambda ms: _sort_key(ms[0], generated))

@@ -44,6 +44,8 @@ class Design:
 
     def __post_init__(self):
         self.coded = np.asarray(self.coded, dtype=float).reshape(-1, len(self.factors))
+        for level in (-1.0, 0.0, 1.0):  # snap round-off from natural -> coded conversion
+            self.coded[np.abs(self.coded - level) < 1e-9] = level
         n = self.coded.shape[0]
         for name in ("run_order", "replicate", "seed", "block"):
             setattr(self, name, np.asarray(getattr(self, name), dtype=np.int64).reshape(n))
@@ -52,7 +54,7 @@ class Design:
         if self.aliases is None:
             fac = self.factorial_mask
             if fac.any():
-                generated = 0
+                generated = 0 if self.generators else None
                 for g in self.generators:
                     generated |= 1 << self.letters.index(g.split("=")[0].strip().upper())
                 self.aliases = alias_structure(self.coded[fac], generated, self.letters)
@@ -147,7 +149,8 @@ class Design:
         """A design from runs already made (e.g. an uploaded CSV), in the order given."""
         factors = as_factors(factors)
         coded = np.array([[float(f.to_coded(float(r[f.name]))) for f in factors] for r in natural_rows])
-        coded[np.abs(coded) < 1e-9] = 0.0
+        for level in (-1.0, 0.0, 1.0):
+            coded[np.abs(coded - level) < 1e-9] = level
         types = [classify_point(row) for row in coded]
         n = len(types)
         return cls(factors, coded, types, np.arange(1, n + 1), _replicate_index(coded),
@@ -369,3 +372,18 @@ def augment_ccd(design: Design, alpha="face", center_runs: int = 2) -> Design:
     if res is not None and res < 5:
         notes.append(f"factorial core is resolution {res}: some two-factor interactions stay aliased")
     return _append(design, new, types, design.kind + f" + CCD ({label})", notes, 23)
+
+
+def make_design(factors, generators=None, *, full: bool = False, center_runs: int = 0, replicates: int = 1,
+                seed: int = 0, randomize: bool = True) -> Design:
+    """One call for campaigns: a full factorial (k <= 3 or full=True) or a half fraction.
+
+    Four factors default to the thesis's 2^(4-1) with D = ABC (Table A.8).
+    `factors` may be dicts {name, low, high, unit, log}.
+    """
+    factors = as_factors(factors)
+    if full or (generators is None and len(factors) <= 3) or generators == []:
+        return full_factorial(factors, center_runs=center_runs, replicates=replicates, seed=seed,
+                              randomize=randomize)
+    return fractional_factorial(factors, generators, center_runs=center_runs, replicates=replicates,
+                                seed=seed, randomize=randomize)

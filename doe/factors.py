@@ -78,7 +78,11 @@ class Factor:
         return (self._t(natural) - self.centre_t) / self.half_range_t
 
     def to_natural(self, coded):
-        return self._t_inv(self.centre_t + np.asarray(coded, dtype=float) * self.half_range_t)
+        c = np.asarray(coded, dtype=float)
+        x = self._t_inv(self.centre_t + c * self.half_range_t)
+        # exact levels at the design points, free of round-off (0.05, not 0.05000000000000002)
+        x = np.where(c == -1.0, self.low, np.where(c == 1.0, self.high, x))
+        return x if x.ndim else float(x)
 
     def with_letter(self, letter: str) -> "Factor":
         return Factor(self.name, self.low, self.high, self.unit, self.log, letter)

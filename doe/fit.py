@@ -157,6 +157,8 @@ class ResponseFit:
         XF = np.column_stack([X, (types == "center").astype(float)]) if use_curv else X
         sse_full, rank_full = _sse(XF, y)
         df_res = n - rank_full
+        if df_res == 0:
+            sse_full = 0.0  # an exact fit; what lstsq leaves is round-off
         ms_e = sse_full / df_res if df_res > 0 else None
 
         def test(ss, df):
