@@ -1,0 +1,102 @@
+"""A whole campaign with the analytic evaluator, from creation to report, through the API."""
+from __future__ import annotations
+
+import math
+
+from conftest_s2 import API, campaign_body, run_to_end, s2, thesis_material_id  # noqa: F401
+from service.models.job import Job
+
+
+def test_analytic_campaign_from_creation_to_report(s2):
+    client, app, settings = s2
+    cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    final = run_to_end(client, app, settings, cid)
+    assert final["status"] == "completed", final["error"]
+
+    # 2^3 factorial + 3 centre replicates, one battery each, plus one confirmation battery
+    (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()
+    runs = iteration["runs"]
+    design_runs = [r for r in runs if r["kind"] == "design"]
+    assert len(design_runs) == 11 and sum(r["is_centre"] for r in design_runs) == 3
+    assert len({r["seed"] for r in runs}) == len(runs)  # centre replicates (and confirmation) use distinct seeds
+    with app.state.session_factory() as session:
+        jobs = session.query(Job).filter(Job.campaign_id == cid).all()
+    assert len(jobs) == 12 and {j.id for j in jobs} == {r["job_id"] for r in runs}
+    assert all(j.evaluator == "analytic" and j.spec["test"] == "battery" for j in jobs)
+    assert {j.seed for j in jobs} == {r["seed"] for r in runs}
+    assert iteration["parameters"]["factors"][0]["name"] == "particle_density_kg_m3"
+
+    models = client.get(f"{API}/campaigns/{cid}/models").json()["models"]
+    assert set(models) == {"fill__bulk_density_kg_m3", "cct__confined_modulus_pa", "dst__friction_angle_deg"}
+    density_fit = models["fill__bulk_density_kg_m3"]["fit"]
+    sources = [row["source"] for row in density_fit["anova"]]
+    assert {"Model", "Curvature", "Residual", "Pure Error", "Cor Total"} <= set(sources)
+    assert density_fit["has_error_estimate"] is True
+    # the centre replicates measure the simulator's noise: pure error > 0 since seeds differ
+    assert models["fill__bulk_density_kg_m3"]["pure_error_sd"] > 0
+
+    optimum = client.get(f"{API}/campaigns/{cid}/optimum").json()
+    for factor in campaign_body(1)["factors"]:  # inside the design box (no extrapolation asked)
+        assert factor["low"] <= optimum["parameters"][factor["name"]] <= factor["high"]
+    confirmation = client.get(f"{API}/campaigns/{cid}/confirmation").json()
+    assert confirmation["status"] == "succeeded" and confirmation["parameters"] == optimum["parameters"]
+
+    report = client.get(f"{API}/campaigns/{cid}/report").json()
+    rows = {r["quantity"]: r for r in report["targets"]}
+    density, modulus, phi = rows["bulk_density_kg_m3"], rows["confined_modulus_pa"], rows["friction_angle_deg"]
+    assert density["measured"] == 1397.8 or math.isclose(density["measured"], 1397.8)  # Table 4.5
+    assert modulus["measured"] == 8.69e6 and phi["measured"] == 60.6  # Table 4.10
+    for row in (density, modulus, phi):
+        assert row["status"] == "calibrated"
+        low, high = row["prediction_interval"]
+        assert low < row["predicted"] < high
+        assert row["confirmation_in_interval"] == (low <= row["confirmed"] <= high)
+        expected_z = (row["confirmed"] - row["measured"]) / math.hypot(row["measured_uncertainty"], row["simulator_sd"])
+        assert math.isclose(row["standardised_residual"], expected_z)
+    # density and modulus lie inside what the box can produce (rho_b = rho_p x solid fraction ~0.55;
+    # E' grows linearly with k_p): the optimum matches them
+    assert density["reachable"] and abs(density["predicted_standardised_residual"]) < 1
+    assert modulus["reachable"] and abs(modulus["predicted_standardised_residual"]) < 1
+    # E' was published as an average only: its uncertainty is the stated 5 % assumption, flagged
+    assert modulus["uncertainty_assumed"] and math.isclose(modulus["measured_uncertainty"], 0.05 * 8.69e6)
+    assert density["uncertainty_assumed"] is False
+    # Round particles without rolling resistance cap the analytic friction angle at 12 + 30 = 42 deg, so
+    # 60.6 deg (an angular aggregate) is > 3 standard uncertainties (3.03 deg) beyond reach: the missing effect.
+    assert phi["reachable"] is False and phi["reachability"] > (60.6 - 42.0) / 3.03 - 1e-9
+    assert report["verdict"] == "targets out of reach"
+    assert report["unreachable"] == ["dst__friction_angle_deg"]
+
+
+def test_unmatched_and_unmodelled_targets_are_reported_not_fatal(s2):
+    client, app, settings = s2
+    material = client.post(f"{API}/materials", json={"name": "mixed", "measurements": [
+        {"test": "fill", "quantity": "bulk_density_kg_m3", "values": [1400.0, 1390.0, 1410.0]},
+        {"test": "fill", "quantity": "packing_height_m", "values": [0.33]},  # fixed by the container
+        {"test": "anchor", "quantity": "peak_pull_force_n", "values": [650.0],  # no anchor test in the battery
+         "condition": {"packing_height_m": 0.32, "pull_speed_m_s": 0.027}},
+    ]}).json()
+    body = campaign_body(material["id"], targets=None, factors=[
+        {"name": "particle_density_kg_m3", "low": 2300.0, "high": 2700.0},
+        {"name": "friction_pp", "low": 0.3, "high": 1.0}], design={"type": "full", "centre_runs": 2})
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    rows = {r["quantity"]: r for r in client.get(f"{API}/campaigns/{cid}/report").json()["targets"]}
+    assert rows["bulk_density_kg_m3"]["status"] == "calibrated"
+    assert rows["packing_height_m"]["status"] == "not_modelled"
+    assert "do not move it" in rows["packing_height_m"]["note"]
+    assert rows["peak_pull_force_n"]["status"] == "not_simulated"
+
+
+def test_campaign_fails_with_reason_when_no_target_can_be_modelled(s2):
+    client, app, settings = s2
+    material = client.post(f"{API}/materials", json={"name": "anchors only", "measurements": [
+        {"test": "anchor", "quantity": "peak_pull_force_n", "values": [650.0],
+         "condition": {"packing_height_m": 0.32, "pull_speed_m_s": 0.027}}]}).json()
+    body = campaign_body(material["id"], targets=None, design={"type": "full", "centre_runs": 1})
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    final = run_to_end(client, app, settings, cid)
+    assert final["status"] == "failed" and "no target could be modelled" in final["error"]
+    assert client.post(f"{API}/campaigns/{cid}/resume").status_code == 409

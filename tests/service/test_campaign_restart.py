@@ -1,0 +1,66 @@
+"""The campaign state machine lives in the database: a restarted service carries on where it was."""
+from __future__ import annotations
+
+from sqlalchemy import select
+
+from conftest_s2 import API, campaign_body, drain, run_to_end, running_app, s2_settings, thesis_material_id
+from service.campaigns.runner import CampaignRunner
+from service.models.campaign import CampaignRun
+from service.models.job import Job
+from service import queue
+
+
+def test_restart_mid_campaign_completes_without_duplicate_jobs(tmp_path):
+    settings = s2_settings(tmp_path)
+    with running_app(settings) as (client, app):
+        cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+        client.post(f"{API}/campaigns/{cid}/start")
+        CampaignRunner(app.state.session_factory, settings).tick()
+        assert drain(app, settings, max_jobs=5) == 5  # service "dies" with 6 batteries still queued
+        before = client.get(f"{API}/campaigns/{cid}").json()
+        assert before["status"] == "running" and before["phase"] == "batteries"
+
+    with running_app(settings) as (client, app):  # a new process: new app, new runner, same database file
+        status = client.get(f"{API}/campaigns/{cid}").json()
+        assert status["phase"] == "batteries" and status["runs_total"] == 11
+        final = run_to_end(client, app, settings, cid)
+        assert final["status"] == "completed", final["error"]
+        with app.state.session_factory() as session:
+            jobs = session.scalars(select(Job).where(Job.campaign_id == cid)).all()
+        assert len(jobs) == 12  # 11 batteries + confirmation, none queued twice
+        report = client.get(f"{API}/campaigns/{cid}/report").json()
+        assert len(report["targets"]) == 3
+
+
+def test_restart_between_queuing_and_recording_a_job_finds_the_same_job(tmp_path):
+    """A crash after submit_job committed but before the run stored the job id must not queue a twin."""
+    settings = s2_settings(tmp_path)
+    with running_app(settings) as (client, app):
+        cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+        client.post(f"{API}/campaigns/{cid}/start")
+        sf = app.state.session_factory
+        CampaignRunner(sf, settings).tick()
+        with sf() as session:
+            run = session.scalars(select(CampaignRun).order_by(CampaignRun.id)).first()
+            lost_job_id = run.job_id
+            run.job_id, run.status = None, "pending"  # as if the process died before this write
+            session.commit()
+        CampaignRunner(sf, settings).tick()
+        with sf() as session:
+            assert session.get(CampaignRun, run.id).job_id == lost_job_id
+            assert session.query(Job).filter(Job.campaign_id == cid).count() == 11
+
+
+def test_a_failed_battery_fails_the_campaign_with_its_reason(tmp_path):
+    settings = s2_settings(tmp_path)
+    with running_app(settings) as (client, app):
+        cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+        client.post(f"{API}/campaigns/{cid}/start")
+        sf = app.state.session_factory
+        CampaignRunner(sf, settings).tick()
+        with sf() as session:
+            job_id = session.scalars(select(Job.id).where(Job.campaign_id == cid)).first()
+            queue.cancel_job(session, job_id)
+        final = run_to_end(client, app, settings, cid)
+        assert final["status"] == "failed"
+        assert f"(job {job_id}) cancelled" in final["error"]
