@@ -79,7 +79,7 @@ def _db_option(parser: argparse.ArgumentParser) -> None:
                         "(default: $DEMCAL_DATABASE_URL or ./demcal-data/demcal.db)")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(plugins: bool = True) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="demcal", description="demcal: calibration service for DEM models")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -103,7 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
     _db_option(up)
     up.set_defaults(func=cmd_db_upgrade)
 
-    for module_name, what in PLUGINS:
+    for module_name, what in PLUGINS if plugins else ():
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as exc:
@@ -115,8 +115,14 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+OWN_COMMANDS = ("serve", "worker", "db")
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    # The other parts' commands import heavy libraries (statsmodels, numba); skip them for ours.
+    own = bool(argv) and argv[0] in OWN_COMMANDS
+    args = build_parser(plugins=not own).parse_args(argv)
     return int(args.func(args) or 0)
 
 

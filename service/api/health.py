@@ -26,6 +26,7 @@ def health(request: Request, session: Session = Depends(get_session)):
     body = {"status": "ok", "version": _version(), "executor": getattr(request.app.state, "executor", "none")}
     pool = getattr(request.app.state, "worker_pool", None)
     body["local_workers_alive"] = pool.alive() if pool is not None else 0
+    body["local_worker_pids"] = pool.pids() if pool is not None else []
     try:
         session.execute(text("SELECT 1"))
         body["database"] = "ok"

@@ -94,6 +94,9 @@ class LocalWorkerPool:
     def alive(self) -> int:
         return sum(proc.poll() is None for proc in self.processes)
 
+    def pids(self) -> list[int]:
+        return [proc.pid for proc in self.processes if proc.poll() is None]
+
     def stop(self, timeout_s: float = 10.0) -> None:
         self.stopping = True
         for proc in self.processes:

@@ -88,6 +88,16 @@ def stop_process(proc: subprocess.Popen, timeout_s: float = 15.0) -> None:
             proc.wait()
 
 
+@pytest.fixture(name="service_env")
+def service_env_fixture():
+    return service_env
+
+
+@pytest.fixture(name="demcal_cmd")
+def demcal_cmd_fixture():
+    return demcal_cmd
+
+
 @pytest.fixture
 def live_server(db_url: str):
     """``demcal serve`` as a real process (uvicorn on loopback); yields (base_url, env, proc)."""
