@@ -19,7 +19,7 @@ log = logging.getLogger(__name__)
 
 
 def default_ticks(session_factory: sessionmaker[Session], settings: Settings) -> list[tuple[str, Callable[[], object]]]:
-    """The campaign runner and the scheduler (S2's), each called once per tick."""
+    """The campaign runner and the scheduler, each called once per tick."""
     from service.campaigns.runner import CampaignRunner
     from service.schedules.scheduler import Scheduler
 
