@@ -119,14 +119,27 @@ class ResponseFit:
             warnings.simplefilter("ignore")
             self.ols = sm.OLS(self.y, X).fit()
         self.params = np.asarray(self.ols.params, dtype=float)
-        self.has_error = self.df_resid > 0
         sse_m = float(np.sum((self.y - X @ self.params) ** 2))
-        self.mse = sse_m / self.df_resid if self.has_error else None
-        self.cov = np.asarray(self.ols.cov_params(), dtype=float) if self.has_error else None
         self._anova(curvature)
+        # Error for tests and intervals: the ANOVA residual, i.e. with curvature taken
+        # out when it has its own row (as Design-Expert does); otherwise the model residual.
+        if self.curvature_row is not None:
+            self.error_variance_df = self.error_df
+            self.mse = self.error_mean_square
+        else:
+            self.error_variance_df = self.df_resid
+            self.mse = sse_m / self.df_resid if self.df_resid > 0 else None
+        self.has_error = self.error_variance_df > 0 and self.mse is not None
+        if not self.has_error:
+            self.mse = None
+        self.cov = (np.asarray(self.ols.normalized_cov_params, dtype=float) * self.mse) if self.has_error else None
+        if self.curvature_row is not None and self.has_error:
+            self.messages.append("Standard errors and intervals use the residual with curvature removed; "
+                                 "if curvature is significant the model is biased near the centre.")
         ss_tot = float(np.sum((self.y - self.y.mean()) ** 2))
         self.r_squared = 1 - sse_m / ss_tot if ss_tot > 0 else None
-        self.adj_r_squared = (1 - self.mse / (ss_tot / (n - 1))) if self.has_error and ss_tot > 0 else None
+        self.adj_r_squared = (1 - (sse_m / self.df_resid) / (ss_tot / (n - 1))
+                              if self.df_resid > 0 and ss_tot > 0 else None)
         h = np.einsum("ij,jk,ik->i", X, np.linalg.pinv(X.T @ X), X)
         if np.all(h < 1 - 1e-9):
             e = (self.y - X @ self.params) / (1 - h)
@@ -223,7 +236,7 @@ class ResponseFit:
 
     def _coef_rows(self) -> list[dict]:
         rows = []
-        t_crit = stats.t.ppf(1 - self.alpha / 2, self.df_resid) if self.has_error else None
+        t_crit = stats.t.ppf(1 - self.alpha / 2, self.error_variance_df) if self.has_error else None
         for i, label in enumerate(["Intercept"] + self.term_labels):
             d = {"term": label, "name": term_name(self.terms[i - 1], self.design.factors) if i else "const",
                  "estimate": float(self.params[i]), "std_error": None, "t_value": None, "p_value": None,
@@ -233,7 +246,7 @@ class ResponseFit:
                 d.update(std_error=se, ci_low=self.params[i] - t_crit * se, ci_high=self.params[i] + t_crit * se)
                 if se > 0:
                     t = self.params[i] / se
-                    d.update(t_value=t, p_value=float(2 * stats.t.sf(abs(t), self.df_resid)))
+                    d.update(t_value=t, p_value=float(2 * stats.t.sf(abs(t), self.error_variance_df)))
             rows.append({k: _clean(v) for k, v in d.items()})
         return rows
 
@@ -258,7 +271,7 @@ class ResponseFit:
         Xp = model_matrix(self._rows_coded(points), self.terms)
         mean = Xp @ self.params
         out = []
-        t_crit = stats.t.ppf(1 - alpha / 2, self.df_resid) if self.has_error else None
+        t_crit = stats.t.ppf(1 - alpha / 2, self.error_variance_df) if self.has_error else None
         for i in range(len(mean)):
             d = {"response": self.response, "mean": float(mean[i]), "se_mean": None, "ci_low": None,
                  "ci_high": None, "pi_low": None, "pi_high": None, "alpha": alpha}

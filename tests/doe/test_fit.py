@@ -18,7 +18,7 @@ def replicated():
 
 def test_intervals_match_an_independent_ols(replicated):
     d, y = replicated
-    fit = fit_response(d, y, terms=["A", "B", "AB"])
+    fit = fit_response(d, y, terms=["A", "B", "AB"], curvature=False)
     X = np.column_stack([np.ones(d.n_runs), d.coded[:, 0], d.coded[:, 1], d.coded[:, 0] * d.coded[:, 1]])
     ref = sm.OLS(y, X).fit()
     pt = {"a": 2.5, "b": 12.0, "c": 0.3}
@@ -28,6 +28,10 @@ def test_intervals_match_an_independent_ols(replicated):
     assert p["mean"] == pytest.approx(frame["mean"][0])
     assert p["ci_low"] == pytest.approx(frame["mean_ci_lower"][0])
     assert p["pi_high"] == pytest.approx(frame["obs_ci_upper"][0])
+    # with a curvature row, the error variance is that of OLS with a centre-run indicator added
+    curved = fit_response(d, y, terms=["A", "B", "AB"])
+    ref_c = sm.OLS(y, np.column_stack([X, d.center_mask.astype(float)])).fit()
+    assert curved.mse == pytest.approx(ref_c.mse_resid) and curved.error_variance_df == ref_c.df_resid
 
 
 def test_press_equals_leave_one_out(replicated):
