@@ -74,11 +74,7 @@ def _stop_executor(app: FastAPI) -> None:
 def _background(app: FastAPI, settings: Settings, session_factory):
     from service.background import BackgroundTicker, default_ticks
 
-    ticks = []
-    try:
-        ticks = default_ticks(session_factory, settings)
-    except ModuleNotFoundError as exc:
-        log.warning("campaign runner / scheduler not available yet (%s); ticks skipped", exc.name)
+    ticks = default_ticks(session_factory, settings)
     if app.state.worker_pool is not None:
         ticks.append(("worker-pool", app.state.worker_pool.supervise))
     ticker = BackgroundTicker(settings.tick_interval_s, ticks)

@@ -11,6 +11,7 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from service.config import settings_from_env
+from service.security import check_bind
 
 # (module, what it adds): each provides register(subparsers).
 PLUGINS = (
@@ -41,14 +42,15 @@ def _logging() -> None:
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
+    settings = _settings(args, host=args.host, port=args.port, workers=args.workers,
+                         dask_scheduler=args.dask_scheduler)
+    check_bind(settings)  # before the heavy imports: refuse a non-loopback host without a token
     import uvicorn
 
     from service.app import create_app
 
-    settings = _settings(args, host=args.host, port=args.port, workers=args.workers,
-                         dask_scheduler=args.dask_scheduler)
     _logging()
-    app = create_app(settings)  # refuses a non-loopback host without a token
+    app = create_app(settings)
     uvicorn.run(app, host=settings.host, port=settings.port, log_level=os.environ.get("DEMCAL_LOG_LEVEL", "info").lower())
     return 0
 

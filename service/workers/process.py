@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 from service.config import Settings, settings_from_env
@@ -31,6 +32,21 @@ def settings_env(settings: Settings) -> dict[str, str]:
     return env
 
 
+def _watch_parent(stop) -> None:
+    """A pool worker stops when the ``demcal serve`` that started it is gone (even after kill -9)."""
+    parent = os.environ.get("DEMCAL_PARENT_PID")
+    if not parent:
+        return
+
+    def watch() -> None:
+        while not stop.wait(1.0):
+            if os.getppid() != int(parent):
+                log.warning("parent %s is gone; stopping", parent)
+                stop.set()
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
 def run_worker(settings: Settings) -> int:
     """Run one worker (or a Dask dispatcher) until SIGTERM/SIGINT; the current job is handed back."""
     engine = make_engine(settings.database_url)
@@ -49,6 +65,7 @@ def run_worker(settings: Settings) -> int:
 
     signal.signal(signal.SIGTERM, _stop)
     signal.signal(signal.SIGINT, _stop)
+    _watch_parent(runner.stop)
     log.info("worker %s polling %s", getattr(runner, "worker_id", "?"), settings.database_url)
     try:
         runner.run()
@@ -78,7 +95,8 @@ class LocalWorkerPool:
         self.stopping = False
 
     def _spawn(self) -> subprocess.Popen:
-        return subprocess.Popen([sys.executable, "-m", "service.workers"], env=settings_env(self.settings))
+        env = dict(settings_env(self.settings), DEMCAL_PARENT_PID=str(os.getpid()))
+        return subprocess.Popen([sys.executable, "-m", "service.workers"], env=env)
 
     def start(self) -> None:
         self.processes = [self._spawn() for _ in range(self.count)]
