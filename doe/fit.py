@@ -25,7 +25,7 @@ from .designs import Design
 from .effects import EffectsResult, compute_effects
 from .factors import DoeError
 from .terms import (Term, mask_to_term, model_matrix, natural_transform, parents, parse_term,
-                    sort_terms, term_label, term_name, term_to_mask)
+                    sort_terms, term_label, term_name)
 
 NO_ERROR_MESSAGE = ("No error estimate: the model has as many coefficients as distinct runs and there are "
                     "no replicates, so F and p-values do not exist. Judge effects from the half-normal plot "
@@ -89,6 +89,7 @@ class ResponseFit:
         if y_all.size != design.n_runs:
             raise DoeError(f"{response}: {y_all.size} values for {design.n_runs} runs")
         self.design, self.response, self.alpha = design, response, alpha
+        self.curvature_requested = curvature
         self.messages: list[str] = []
         self.reduction_log: list[str] = []
         ok = np.isfinite(y_all)
@@ -293,53 +294,9 @@ class ResponseFit:
 
     # --- model reduction -----------------------------------------------------------
     def reduce(self, alpha_out: float = 0.10, method: str = "auto") -> "ResponseFit":
-        """Hierarchy-preserving backward elimination.
-
-        method 'p' drops, one at a time, the term with the largest p-value above
-        alpha_out among terms no other term needs; 'lenth' (for unreplicated
-        saturated fits) keeps the effects beyond Lenth's margin of error plus their
-        parents, so the dropped effects become the error estimate (the thesis's
-        "hidden replication").
-        """
-        if method == "auto":
-            method = "p" if self.has_error else "lenth"
-        if method == "lenth":
-            if self.effects is None or self.effects.margin_of_error is None:
-                raise DoeError("Lenth reduction needs the effects of a two-level factorial")
-            keep = set()
-            k = self.design.k
-            for term in self.effects.significant():
-                mask = next(c.mask for c in self.design.aliases.chains if c.term == term)
-                t = mask_to_term(mask, k)
-                keep |= {t, *parents(t)}
-            keep &= set(self.terms) | {p for t in keep for p in parents(t)}
-            if not keep:
-                raise DoeError(f"{self.response}: no effect exceeds Lenth's margin of error; nothing to keep")
-            fit = ResponseFit(self.design, self._y_full(), sorted(keep), self.response, self.alpha)
-            fit.reduction_log = [f"kept {', '.join(fit.term_labels)} (beyond Lenth ME "
-                                 f"{self.effects.margin_of_error:.4g} or needed by hierarchy)"]
-            return fit
-        if method != "p":
-            raise DoeError("method must be 'auto', 'p' or 'lenth'")
-        if not self.has_error:
-            raise DoeError(f"{self.response}: no error estimate, so p-values cannot guide reduction; "
-                           "use method='lenth'")
-        fit, log = self, []
-        while fit.terms:
-            needed = {p for t in fit.terms for p in parents(t)}
-            rows = {r.source: r for r in fit.anova}
-            cands = [(rows[lbl].p_value, t, lbl) for t, lbl in zip(fit.terms, fit.term_labels)
-                     if t not in needed and rows[lbl].p_value is not None]
-            if not cands:
-                break
-            p_max, t_drop, lbl = max(cands, key=lambda c: c[0])
-            if p_max <= alpha_out:
-                break
-            log.append(f"removed {lbl} (p = {p_max:.4g})")
-            fit = ResponseFit(self.design, self._y_full(), [t for t in fit.terms if t != t_drop],
-                              self.response, self.alpha)
-        fit.reduction_log = log
-        return fit
+        """Hierarchy-preserving backward elimination; see doe.reduction.reduce_fit."""
+        from .reduction import reduce_fit
+        return reduce_fit(self, alpha_out, method)
 
     def _y_full(self) -> np.ndarray:
         y = np.full(self.design.n_runs, np.nan)
@@ -404,7 +361,13 @@ def fit_responses(design: Design, results: list[dict], responses=None, terms=Non
         responses = sorted({k for r in results for k in r})
     fits = {}
     for name in responses:
-        y = [float(r.get(name, float("nan"))) if r.get(name) is not None else float("nan") for r in results]
+        y = []
+        for i, r in enumerate(results):
+            v = r.get(name)
+            try:
+                y.append(float("nan") if v is None else float(v))
+            except (TypeError, ValueError):
+                raise DoeError(f"run {i + 1}: {name} = {v!r} is not a number") from None
         t = terms.get(name) if isinstance(terms, dict) else terms
         fits[name] = ResponseFit(design, y, t, name, alpha)
     return fits

@@ -19,7 +19,6 @@ from scipy.optimize import minimize
 
 from .constraints import Prior, Target, as_constraint
 from .factors import DoeError, Factor
-from .fit import ResponseFit
 
 _FEAS_TOL = 1e-6
 

@@ -50,7 +50,7 @@ def design_text(design) -> str:
     recs = design.records("std")
     headers = ["Std", "Run", "Block", "Type", "Rep", "Seed"] + [f.name for f in fac] + [f.letter for f in fac]
     rows = [[str(r["std_order"]), str(r["run_order"]), str(r["block"]), r["point_type"], str(r["replicate"]),
-             str(r["seed"])] + [r[f.name] for f in fac] + [f"{r[f.letter + '_coded']:+.4g}" for f in fac]
+             str(r["seed"])] + [r[f.name] for f in fac] + [_coded_text(r[f.letter + "_coded"]) for f in fac]
             for r in recs]
     parts = ["\n".join(head), table(headers, rows)]
     if design.aliases is not None:
@@ -58,3 +58,7 @@ def design_text(design) -> str:
     if design.notes:
         parts.append("Notes\n" + "\n".join("  " + s for s in design.notes))
     return "\n\n".join(parts)
+
+
+def _coded_text(v: float) -> str:
+    return "0" if v == 0 else f"{v:+.4g}"

@@ -94,3 +94,21 @@ def test_missing_values_and_bad_terms():
         fit_response(d, np.arange(d.n_runs, dtype=float), terms=["A", "zz*a"])
     with pytest.raises(DoeError, match="values for"):
         fit_response(d, [1.0, 2.0])
+
+
+def test_ccd_quadratic_fit_and_reduction_keep_parents():
+    """Rotatable CCD; truth has A^2 and AB but no B^2: reduction drops B^2 only, keeping B for AB."""
+    from doe import augment_ccd
+    d = augment_ccd(full_factorial([("a", 0.0, 1.0), ("b", 10.0, 20.0)], center_runs=3, seed=1), "rotatable", 3)
+    x = d.coded
+    y = (3 + 1.0 * x[:, 0] + 0.8 * x[:, 0] ** 2 + 0.3 * x[:, 0] * x[:, 1]
+         + np.random.default_rng(0).normal(0, 0.05, d.n_runs))
+    fit = fit_response(d, y)
+    assert fit.term_labels == ["A", "B", "AB", "A^2", "B^2"]
+    assert "Curvature" not in [r.source for r in fit.anova]      # squares are in the model instead
+    assert fit.coefficients["A^2"] == pytest.approx(0.8, abs=0.1)
+    red = fit.reduce(alpha_out=0.05)
+    assert red.term_labels == ["A", "B", "AB", "A^2"]
+    with pytest.raises(DoeError, match="not a number"):
+        from doe import fit_responses
+        fit_responses(d, [{"y": "bad"}] * d.n_runs)

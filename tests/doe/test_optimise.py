@@ -6,7 +6,6 @@ noise, so the true parameters are the answer the optimiser must find.
 """
 import math
 
-import numpy as np
 import pytest
 
 from doe import (AnalyticEvaluator, DoeError, Factor, LinearConstraint, NonlinearConstraint, Prior, calibrate,
