@@ -13,28 +13,21 @@ from datetime import datetime, timezone
 
 from sqlalchemy.orm import Session, sessionmaker
 
+from service.campaigns.runner import CampaignRunner
 from service.config import Settings
+from service.schedules.scheduler import Scheduler
 
 log = logging.getLogger(__name__)
 
 
 def default_ticks(session_factory: sessionmaker[Session], settings: Settings) -> list[tuple[str, Callable[[], object]]]:
     """The campaign runner and the scheduler, each called once per tick."""
-    ticks: list[tuple[str, Callable[[], object]]] = []
-    try:
-        from service.campaigns.runner import CampaignRunner
-    except ModuleNotFoundError as exc:  # until the campaigns part lands
-        log.warning("campaign runner unavailable (%s); campaigns will not advance", exc.name)
-    else:
-        ticks.append(("campaigns", CampaignRunner(session_factory, settings).tick))
-    try:
-        from service.schedules.scheduler import Scheduler
-    except ModuleNotFoundError as exc:  # until the schedules part lands
-        log.warning("scheduler unavailable (%s); schedules will not fire", exc.name)
-    else:
-        scheduler = Scheduler(session_factory, settings)
-        ticks.append(("schedules", lambda: scheduler.tick(datetime.now(timezone.utc).replace(tzinfo=None))))
-    return ticks
+    runner = CampaignRunner(session_factory, settings)
+    scheduler = Scheduler(session_factory, settings)
+    return [
+        ("campaigns", runner.tick),
+        ("schedules", lambda: scheduler.tick(datetime.now(timezone.utc).replace(tzinfo=None))),
+    ]
 
 
 class BackgroundTicker(threading.Thread):

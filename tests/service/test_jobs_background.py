@@ -29,6 +29,6 @@ def test_ticker_survives_failing_tick():
 
 def test_default_ticks_are_the_campaign_runner_and_scheduler(session_factory, settings):
     names = [name for name, _ in default_ticks(session_factory, settings)]
-    assert "campaigns" in names
+    assert names == ["campaigns", "schedules"]
     for _name, tick in default_ticks(session_factory, settings):
         tick()  # idempotent on an empty database
