@@ -104,9 +104,11 @@ def confirm(models, parameters: dict[str, float], observed: dict[str, float], *,
     if (inadequate or no_pi) and not has_axial:
         kind = "augment_ccd"
         nxt = augment_ccd(design, "face", center_runs)
-        why = (f"curvature or lack of fit in {', '.join(inadequate)}" if inadequate
-               else "centre runs give the missing error estimate")
-        reason += f"; {why}: augment to a face-centred CCD to fit squared terms"
+        if inadequate:
+            reason += (f"; curvature or lack of fit in {', '.join(inadequate)}: augment to a face-centred CCD "
+                       "to fit squared terms")
+        else:
+            reason += "; augment to a face-centred CCD, whose replicated centre runs give an error estimate"
     else:
         kind = "narrowed_factorial"
         nxt = narrowed_factorial(design, parameters, shrink, center_runs, seed)

@@ -41,6 +41,7 @@ class CalibrationResult:
     allow_extrapolation: bool = False
     seed: int = 0
     n_starts: int = 0
+    notes: list[str] = field(default_factory=list)
 
     @property
     def unreachable(self) -> list[dict]:
@@ -67,6 +68,7 @@ class CalibrationResult:
             parts.append("Active bounds: " + ", ".join(f"{b['parameter']} at {b['side']}" for b in self.active_bounds))
         if self.active_constraints:
             parts.append("Active constraints: " + ", ".join(self.active_constraints))
+        parts += self.notes
         return "\n\n".join(parts)
 
 
@@ -270,10 +272,15 @@ def calibrate(models, targets, *, bounds=None, fixed=None, constraints=(), prior
     # parameter uncertainty from the Gauss-Newton curvature of S in natural units
     J = residuals_jac(u)[1] / prob.dnatural_du(u)[None, :]
     std: dict[str, float | None] = {n: None for n in free}
+    notes = []
     JtJ = J.T @ J
     if np.linalg.matrix_rank(JtJ) == len(free):
         cov = np.linalg.inv(JtJ)
         std = {n: float(math.sqrt(max(cov[j, j], 0.0))) for j, n in enumerate(free)}
+    else:
+        notes.append(f"{len(targets)} target(s) and {len(priors)} prior(s) do not identify all {len(free)} free "
+                     "parameters at the optimum: many parameter sets fit equally well, so no standard deviations; "
+                     "add targets or priors, or fix parameters")
     std.update({n: 0.0 for n in fixed})
 
     target_rows = []
@@ -323,4 +330,4 @@ def calibrate(models, targets, *, bounds=None, fixed=None, constraints=(), prior
     message = msg if feasible else f"no feasible point found ({msg})"
     return CalibrationResult(params, std, {n: float(x) for n, x in zip(free, u)}, val, target_rows, prior_rows,
                              active_bounds, active, cons_rows, reach, bool(feasible), message, fixed,
-                             allow_extrapolation, seed, len(starts))
+                             allow_extrapolation, seed, len(starts), notes)

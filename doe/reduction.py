@@ -27,11 +27,9 @@ def reduce_fit(fit0, alpha_out: float = 0.10, method: str = "auto"):
             t = mask_to_term(mask, k)
             keep |= {t, *parents(t)}
         keep &= set(fit0.terms) | {p for t in keep for p in parents(t)}
-        if not keep:
-            raise DoeError(f"{fit0.response}: no effect exceeds Lenth's margin of error; nothing to keep")
         fit = ResponseFit(fit0.design, fit0._y_full(), sorted(keep), fit0.response, fit0.alpha,
                           fit0.curvature_requested)
-        fit.reduction_log = [f"kept {', '.join(fit.term_labels)} (beyond Lenth ME "
+        fit.reduction_log = [f"kept {', '.join(fit.term_labels) or 'the mean only'} (beyond Lenth ME "
                              f"{fit0.effects.margin_of_error:.4g} or needed by hierarchy)"]
         return fit
     if method != "p":
