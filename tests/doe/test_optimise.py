@@ -108,3 +108,10 @@ def test_linear_constraint_objects_and_text_agree(fits):
     assert a.parameters == pytest.approx(b.parameters)
     import json
     json.dumps(a.to_dict())
+
+
+def test_too_few_targets_say_parameters_are_not_identified(fits):
+    res = calibrate(fits, targets_at(TRUE)[:1], seed=0)
+    assert res.success and abs(res.targets[0]["standardised_residual"]) < 1e-3
+    assert all(v is None for v in res.parameter_std.values())
+    assert res.notes and "do not identify" in res.notes[0]
