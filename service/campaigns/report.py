@@ -46,7 +46,7 @@ def build_report(config, models: dict, optimum: dict, confirmation, targets, nex
         pred = optimum["predictions"].get(name, {})
         lo, hi = pred.get("pi_low"), pred.get("pi_high")
         row.update(
-            status="calibrated",
+            status="modelled",
             measured_uncertainty=u_meas,
             uncertainty_assumed=opt_target.get("uncertainty_assumed", False),
             predicted=pred.get("value"), prediction_interval=[lo, hi],
@@ -58,9 +58,9 @@ def build_report(config, models: dict, optimum: dict, confirmation, targets, nex
             reachable=opt_target.get("reachable"),
         )
         rows.append(row)
-    calibrated = [r for r in rows if r["status"] == "calibrated"]
-    unreachable = [r for r in calibrated if r.get("reachable") is False]
-    outside = [r for r in calibrated if not r["confirmation_in_interval"]]
+    modelled = [r for r in rows if r["status"] == "modelled"]
+    unreachable = [r for r in modelled if r.get("reachable") is False]
+    outside = [r for r in modelled if not r["confirmation_in_interval"]]
     verdict = "calibrated"
     if unreachable:
         verdict = "targets out of reach"
@@ -75,7 +75,7 @@ def build_report(config, models: dict, optimum: dict, confirmation, targets, nex
         "verdict": verdict,
         "unreachable": [r["response"] for r in unreachable],
         "confirmation_outside_interval": [r["response"] for r in outside],
-        "max_abs_standardised_residual": max((abs(r["standardised_residual"]) for r in calibrated
+        "max_abs_standardised_residual": max((abs(r["standardised_residual"]) for r in modelled
                                               if r["standardised_residual"] is not None), default=None),
         "next_step": next_step,
     }

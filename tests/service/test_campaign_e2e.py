@@ -48,7 +48,7 @@ def test_analytic_campaign_from_creation_to_report(s2):
     assert density["measured"] == 1397.8 or math.isclose(density["measured"], 1397.8)  # Table 4.5
     assert modulus["measured"] == 8.69e6 and phi["measured"] == 60.6  # Table 4.10
     for row in (density, modulus, phi):
-        assert row["status"] == "calibrated"
+        assert row["status"] == "modelled"
         low, high = row["prediction_interval"]
         assert low < row["predicted"] < high
         assert row["confirmation_in_interval"] == (low <= row["confirmed"] <= high)
@@ -83,7 +83,7 @@ def test_unmatched_and_unmodelled_targets_are_reported_not_fatal(s2):
     client.post(f"{API}/campaigns/{cid}/start")
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
     rows = {r["quantity"]: r for r in client.get(f"{API}/campaigns/{cid}/report").json()["targets"]}
-    assert rows["bulk_density_kg_m3"]["status"] == "calibrated"
+    assert rows["bulk_density_kg_m3"]["status"] == "modelled"
     assert rows["packing_height_m"]["status"] == "not_modelled"
     assert "do not move it" in rows["packing_height_m"]["note"]
     assert rows["peak_pull_force_n"]["status"] == "not_simulated"

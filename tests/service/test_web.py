@@ -1,0 +1,89 @@
+"""The web UI: pages, scripts and styles served by the app itself, nothing from the web, API paths that exist."""
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+
+import pytest
+
+from conftest_s2 import s2  # noqa: F401
+
+IMPORT_RE = re.compile(r"""(?:import|from)\s*(?:[^"';]*?\s+from\s+)?["'](\./[^"']+)["']""")
+API_CALL_RE = re.compile(r"""(?:api|optional)\(\s*(?:`([^`]*)`|"([^"]*)")""")
+
+
+def _fetch_modules(client) -> dict[str, str]:
+    """index.html's module and every module it imports, transitively, through HTTP."""
+    html = client.get("/").text
+    pending = re.findall(r'<script[^>]+src="([^"]+)"', html)
+    seen: dict[str, str] = {}
+    while pending:
+        path = pending.pop()
+        if path in seen:
+            continue
+        response = client.get(path)
+        assert response.status_code == 200, path
+        assert "javascript" in response.headers["content-type"], path
+        seen[path] = response.text
+        base = path.rsplit("/", 1)[0]
+        pending += [f"{base}/{m[2:]}" for m in IMPORT_RE.findall(response.text)]
+    return seen
+
+
+def test_index_and_assets_are_served_locally(s2):
+    client, _, _ = s2
+    index = client.get("/")
+    assert index.status_code == 200 and index.headers["content-type"].startswith("text/html")
+    html = index.text
+    for href in re.findall(r'(?:href|src)="([^"#]+)"', html):
+        assert href.startswith("/"), f"external or relative asset {href}"
+        assert client.get(href).status_code == 200, href
+    css = client.get("/static/style.css")
+    assert css.status_code == 200 and "text/css" in css.headers["content-type"]
+    modules = _fetch_modules(client)
+    assert {"/static/js/app.js", "/static/js/core.js", "/static/js/jobs.js", "/static/js/materials.js",
+            "/static/js/campaigns.js", "/static/js/charts.js"} <= set(modules)
+    for path, text in {**modules, "/": html, "/static/style.css": css.text}.items():
+        urls = re.findall(r"https?://[^\s\"'`)]+", text)
+        assert urls in ([], ["http://www.w3.org/2000/svg"]), (path, urls)  # SVG namespace is a name, not a fetch
+    assert client.get("/static/js/nothing.js").status_code == 404
+
+
+def test_pages_call_only_existing_api_endpoints(s2):
+    client, _, _ = s2
+    paths = client.get("/api/v1/openapi.json").json()["paths"]
+    templates = [re.compile("^" + re.sub(r"\{[^}]+\}", "[^/]+", p[len("/api/v1"):]) + "$") for p in paths]
+    calls = set()
+    for text in _fetch_modules(client).values():
+        for literal in API_CALL_RE.findall(text):
+            # `/jobs/${id}/cancel` -> /jobs/1/cancel; a query string is not part of the path
+            calls.add(re.sub(r"\$\{[^}]*\}", "1", literal[0] or literal[1]).split("?")[0])
+    assert {"/jobs", "/jobs/1/cancel", "/materials/1/measurements", "/campaigns/1/report", "/schedules/1",
+            "/campaigns/1/start", "/campaigns/1/models", "/openapi.json"} <= calls
+    for call in calls - {"/openapi.json"}:
+        assert any(t.match(call) for t in templates), call
+
+
+def test_ui_pages_show_campaign_and_material_data_through_the_api(s2):
+    """What the pages render comes from these endpoints; check the fields the scripts read exist."""
+    client, _, _ = s2
+    campaigns_js = client.get("/static/js/campaigns.js").text
+    for field in ("measured_uncertainty", "prediction_interval", "confirmed", "standardised_residual",
+                  "reachability", "reachable", "uncertainty_assumed"):
+        assert field in campaigns_js
+    materials_js = client.get("/static/js/materials.js").text
+    material = client.get("/api/v1/materials").json()[0]["measurements"][0]
+    for field in ("mean", "standard_uncertainty", "values", "reported_replicates", "condition"):
+        assert f"m.{field}" in materials_js and field in material
+    assert client.get("/ui", follow_redirects=False).status_code in (307, 302)
+
+
+@pytest.mark.skipif(shutil.which("node") is None, reason="node not installed")
+def test_scripts_parse(s2, tmp_path):
+    client, _, _ = s2
+    for path, text in _fetch_modules(client).items():
+        target = tmp_path / path.rsplit("/", 1)[1].replace(".js", ".mjs")
+        target.write_text(text)
+        result = subprocess.run(["node", "--check", str(target)], capture_output=True, text=True, timeout=60)
+        assert result.returncode == 0, (path, result.stderr)
