@@ -1,0 +1,293 @@
+"""``demcal material|campaign|schedule ...``: every calibration action, scripted through the HTTP API.
+
+The commands talk to a running service (``--url``, default $DEMCAL_URL or
+http://127.0.0.1:8000) with httpx, so they work against a remote service as
+well as a local one. Any error (HTTP 4xx/5xx, no server, bad input file) is a
+one-line message on stderr and exit status 2, never a traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+DEFAULT_URL = "http://127.0.0.1:8000"
+TIMEOUT_S = 30.0
+
+
+class CliError(Exception):
+    pass
+
+
+def _client(args) -> httpx.Client:
+    headers = {"X-Client-Id": "demcal-cli"}
+    token = args.token or os.environ.get("DEMCAL_TOKEN")
+    if token:
+        headers["Authorization"] = f"Bearer {token}"
+    return httpx.Client(base_url=args.url.rstrip("/") + "/api/v1", headers=headers, timeout=TIMEOUT_S)
+
+
+def _call(args, method: str, path: str, body: Any = None, params: dict | None = None) -> Any:
+    try:
+        with _client(args) as client:
+            response = client.request(method, path, json=body, params=params)
+    except httpx.HTTPError as exc:
+        raise CliError(f"cannot reach {args.url}: {exc}") from exc
+    if response.status_code == 204:
+        return None
+    try:
+        data = response.json()
+    except ValueError:
+        data = {"detail": [{"loc": [], "msg": response.text[:200]}]}
+    if response.status_code >= 400:
+        detail = data.get("detail") if isinstance(data, dict) else None
+        first = detail[0] if isinstance(detail, list) and detail else {"msg": str(detail), "loc": []}
+        where = ".".join(str(p) for p in first.get("loc", []))
+        raise CliError(f"HTTP {response.status_code}: {first.get('msg')}" + (f" (at {where})" if where else ""))
+    return data
+
+
+def _read_json(path: str) -> Any:
+    try:
+        text = sys.stdin.read() if path == "-" else Path(path).read_text()
+        return json.loads(text)
+    except (OSError, json.JSONDecodeError) as exc:
+        raise CliError(f"cannot read JSON from {path}: {exc}") from exc
+
+
+def _pairs(items: list[str] | None, what: str, cast=float) -> dict:
+    out = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise CliError(f"{what} {item!r}: expected NAME=VALUE")
+        try:
+            out[key.strip()] = cast(value)
+        except ValueError as exc:
+            raise CliError(f"{what} {item!r}: {exc}") from exc
+    return out
+
+
+def _fmt(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.5g}"
+    if value is None:
+        return "-"
+    if isinstance(value, dict):
+        return ", ".join(f"{k}={_fmt(v)}" for k, v in value.items()) or "-"
+    return str(value)
+
+
+def _table(headers: list[str], rows: list[list[Any]]) -> str:
+    cells = [[_fmt(c) for c in row] for row in rows]
+    widths = [max([len(h)] + [len(r[i]) for r in cells]) for i, h in enumerate(headers)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(headers, widths)), "  ".join("-" * w for w in widths)]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths)) for row in cells]
+    return "\n".join(lines)
+
+
+def _emit(args, data: Any, text: str | None = None) -> int:
+    print(json.dumps(data, indent=1) if args.json or text is None else text)
+    return 0
+
+
+# -- materials -------------------------------------------------------------------------------------
+
+def material_list(args) -> int:
+    data = _call(args, "GET", "/materials")
+    return _emit(args, data, _table(["id", "name", "measurements", "bundled"],
+                                    [[m["id"], m["name"], len(m["measurements"]), m["bundled"]] for m in data]))
+
+
+def material_show(args) -> int:
+    m = _call(args, "GET", f"/materials/{args.id}")
+    rows = [[x["id"], x["test"], x["quantity"], x["condition"], x["n"], x["mean"], x["standard_uncertainty"], x["unit"]]
+            for x in m["measurements"]]
+    text = f"{m['name']} (#{m['id']})\n{m['description']}\n\n" + _table(
+        ["id", "test", "quantity", "condition", "n", "mean", "std.unc.", "unit"], rows)
+    return _emit(args, m, text)
+
+
+def material_add(args) -> int:
+    try:
+        values = [float(v) for v in args.values.split(",")]
+    except ValueError as exc:
+        raise CliError(f"--values: {exc}") from exc
+    body = {"test": args.test, "quantity": args.quantity, "values": values, "source": args.source or "",
+            "condition": _pairs(args.condition, "--condition"), "condition_units": _pairs(args.condition_unit,
+                                                                                             "--condition-unit", str)}
+    if args.unit:
+        body["unit"] = args.unit
+    m = _call(args, "POST", f"/materials/{args.id}/measurements", body)
+    return _emit(args, m, f"measurement {m['id']}: {m['test']}/{m['quantity']} mean {_fmt(m['mean'])} {m['unit']}")
+
+
+# -- campaigns -------------------------------------------------------------------------------------
+
+def _factor(text: str) -> dict:
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise CliError(f"--factor {text!r}: expected NAME:LOW:HIGH")
+    try:
+        return {"name": parts[0], "low": float(parts[1]), "high": float(parts[2])}
+    except ValueError as exc:
+        raise CliError(f"--factor {text!r}: {exc}") from exc
+
+
+def campaign_create(args) -> int:
+    body = _read_json(args.file) if args.file else {}
+    for key in ("name", "material_id", "evaluator", "fidelity", "seed"):
+        value = getattr(args, key)
+        if value is not None:
+            body[key] = value
+    if args.factor:
+        body["factors"] = [_factor(f) for f in args.factor]
+    if args.centre_runs is not None or args.generators:
+        design = body.setdefault("design", {})
+        if args.centre_runs is not None:
+            design["centre_runs"] = args.centre_runs
+        if args.generators:
+            design.update(type="fractional", generators=args.generators)
+    c = _call(args, "POST", "/campaigns", body)
+    if args.start:
+        c = _call(args, "POST", f"/campaigns/{c['id']}/start")
+    return _emit(args, c, f"campaign {c['id']} {c['status']}")
+
+
+def _status_text(c: dict) -> str:
+    text = (f"campaign {c['id']} {c['name']!r}: {c['status']}, iteration {c['current_iteration']}, "
+            f"phase {c['phase'] or '-'}, runs {c['runs_succeeded']}/{c['runs_total']}")
+    return text + (f"\nerror: {c['error']}" if c.get("error") else "")
+
+
+def campaign_list(args) -> int:
+    data = _call(args, "GET", "/campaigns", params={"status": args.status} if args.status else None)
+    return _emit(args, data, _table(["id", "name", "material", "status", "iteration", "phase"],
+                                    [[c["id"], c["name"], c["material_id"], c["status"], c["current_iteration"],
+                                      c["phase"]] for c in data]))
+
+
+def campaign_action(args) -> int:
+    method = "GET" if args.action == "status" else "POST"
+    path = f"/campaigns/{args.id}" + ("" if args.action == "status" else f"/{args.action}")
+    c = _call(args, method, path)
+    return _emit(args, c, _status_text(c))
+
+
+def campaign_report(args) -> int:
+    params = {"number": args.iteration} if args.iteration else None
+    r = _call(args, "GET", f"/campaigns/{args.id}/report", params=params)
+    rows = [[t["test"], t["quantity"], t["condition"], t["measured"], t.get("measured_uncertainty"),
+             t.get("predicted"), t.get("prediction_interval"), t.get("confirmed"), t.get("standardised_residual"),
+             t.get("reachability"), t["status"]] for t in r["targets"]]
+    text = (f"campaign {r['campaign_id']} iteration {r['iteration']}: {r['verdict']}\n"
+            f"optimum: {_fmt(r['optimum'])}\n\n"
+            + _table(["test", "quantity", "condition", "measured", "u", "predicted", "95% PI", "confirmed", "z",
+                      "min|z| in box", "status"],
+                     [[c if not isinstance(c, list) else "[" + ", ".join(_fmt(x) for x in c) + "]" for c in row]
+                      for row in rows]))
+    if r.get("next_step"):
+        text += f"\n\nconfirmation: {r['next_step'].get('verdict')}: {r['next_step'].get('reason')}"
+    return _emit(args, r, text)
+
+
+# -- schedules -------------------------------------------------------------------------------------
+
+def schedule_create(args) -> int:
+    if bool(args.campaign_file) == bool(args.from_campaign):
+        raise CliError("give exactly one of --campaign-file or --from-campaign")
+    template = (_read_json(args.campaign_file) if args.campaign_file
+                else _call(args, "GET", f"/campaigns/{args.from_campaign}")["config"])
+    body = {"name": args.name, "cron": args.cron, "template": template,
+            "only_if_new_measurements": args.only_new, "missed_run_policy": args.policy}
+    s = _call(args, "POST", "/schedules", body)
+    return _emit(args, s, f"schedule {s['id']} {s['cron']!r}: next run {s['next_run_at']}")
+
+
+def schedule_list(args) -> int:
+    data = _call(args, "GET", "/schedules")
+    return _emit(args, data, _table(["id", "name", "cron", "enabled", "only new data", "next run", "last campaign"],
+                                    [[s["id"], s["name"], s["cron"], s["enabled"], s["only_if_new_measurements"],
+                                      s["next_run_at"], s["last_campaign_id"]] for s in data]))
+
+
+def schedule_delete(args) -> int:
+    _call(args, "DELETE", f"/schedules/{args.id}")
+    return _emit(args, {"deleted": args.id}, f"schedule {args.id} deleted")
+
+
+# -- wiring ----------------------------------------------------------------------------------------
+
+def _guard(func):
+    def run(args) -> int:
+        try:
+            return func(args)
+        except CliError as exc:
+            print(f"demcal: {exc}", file=sys.stderr)
+            return 2
+    return run
+
+
+def _leaf(sub, name: str, func, help_text: str) -> argparse.ArgumentParser:
+    parser = sub.add_parser(name, help=help_text, description=help_text)
+    parser.add_argument("--url", default=os.environ.get("DEMCAL_URL", DEFAULT_URL), help="service base URL")
+    parser.add_argument("--token", default=None, help="bearer token for writes (or $DEMCAL_TOKEN)")
+    parser.add_argument("--json", action="store_true", help="print the API's JSON")
+    parser.set_defaults(func=_guard(func))
+    return parser
+
+
+def register(subparsers) -> None:
+    material = subparsers.add_parser("material", help="materials and their measurements")
+    msub = material.add_subparsers(dest="material_command", required=True)
+    _leaf(msub, "list", material_list, "list materials")
+    _leaf(msub, "show", material_show, "show a material's measurements (SI)").add_argument("id", type=int)
+    add = _leaf(msub, "add-measurement", material_add, "add replicate values of one measurement")
+    add.add_argument("id", type=int)
+    add.add_argument("--test", required=True)
+    add.add_argument("--quantity", required=True)
+    add.add_argument("--values", required=True, help="comma-separated replicate values")
+    add.add_argument("--unit", help="unit of the values, e.g. kPa (default SI)")
+    add.add_argument("--condition", action="append", help="NAME=VALUE, e.g. normal_stress_pa=24 (repeatable)")
+    add.add_argument("--condition-unit", action="append", help="NAME=UNIT, e.g. normal_stress_pa=kPa")
+    add.add_argument("--source")
+
+    campaign = subparsers.add_parser("campaign", help="calibration campaigns")
+    csub = campaign.add_subparsers(dest="campaign_command", required=True)
+    create = _leaf(csub, "create", campaign_create, "create a campaign from a JSON file and/or flags")
+    create.add_argument("--file", help="JSON body (as POST /campaigns), '-' for stdin")
+    create.add_argument("--name")
+    create.add_argument("--material", dest="material_id", type=int)
+    create.add_argument("--evaluator", choices=["analytic", "dem"])
+    create.add_argument("--fidelity", choices=["screening", "thesis"])
+    create.add_argument("--factor", action="append", help="NAME:LOW:HIGH in SI (repeatable)")
+    create.add_argument("--centre-runs", type=int)
+    create.add_argument("--generators", nargs="+", help="e.g. D=ABC (makes the design fractional)")
+    create.add_argument("--seed", type=int)
+    create.add_argument("--start", action="store_true", help="start it right away")
+    list_parser = _leaf(csub, "list", campaign_list, "list campaigns")
+    list_parser.add_argument("--status", choices=["draft", "running", "paused", "completed", "failed"])
+    for action, text in (("start", "start a draft campaign"), ("pause", "pause a running campaign"),
+                         ("resume", "resume a paused campaign"), ("status", "show a campaign's state")):
+        _leaf(csub, action, campaign_action, text).add_argument("id", type=int)
+        csub.choices[action].set_defaults(action=action)
+    report = _leaf(csub, "report", campaign_report, "measured vs predicted vs confirmed per target")
+    report.add_argument("id", type=int)
+    report.add_argument("--iteration", type=int)
+
+    schedule = subparsers.add_parser("schedule", help="cron schedules that start campaigns")
+    ssub = schedule.add_subparsers(dest="schedule_command", required=True)
+    screate = _leaf(ssub, "create", schedule_create, "create a schedule (cron in UTC)")
+    screate.add_argument("--name", required=True)
+    screate.add_argument("--cron", required=True, help="5 fields, e.g. '0 2 * * *', or @daily")
+    screate.add_argument("--campaign-file", help="campaign template JSON (as POST /campaigns)")
+    screate.add_argument("--from-campaign", type=int, help="reuse an existing campaign's configuration")
+    screate.add_argument("--only-new", action="store_true", help="only when new measurements arrived")
+    screate.add_argument("--policy", choices=["coalesce", "skip"], default="coalesce", help="missed-run policy")
+    _leaf(ssub, "list", schedule_list, "list schedules")
+    _leaf(ssub, "delete", schedule_delete, "delete a schedule").add_argument("id", type=int)

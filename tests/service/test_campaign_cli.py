@@ -1,0 +1,119 @@
+"""``demcal material|campaign|schedule`` against a real HTTP server (uvicorn on a loopback port)."""
+from __future__ import annotations
+
+import json
+import socket
+import threading
+import time
+
+import pytest
+import uvicorn
+
+from conftest_s2 import drain, s2_settings
+from service.app import create_app
+from service.campaigns.runner import CampaignRunner
+from service.cli import main
+
+
+@pytest.fixture
+def server(tmp_path):
+    settings = s2_settings(tmp_path)
+    app = create_app(settings)
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    config = uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", lifespan="on")
+    srv = uvicorn.Server(config)
+    thread = threading.Thread(target=srv.run, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + 30
+    while not srv.started:
+        assert time.monotonic() < deadline, "server did not start"
+        time.sleep(0.05)
+    yield f"http://127.0.0.1:{port}", app, settings
+    srv.should_exit = True
+    thread.join(10)
+
+
+def run(capsys, *argv) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_material_commands(server, capsys):
+    url, _, _ = server
+    code, out, _ = run(capsys, "material", "list", "--url", url)
+    assert code == 0 and "thesis-coarse-aggregate" in out
+    code, out, _ = run(capsys, "material", "show", "1", "--url", url, "--json")
+    assert code == 0 and json.loads(out)["measurements"][0]["values"] == [1412.0, 1383.6, 1397.8]
+    code, out, _ = run(capsys, "material", "add-measurement", "1", "--url", url, "--test", "dst",
+                       "--quantity", "residual_shear_stress_pa", "--values", "17,18", "--unit", "kPa",
+                       "--condition", "normal_stress_pa=24", "--condition-unit", "normal_stress_pa=kPa")
+    assert code == 0 and "mean 17500 Pa" in out
+    code, _, err = run(capsys, "material", "add-measurement", "1", "--url", url, "--test", "dst",
+                       "--quantity", "porosity", "--values", "1")
+    assert code == 2 and "HTTP 422" in err and "quantity" in err
+    code, _, err = run(capsys, "material", "show", "99", "--url", url)
+    assert code == 2 and "HTTP 404" in err
+    code, _, err = run(capsys, "material", "add-measurement", "1", "--url", url, "--test", "dst",
+                       "--quantity", "friction_angle_deg", "--values", "a,b")
+    assert code == 2 and "--values" in err
+
+
+def test_campaign_and_schedule_commands(server, capsys, tmp_path):
+    url, app, settings = server
+    code, out, _ = run(capsys, "campaign", "create", "--url", url, "--name", "cli", "--material", "1",
+                       "--evaluator", "analytic", "--fidelity", "thesis", "--centre-runs", "2",
+                       "--factor", "particle_density_kg_m3:2300:2700", "--factor", "friction_pp:0.3:1.0",
+                       "--start", "--json")
+    assert code == 0
+    campaign = json.loads(out)
+    cid = campaign["id"]
+    assert campaign["status"] == "running"
+    code, _, err = run(capsys, "campaign", "start", str(cid), "--url", url)
+    assert code == 2 and "HTTP 409" in err
+    assert run(capsys, "campaign", "pause", str(cid), "--url", url)[0] == 0
+    code, out, _ = run(capsys, "campaign", "resume", str(cid), "--url", url)
+    assert code == 0 and "running" in out
+    code, _, err = run(capsys, "campaign", "report", str(cid), "--url", url)
+    assert code == 2 and "HTTP 404" in err  # no iteration yet
+
+    runner = CampaignRunner(app.state.session_factory, settings)
+    for _ in range(5):
+        runner.tick()
+        drain(app, settings)
+    code, out, _ = run(capsys, "campaign", "status", str(cid), "--url", url)
+    assert code == 0 and "completed" in out
+    code, out, _ = run(capsys, "campaign", "report", str(cid), "--url", url)
+    assert code == 0 and "bulk_density_kg_m3" in out and "95% PI" in out
+    code, out, _ = run(capsys, "campaign", "list", "--url", url, "--status", "completed")
+    assert code == 0 and "cli" in out
+
+    template = tmp_path / "template.json"
+    template.write_text(json.dumps({"name": "nightly", "material_id": 1,
+                                    "factors": [{"name": "friction_pp", "low": 0.3, "high": 1.0}]}))
+    code, out, _ = run(capsys, "schedule", "create", "--url", url, "--name", "n", "--cron", "0 2 * * *",
+                       "--campaign-file", str(template), "--only-new", "--json")
+    assert code == 0 and json.loads(out)["only_if_new_measurements"] is True
+    code, out, _ = run(capsys, "schedule", "create", "--url", url, "--name", "again", "--cron", "@daily",
+                       "--from-campaign", str(cid))
+    assert code == 0 and "next run" in out
+    code, _, err = run(capsys, "schedule", "create", "--url", url, "--name", "x", "--cron", "99 * * * *",
+                       "--from-campaign", str(cid))
+    assert code == 2 and "HTTP 422" in err and "cron" in err
+    code, _, err = run(capsys, "schedule", "create", "--url", url, "--name", "x", "--cron", "@daily")
+    assert code == 2 and "exactly one" in err
+    code, out, _ = run(capsys, "schedule", "list", "--url", url, "--json")
+    ids = [s["id"] for s in json.loads(out)]
+    assert len(ids) == 2
+    assert run(capsys, "schedule", "delete", str(ids[0]), "--url", url)[0] == 0
+    code, _, err = run(capsys, "schedule", "delete", str(ids[0]), "--url", url)
+    assert code == 2 and "HTTP 404" in err
+    code, _, err = run(capsys, "campaign", "create", "--url", url, "--file", str(tmp_path / "missing.json"))
+    assert code == 2 and "cannot read JSON" in err
+
+
+def test_unreachable_service_is_a_message_not_a_traceback(capsys):
+    code, _, err = run(capsys, "campaign", "list", "--url", "http://127.0.0.1:9")
+    assert code == 2 and err.startswith("demcal: cannot reach")
