@@ -31,7 +31,7 @@ def test_sigkill_worker_mid_job_job_finishes_on_the_other(live_server):
     workers = {}
     try:
         for _ in range(2):
-            proc = subprocess.Popen([sys.executable, "-m", "service.workers"], env=env)
+            proc = subprocess.Popen([sys.executable, "-m", "service.cli", "worker"], env=env)  # `demcal worker`
             workers[proc.pid] = proc
         api = httpx.Client(base_url=f"{base}/api/v1", timeout=10)
         victim_job = api.post("/jobs", json={"evaluator": "analytic", "seed": 1, "idempotency_key": "victim"}).json()
@@ -63,6 +63,13 @@ def test_sigkill_worker_mid_job_job_finishes_on_the_other(live_server):
             assert _wait_for(lambda: finished(job_id), 60, "later jobs")["status"] == "succeeded"
         listing = api.get("/jobs").json()
         assert listing["total"] == 3 and {j["status"] for j in listing["items"]} == {"succeeded"}
+
+        # Cancellation reaches a job running in a worker process.
+        doomed = api.post("/jobs", json={"evaluator": "analytic", "seed": 4}).json()["id"]
+        _wait_for(lambda: api.get(f"/jobs/{doomed}").json()["status"] == "running", 30, "the job to start")
+        assert api.post(f"/jobs/{doomed}/cancel").status_code == 202
+        cancelled = _wait_for(lambda: finished(doomed), 30, "the running job to stop")
+        assert cancelled["status"] == "cancelled" and cancelled["progress"]["fraction"] < 1.0
     finally:
         for proc in workers.values():
             if proc.poll() is None:
