@@ -11,8 +11,7 @@ from typing import Any
 from sqlalchemy import JSON, DateTime, ForeignKey, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
-from service.models.base import Base
-from service.models.material import utcnow
+from service.models.base import Base, utcnow
 
 CAMPAIGN_STATUSES = ("draft", "running", "paused", "completed", "failed")
 # Phases of one iteration, in order.

@@ -7,8 +7,7 @@ from typing import Any
 from sqlalchemy import JSON, Boolean, DateTime, ForeignKey, Integer, String, Text
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
-from service.models.base import Base
-from service.models.material import utcnow
+from service.models.base import Base, utcnow
 
 
 class Schedule(Base):

@@ -1,0 +1,1 @@
+"""Calibration campaigns: configuration, design, runner (state machine), analysis and report."""
