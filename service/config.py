@@ -10,7 +10,7 @@ import os
 from functools import lru_cache
 from pathlib import Path
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field
 
 DEFAULT_DATA_DIR = Path("demcal-data")
 
@@ -62,4 +62,4 @@ def get_settings() -> Settings:
     return settings_from_env()
 
 
-__all__ = ["Settings", "settings_from_env", "get_settings", "ValidationError", "default_database_url"]
+__all__ = ["Settings", "settings_from_env", "get_settings", "default_database_url"]

@@ -71,6 +71,17 @@ def test_expired_lease_requeues_then_fails_with_reason(session_factory):
     assert "max_attempts=2" in job.error and "dead-2" in job.error
 
 
+def test_cancel_requested_on_a_dead_workers_job_ends_cancelled(session_factory):
+    (job_id,) = _submit(session_factory, 1)
+    with session_factory() as s:
+        queue.claim_next(s, "dead", 0.05)
+        queue.cancel_job(s, job_id)
+        time.sleep(0.1)
+        assert queue.claim_next(s, "w", 30) is None  # not run again
+        job = queue.get_job(s, job_id)
+    assert job.status == "cancelled" and "dead" in job.error
+
+
 def test_heartbeat_extends_lease_and_stores_progress(session_factory):
     (job_id,) = _submit(session_factory, 1)
     with session_factory() as s:
