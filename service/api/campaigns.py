@@ -6,9 +6,9 @@ from typing import Literal
 from fastapi import APIRouter, Depends, Header, Query
 from sqlalchemy.orm import Session
 
-from service.campaigns.schemas import CampaignCreate
+from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.campaigns.store import (campaign_summary, create_campaign, get_campaign, iteration, iteration_view,
-                                     list_campaigns, transition)
+                                     list_campaigns, next_iteration, transition)
 from service.db import get_session
 from service.errors import Conflict
 
@@ -51,6 +51,12 @@ def resume(campaign_id: int, session: Session = Depends(get_session)) -> dict:
 @router.get("/{campaign_id}/iterations", summary="All iterations with their parameters, design, runs and report")
 def iterations(campaign_id: int, session: Session = Depends(get_session)) -> list[dict]:
     return [iteration_view(it) for it in get_campaign(session, campaign_id).iterations]
+
+
+@router.post("/{campaign_id}/iterations", status_code=201,
+             summary="Start the next iteration of a completed campaign (e.g. with a contact effect added)")
+def add_iteration(campaign_id: int, body: IterationIn, session: Session = Depends(get_session)) -> dict:
+    return campaign_summary(next_iteration(session, campaign_id, body))
 
 
 def _product(session: Session, campaign_id: int, number: int | None, attr: str, label: str):

@@ -90,6 +90,9 @@ class CampaignRunner:
             return self._batteries(session, campaign, config, it, kind="confirmation", next_phase="report")
         if it.phase == "report":
             return self._report(session, campaign, config, it)
+        if it.phase == "done":  # running again after POST .../iterations: the next iteration begins
+            self._new_iteration(session, campaign, config)
+            return True
         return False
 
     def _new_iteration(self, session: Session, campaign: Campaign, config: CampaignCreate) -> None:
@@ -131,7 +134,7 @@ class CampaignRunner:
     # -- batteries ---------------------------------------------------------------------------
     def _spec(self, config: CampaignCreate, run: CampaignRun) -> JobSpec:
         parameters = MicroParameters.model_validate({**config.fixed_parameters, **run.natural})
-        return JobSpec(test="battery", fidelity=config.fidelity, seed=run.seed, parameters=parameters,
+        return JobSpec(test=config.test, fidelity=config.fidelity, seed=run.seed, parameters=parameters,
                        options=TestOptions.model_validate(config.options))
 
     def _submit(self, session, campaign, config, run) -> bool:

@@ -102,6 +102,9 @@ class CampaignCreate(BaseModel):
     material_id: int = Field(..., ge=1)
     evaluator: Literal["analytic", "dem"] = "analytic"
     fidelity: Literal["screening", "thesis"] = "screening"
+    test: Literal["battery", "fill", "cct", "dst", "aor", "anchor"] = Field(
+        "battery", description="what each run simulates: the fill -> CCT -> DST battery, or one test alone"
+    )
     factors: list[FactorIn] = Field(..., min_length=1, max_length=8)
     design: DesignIn = Field(default_factory=DesignIn)
     targets: list[TargetIn] | None = Field(
@@ -169,3 +172,20 @@ class CampaignCreate(BaseModel):
             for level in (factor.low, factor.high):
                 MicroParameters.model_validate({**self.fixed_parameters, factor.name: level})
         return self
+
+
+class IterationIn(BaseModel):
+    """Changes for the next iteration of a completed campaign (e.g. a contact effect added).
+
+    Whatever is not given is carried over from the previous iteration's configuration.
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    fixed_parameters: dict[str, Any] | None = Field(
+        None, description="replaces the fixed micro parameters, e.g. with effects={'rolling_epsd2': {...}}"
+    )
+    factors: list[FactorIn] | None = None
+    design: DesignIn | None = None
+    targets: list[TargetIn] | None = None
+    options: dict[str, Any] | None = None

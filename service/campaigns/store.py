@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from sqlalchemy import select
+from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
-from service.campaigns.schemas import CampaignCreate
+from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.errors import Conflict, NotFound
 from service.materials.store import get_material
 from service.models.base import utcnow
@@ -56,9 +56,27 @@ def transition(session: Session, campaign_id: int, action: str) -> Campaign:
     values: dict[str, Any] = {"status": target, "updated_at": utcnow()}
     if action == "start":
         values["started_at"] = utcnow()
-    from sqlalchemy import update
     won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == campaign.status)
                           .values(**values).execution_options(synchronize_session=False)).rowcount
+    session.commit()
+    if not won:
+        raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])
+    return get_campaign(session, campaign_id)
+
+
+def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> Campaign:
+    """Completed campaign -> running again with a new iteration using the changed configuration."""
+    campaign = get_campaign(session, campaign_id)
+    if campaign.status != "completed":
+        raise Conflict(f"campaign {campaign_id} is {campaign.status}; a next iteration starts only after "
+                       "the current one completed", ["path", "campaign_id"])
+    config = dict(campaign.config)
+    for key, value in changes.model_dump(mode="json", exclude_none=True).items():
+        config[key] = value
+    config = CampaignCreate.model_validate(config).model_dump(mode="json")  # 422 naming the field if inconsistent
+    won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == "completed")
+                          .values(config=config, status="running", finished_at=None, updated_at=utcnow())
+                          .execution_options(synchronize_session=False)).rowcount
     session.commit()
     if not won:
         raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])

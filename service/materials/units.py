@@ -44,7 +44,13 @@ def to_si(value: float, unit: str, si_unit: str) -> float:
     return float(value) * table[unit]
 
 
+# Dimensionless condition names the lab emits (angle-of-repose sector 1..8).
+_UNITLESS_CONDITIONS = ("sector",)
+
+
 def condition_si_unit(name: str) -> str:
+    if name in _UNITLESS_CONDITIONS:
+        return "1"
     for suffix, unit in _CONDITION_SUFFIXES:
         if name.endswith(suffix):
             return unit

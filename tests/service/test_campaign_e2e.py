@@ -100,3 +100,33 @@ def test_campaign_fails_with_reason_when_no_target_can_be_modelled(s2):
     final = run_to_end(client, app, settings, cid)
     assert final["status"] == "failed" and "no target could be modelled" in final["error"]
     assert client.post(f"{API}/campaigns/{cid}/resume").status_code == 409
+
+
+def test_next_iteration_with_an_effect_keeps_the_first(s2):
+    """Iteration 2 adds rolling resistance (the analytic stand-in's hidden effect); iteration 1 stays as it was."""
+    client, app, settings = s2
+    cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+    assert client.post(f"{API}/campaigns/{cid}/iterations", json={}).status_code == 409  # draft
+    client.post(f"{API}/campaigns/{cid}/start")
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    first = client.get(f"{API}/campaigns/{cid}/report").json()
+    bad = client.post(f"{API}/campaigns/{cid}/iterations", json={"fixed_parameters": {"friction_pp": 0.5}})
+    assert bad.status_code == 422  # friction_pp is a factor: cannot also be fixed
+    effects = {"rolling_epsd2": {"rolling_friction": 0.3}}
+    response = client.post(f"{API}/campaigns/{cid}/iterations", json={"fixed_parameters": {"effects": effects}})
+    assert response.status_code == 201 and response.json()["status"] == "running"
+    assert client.post(f"{API}/campaigns/{cid}/iterations", json={}).status_code == 409  # running
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+
+    iterations = client.get(f"{API}/campaigns/{cid}/iterations").json()
+    assert [it["number"] for it in iterations] == [1, 2]
+    assert iterations[0]["parameters"]["effects"] == {} and iterations[1]["parameters"]["effects"] == effects
+    assert client.get(f"{API}/campaigns/{cid}/report", params={"number": 1}).json()["targets"] == first["targets"]
+    second = {r["quantity"]: r for r in client.get(f"{API}/campaigns/{cid}/report").json()["targets"]}
+    # with rolling friction 0.3 the stand-in's friction angle reaches 12 + 30 (1 - e^(-1/0.35)) + 25 x 0.3/0.38
+    # = 60.0 deg at mu_pp = 1: 60.6 deg is now within 3 u
+    assert second["friction_angle_deg"]["reachable"] is True
+    with app.state.session_factory() as session:
+        jobs = session.query(Job).filter(Job.campaign_id == cid).all()
+    assert len(jobs) == 24
+    assert all(j.spec["parameters"]["effects"] == effects for j in jobs if j.id > 12)
