@@ -123,7 +123,9 @@ SCREENING = Fidelity(
     cct_max_stress_pa=8415.0 / _SCREENING_AREA_M2,
     cct_cycles=4,
     lab_lid_speed_m_s=0.001,
-    lab_shear_speed_m_s=0.0003,
+    # Table A.7 sheared at 0.3 mm/s; A.6.2 found 0.3 and 1 mm/s gave the same curves, so the lab
+    # speed is the thesis's 1 mm/s at both fidelities and speed_factor means the same thing
+    lab_shear_speed_m_s=0.001,
     # Table A.7 sheared 39 mm (9.75 % of 400 mm); the 8-10 % window needs a little beyond 10 %.
     shear_distance_m=0.042,
     default_speed_factor=40.0,

@@ -1,0 +1,1 @@
+"""Test procedures: preparation and simulation; each returns curves and reduced properties."""

@@ -1,0 +1,130 @@
+"""Direct shear test (thesis sections 3.3.2 and 4.7.2), one run per normal stress.
+
+Per load, from the precompressed packing: reload to the target, hold it with the servo until the
+packing is stable (stress within 2 %, at rest; the thesis waited 20 s), then move every bottom-half
+wall in +x at the shear speed over the shear distance while the servo holds the normal stress.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from engine.config import ServoSpec
+from engine.lab import sim as labsim
+from engine.lab.context import RunContext
+from engine.lab.geometry import BOTTOM_HALF
+from engine.lab.procedures.lid import LidRecord, load_to
+from engine.lab.reducers.dst import DstReduction, MohrCoulombFit, mohr_coulomb_fit, reduce_dst
+
+SAMPLES_PER_RUN = 800  # shear samples over the shear distance (the 8-10 % window gets ~150)
+SHEAR_BAND_DIAMETERS = 10.0  # shear band thickness for the inertial number, in mean diameters
+# The engine's servo closes gain x (force error) per step through the summed contact stiffness, but
+# the lid's contacts also carry dashpots: a lid speed v adds c v per contact, with c dt / k ~ 18 x the
+# gain at the engine's time step and a damping ratio of 0.8, so the default gain (0.2) flips the lid
+# between +-max speed every step. 0.02 keeps that ratio near 0.36 and still closes the error in ~50 steps.
+SERVO_GAIN = 0.02
+
+
+@dataclass
+class DstRun:
+    normal_stress_target_pa: float
+    reduction: DstReduction
+    curve: dict[str, list[float]]
+
+
+@dataclass
+class DstOutcome:
+    runs: list[DstRun]
+    fit: MohrCoulombFit | None
+
+
+def _stabilise(ctx: RunContext, sim, target_pa: float, phase: str, min_time_s=0.05, max_time_s=0.5) -> None:
+    """Hold the servo until the stress is within 2 % of the target and the packing is nearly at rest
+    (kinetic energy ratio 1e-4: mean speed ~9 mm/s for 40 mm grains, a fraction of the shear speed)."""
+    area = ctx.preset.container_area_m2
+    d = labsim.mean_diameter_m(sim)
+    chunk = labsim.steps_for(sim, 0.01)
+    t0 = sim.time_s
+    while True:
+        labsim.advance(ctx, sim, chunk)
+        stress = float(sim.wall_force("lid")[2]) / area
+        elapsed = sim.time_s - t0
+        ctx.report(elapsed / max_time_s, phase)
+        if elapsed >= min_time_s and abs(stress - target_pa) < 0.02 * target_pa \
+                and labsim.kinetic_energy_ratio(sim, d) < 1e-4:
+            return
+        if elapsed >= max_time_s:
+            ctx.warn(f"{phase}: not stable after {max_time_s} s (stress {stress / 1000:.2f} kPa)")
+            return
+
+
+def run_one(ctx: RunContext, precompressed: dict, packing_height_m: float, target_pa: float) -> DstRun:
+    tag = f"dst {target_pa / 1000:.1f} kPa"
+    sim = labsim.restore(precompressed)
+    area = ctx.preset.container_area_m2
+    load_to(ctx, sim, target_pa, ctx.lid_speed_m_s, LidRecord(), 0, f"{tag}: reloading", packing_height_m,
+            0.5 * packing_height_m)
+    v = ctx.shear_speed_m_s
+    sim.set_wall_servo("lid", ServoSpec(axis=(0.0, 0.0, -1.0), target_stress_pa=target_pa, area_m2=area,
+                                        max_speed_m_s=max(v, ctx.lid_speed_m_s), gain_fraction=SERVO_GAIN))
+    _stabilise(ctx, sim, target_pa, f"{tag}: stabilising")
+
+    distance = ctx.shear_distance_m
+    chunk = max(1, int(distance / SAMPLES_PER_RUN / (v * sim.timestep_s)))
+    x0 = float(sim.wall_position("floor")[0])
+    z0 = float(sim.wall_position("lid")[2])
+    rho = ctx.spec.parameters.particle_density_kg_m3
+    d = labsim.mean_diameter_m(sim)
+    band = min(SHEAR_BAND_DIAMETERS * d, packing_height_m)
+    for name in BOTTOM_HALF:
+        sim.set_wall_velocity(name, (v, 0.0, 0.0))
+    cols = {k: [] for k in ("time_s", "shear_displacement_m", "shear_force_n", "normal_force_n", "lid_rise_m",
+                            "inertial_number")}
+    while True:
+        labsim.advance(ctx, sim, chunk)
+        disp = float(sim.wall_position("floor")[0]) - x0
+        fs = -sum(float(sim.wall_force(n)[0]) for n in BOTTOM_HALF)
+        fn = float(sim.wall_force("lid")[2])
+        inertial = v / band * d / math.sqrt(max(fn / area, 1e-9) / rho)
+        cols["time_s"].append(sim.time_s)
+        cols["shear_displacement_m"].append(disp)
+        cols["shear_force_n"].append(fs)
+        cols["normal_force_n"].append(fn)
+        cols["lid_rise_m"].append(float(sim.wall_position("lid")[2]) - z0)
+        cols["inertial_number"].append(inertial)
+        ctx.inertial_number(inertial, "dst/shearing")
+        ctx.report(disp / distance, f"{tag}: shearing")
+        if disp >= distance:
+            break
+    opts = ctx.spec.options
+    red = reduce_dst(cols["shear_displacement_m"], cols["shear_force_n"], cols["normal_force_n"],
+                     cols["lid_rise_m"], area, ctx.preset.container_diameter_m,
+                     window=tuple(opts.residual_window_strain), span=opts.moving_average_span)
+    disp = np.asarray(cols["shear_displacement_m"])
+    curve = {
+        "time_s": cols["time_s"],
+        "shear_displacement_m": cols["shear_displacement_m"],
+        "shear_strain": (disp / ctx.preset.container_diameter_m).tolist(),
+        "shear_stress_pa": (np.asarray(cols["shear_force_n"]) / area).tolist(),
+        "normal_stress_pa": (np.asarray(cols["normal_force_n"]) / area).tolist(),
+        "shear_stress_smoothed_pa": red.smoothed_shear_stress_pa.tolist(),
+        "normal_stress_smoothed_pa": red.smoothed_normal_stress_pa.tolist(),
+        "lid_rise_m": cols["lid_rise_m"],
+        "inertial_number": cols["inertial_number"],
+    }
+    return DstRun(target_pa, red, curve)
+
+
+def run_dst(ctx: RunContext, precompressed: dict, packing_height_m: float, lo: float, hi: float) -> DstOutcome:
+    stresses = ctx.dst_normal_stresses_pa
+    runs = []
+    for k, target in enumerate(stresses):
+        ctx.phase(lo + (hi - lo) * k / len(stresses), lo + (hi - lo) * (k + 1) / len(stresses))
+        runs.append(run_one(ctx, precompressed, packing_height_m, target))
+    fit = None
+    if len(runs) >= 2:
+        fit = mohr_coulomb_fit([r.reduction.residual_normal_stress_pa for r in runs],
+                               [r.reduction.residual_shear_stress_pa for r in runs])
+    return DstOutcome(runs, fit)
