@@ -61,6 +61,7 @@ class TestOptions(BaseModel):
     aor_floor_friction: float | None = Field(None, ge=0, description="particle-floor friction (plywood 0.86)")
     anchor_friction: float | None = Field(None, ge=0, description="particle-anchor friction (bare steel 0.54)")
     anchor_bin_width_m: float | None = Field(None, gt=0, description="square bin side; unset: the fidelity's")
+    anchor_pull_distance_m: float | None = Field(None, gt=0, description="anchor travel recorded (default 0.1 m)")
     include_aor: bool = False
     include_anchor: bool = False
     anchor_packing_height_m: float | None = None

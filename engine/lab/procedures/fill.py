@@ -25,30 +25,30 @@ from engine.particles.generation import CylinderRegion, generate
 COLUMN_SOLID_FRACTION = 0.22
 
 
-def shape_mix(preset: Fidelity) -> ShapeMix:
+def shape_mix(preset: Fidelity, shapes=None) -> ShapeMix:
     comps = []
-    for s in preset.shapes:
+    for s in shapes or preset.shapes:
         size = ConstantSize(s.radius_min_m) if s.radius_min_m == s.radius_max_m else \
             TruncatedGaussian(s.radius_min_m, s.radius_max_m)
         comps.append(ShapeComponent(s.shape, size, s.volume_fraction))
     return ShapeMix(tuple(comps))
 
 
-def smallest_radius_m(preset: Fidelity) -> float:
-    return min(s.radius_min_m for s in preset.shapes)
+def smallest_radius_m(preset: Fidelity, shapes=None) -> float:
+    return min(s.radius_min_m for s in shapes or preset.shapes)
 
 
-def largest_radius_m(preset: Fidelity) -> float:
-    return max(s.radius_max_m for s in preset.shapes)
+def largest_radius_m(preset: Fidelity, shapes=None) -> float:
+    return max(s.radius_max_m for s in shapes or preset.shapes)
 
 
 def rain_packing(preset: Fidelity, seed: int, bulk_volume_m3: float, region_radius_m: float,
-                 z_floor_m: float = 0.0):
+                 z_floor_m: float = 0.0, shapes=None, column_solid_fraction: float = COLUMN_SOLID_FRACTION):
     """Bodies for ``fill_margin`` x the expected solid volume, at random in a loose column."""
     solid = preset.fill_margin * preset.expected_solid_fraction * bulk_volume_m3
-    height = solid / (COLUMN_SOLID_FRACTION * np.pi * region_radius_m**2)
+    height = solid / (column_solid_fraction * np.pi * region_radius_m**2)
     region = CylinderRegion(region_radius_m, z_floor_m, z_floor_m + height)
-    return generate(shape_mix(preset), region, seed=seed, solid_volume_m3=solid), z_floor_m + height
+    return generate(shape_mix(preset, shapes), region, seed=seed, solid_volume_m3=solid), z_floor_m + height
 
 
 def level_and_measure(ctx: RunContext, sim, level_m: float, phase: str) -> None:

@@ -30,7 +30,10 @@ def angle_of_repose(
     sectors: int = 8,
     bin_width_m: float | None = None,
     flank_fraction: tuple[float, float] = (0.2, 0.8),
+    toe_height_m: float = 0.0,
 ) -> ReposeReduction:
+    """``toe_height_m``: heights up to this (the layer of grains that ran out over the floor) are
+    not part of the flank, whatever fraction of the peak they are."""
     pos = np.asarray(positions_m, dtype=float).reshape(-1, 3)
     radii = np.asarray(radii_m, dtype=float).reshape(-1)
     if pos.shape[0] != radii.size or radii.size == 0:
@@ -62,7 +65,7 @@ def angle_of_repose(
         peak = float(np.max(h_s))
         i_peak = int(np.argmax(h_s))
         # the flank lies outward of the peak; heights between the fractions of the peak
-        mask = (np.arange(h_s.size) >= i_peak) & (h_s >= lo * peak) & (h_s <= hi * peak)
+        mask = (np.arange(h_s.size) >= i_peak) & (h_s >= max(lo * peak, toe_height_m)) & (h_s <= hi * peak)
         if np.count_nonzero(mask) < 2:
             angles.append(float("nan"))
             continue
