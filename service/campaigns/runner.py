@@ -17,6 +17,7 @@ import logging
 from typing import Any
 
 from sqlalchemy import select, update
+from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from engine.lab.spec import JobSpec, MicroParameters, TestOptions
@@ -106,7 +107,10 @@ class CampaignRunner:
                         "evaluator": config.evaluator, "fidelity": config.fidelity},
         ))
         campaign.current_iteration = number
-        session.commit()
+        try:
+            session.commit()
+        except IntegrityError:  # another runner sharing the database created it first
+            session.rollback()
 
     def _set_phase(self, session: Session, it: CampaignIteration, old: str, new: str, **values: Any) -> bool:
         """Conditional phase change: a second runner that raced us loses and rolls back."""
@@ -122,7 +126,10 @@ class CampaignRunner:
 
     def _design(self, session, campaign, config, it) -> bool:
         seed = (config.seed + 7919 * (it.number - 1)) % _SEED_MAX
-        design = build_design(config.factors, config.design, seed)
+        try:
+            design = build_design(config.factors, config.design, seed)
+        except ApiError as exc:
+            raise CampaignFailed(f"iteration {it.number}: the design cannot be built: {exc.message}") from exc
         view = design_view(design)
         for row in view["runs"]:
             session.add(CampaignRun(
@@ -156,7 +163,8 @@ class CampaignRunner:
         return True
 
     def _batteries(self, session, campaign, config, it, *, kind: str, next_phase: str) -> bool:
-        runs = [r for r in it.runs if r.kind == kind]
+        # queued in the design's randomised run order, so drifts in the service do not alias with factors
+        runs = sorted((r for r in it.runs if r.kind == kind), key=lambda r: (r.run_order, r.id))
         progressed = False
         for run in runs:
             if run.job_id is None:

@@ -11,6 +11,7 @@ from typing import Any
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
+from service.campaigns.design import build_design
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.errors import Conflict, NotFound
 from service.materials.store import get_material
@@ -24,6 +25,7 @@ def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = 
                     schedule_id: int | None = None) -> Campaign:
     if get_material(session, body.material_id) is None:
         raise NotFound(f"material {body.material_id} not found", "material_id")
+    build_design(body.factors, body.design, body.seed)  # a design doe/ refuses is a 422 now, not a failure later
     campaign = Campaign(name=body.name, material_id=body.material_id, status="draft", evaluator=body.evaluator,
                         fidelity=body.fidelity, config=body.model_dump(mode="json"), current_iteration=0,
                         schedule_id=schedule_id, client_id=client_id)
@@ -73,7 +75,9 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     config = dict(campaign.config)
     for key, value in changes.model_dump(mode="json", exclude_none=True).items():
         config[key] = value
-    config = CampaignCreate.model_validate(config).model_dump(mode="json")  # 422 naming the field if inconsistent
+    validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
+    build_design(validated.factors, validated.design, validated.seed)
+    config = validated.model_dump(mode="json")
     won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == "completed")
                           .values(config=config, status="running", finished_at=None, updated_at=utcnow())
                           .execution_options(synchronize_session=False)).rowcount

@@ -98,3 +98,23 @@ def test_unknown_campaign_is_404_everywhere(s2):
     response = client.get(f"{API}/campaigns/{cid}/iterations/3")
     assert response.status_code == 404 and error_loc(response) == ["path", "number"]
     assert client.get(f"{API}/campaigns/{cid}/report", params={"number": 0}).status_code == 422
+
+
+def test_generators_doe_refuses_are_422_at_creation(s2):
+    client, _, _ = s2
+    body = campaign_body(thesis_material_id(client), design={"type": "fractional", "generators": ["C=AX"]})
+    response = client.post(f"{API}/campaigns", json=body)
+    assert response.status_code == 422 and error_loc(response) == ["body", "design", "generators"]
+
+
+def test_batteries_are_queued_in_randomised_run_order(s2):
+    from service.models.campaign import CampaignRun
+
+    client, app, settings = s2
+    cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    CampaignRunner(app.state.session_factory, settings).tick()
+    with app.state.session_factory() as session:
+        runs = session.query(CampaignRun).order_by(CampaignRun.job_id).all()
+    assert [r.run_order for r in runs] == list(range(1, 12))
+    assert [r.std_order for r in runs] != list(range(1, 12))  # randomised (seeded) order differs from std order
