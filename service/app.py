@@ -8,7 +8,6 @@ running jobs back to the queue.
 from __future__ import annotations
 
 import importlib
-import logging
 import os
 import threading
 from contextlib import asynccontextmanager
@@ -20,28 +19,15 @@ from service.db import make_engine, make_session_factory
 from service.errors import install_error_handlers
 from service.security import check_bind, install_token_guard
 
-log = logging.getLogger(__name__)
 API_PREFIX = "/api/v1"
 ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules")
 
 
-def _optional(module: str):
-    """Import a module another part provides; only its absence (not its bugs) is tolerated."""
-    try:
-        return importlib.import_module(module)
-    except ModuleNotFoundError as exc:
-        if exc.name and module.startswith(exc.name):
-            log.warning("%s is not available yet; skipped", module)
-            return None
-        raise
-
-
 def _seed(session_factory) -> None:
-    materials = _optional("service.materials")
-    if materials is None:
-        return
+    from service.materials import seed_bundled_materials
+
     with session_factory() as session:
-        materials.seed_bundled_materials(session)
+        seed_bundled_materials(session)
 
 
 def _start_executor(app: FastAPI, settings: Settings, session_factory) -> None:
@@ -116,10 +102,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     install_error_handlers(app)
     install_token_guard(app, settings)
     for name in ROUTERS:
-        module = _optional(f"service.api.{name}")
-        if module is not None:
-            app.include_router(module.router, prefix=API_PREFIX)
-    web = _optional("service.web")
-    if web is not None:
-        web.mount(app)
+        app.include_router(importlib.import_module(f"service.api.{name}").router, prefix=API_PREFIX)
+    from service import web
+
+    web.mount(app)  # at "/", after the API so /api/v1 routes win
     return app

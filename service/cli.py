@@ -13,12 +13,8 @@ from pydantic import ValidationError
 from service.config import settings_from_env
 from service.security import check_bind
 
-# (module, what it adds): each provides register(subparsers).
-PLUGINS = (
-    ("doe.cli", "demcal doe ..."),
-    ("engine.lab.cli", "demcal run SPEC"),
-    ("service.cli_campaigns", "demcal material/campaign/schedule ..."),
-)
+# Each provides register(subparsers): demcal doe ..., demcal run SPEC, demcal material/campaign/schedule ...
+PLUGINS = ("doe.cli", "engine.lab.cli", "service.cli_campaigns")
 
 
 def database_url(value: str | None) -> str | None:
@@ -105,15 +101,8 @@ def build_parser(plugins: bool = True) -> argparse.ArgumentParser:
     _db_option(up)
     up.set_defaults(func=cmd_db_upgrade)
 
-    for module_name, what in PLUGINS if plugins else ():
-        try:
-            module = importlib.import_module(module_name)
-        except ModuleNotFoundError as exc:
-            if exc.name and module_name.startswith(exc.name):
-                print(f"demcal: {what} unavailable ({module_name} not installed)", file=sys.stderr)
-                continue
-            raise
-        module.register(sub)
+    for module_name in PLUGINS if plugins else ():
+        importlib.import_module(module_name).register(sub)
     return parser
 
 

@@ -64,7 +64,7 @@ def test_submit_single_test_and_battery(client):
     ({"unknown": 1}, ["body", "unknown"]),
     ({"options": {"speed_factor": 0}}, ["body", "options", "speed_factor"]),
     ({"parameters": {"particle_radius_m": 0.001}}, ["body", "parameters", "particle_radius_m"]),  # particle limit
-    ({"options": {"speed_factor": 0.05}}, ["body", "options", "speed_factor"]),  # simulated time limit
+    ({"options": {"speed_factor": 0.001}}, ["body", "options", "speed_factor"]),  # simulated time limit
     ({"fidelity": "thesis", "parameters": {"particle_radius_m": 0.01}}, ["body", "parameters", "particle_radius_m"]),
 ])
 def test_submit_rejects_bad_input_naming_the_field(client, body, loc):
@@ -192,3 +192,29 @@ def test_refuses_public_bind_without_token(settings):
     with pytest.raises(SystemExit, match="DEMCAL_TOKEN"):
         create_app(settings.model_copy(update={"host": "0.0.0.0"}))
     create_app(settings.model_copy(update={"host": "0.0.0.0", "token": "t"}))
+
+
+def test_limits_follow_settings(settings):
+    from engine.lab.spec import JobSpec
+    from service.security import estimated_particles, estimated_simulated_time_s
+
+    spec = JobSpec()
+    particles, sim_s = estimated_particles(spec), estimated_simulated_time_s(spec)
+    for update, loc in [({"max_particles": particles - 1}, ["body", "parameters", "particle_radius_m"]),
+                        ({"max_simulated_time_s": sim_s * 0.99}, ["body", "options", "speed_factor"])]:
+        with TestClient(create_app(settings.model_copy(update=update))) as client:
+            r = submit(client)
+            assert r.status_code == 422 and locs(r) == [loc]
+    roomy = {"max_particles": particles, "max_simulated_time_s": sim_s * 1.01}
+    with TestClient(create_app(settings.model_copy(update=roomy))) as client:
+        assert submit(client).status_code == 201
+
+
+def test_particle_estimate_matches_appendix_a():
+    """Table A.7's screening set-up holds ~840 spheres of 20 mm below the levelling height."""
+    from engine.lab.presets import SCREENING
+    from engine.lab.spec import JobSpec
+    from service.security import estimated_particles
+
+    below_level = estimated_particles(JobSpec()) / SCREENING.fill_margin
+    assert abs(below_level - 840) / 840 < 0.10

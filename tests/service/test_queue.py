@@ -163,7 +163,7 @@ def test_limits(session_factory, settings):
             queue.submit_job(s, JobSpec(parameters={"particle_radius_m": 0.002}), settings=settings, client_id="x")
         assert err.value.loc() == ["body", "parameters", "particle_radius_m"]
         with pytest.raises(Invalid) as err:
-            queue.submit_job(s, JobSpec(options={"speed_factor": 0.01}), settings=settings, client_id="x")
+            queue.submit_job(s, JobSpec(options={"speed_factor": 0.001}), settings=settings, client_id="x")
         assert err.value.loc() == ["body", "options", "speed_factor"]
         with pytest.raises(Invalid):
             queue.submit_job(s, JobSpec(), evaluator="python", settings=settings, client_id="x")
