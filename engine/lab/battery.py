@@ -32,11 +32,17 @@ def _tests(spec: JobSpec) -> list[str]:
 
 def run_job(spec: JobSpec, progress=None, should_cancel=None) -> LabResult:
     """Run the spec's test (or battery); raises ``engine.lab.Cancelled`` when ``should_cancel()`` is true."""
+    return run_in_context(RunContext.from_spec(spec, progress, should_cancel))
+
+
+def run_in_context(ctx: RunContext) -> LabResult:
+    """``run_job`` with a caller-owned context (benchmarks read its particle-step counters)."""
     from engine.lab.procedures.cct import precompressed_state, run_cct
     from engine.lab.procedures.dst import run_dst
     from engine.lab.procedures.fill import run_fill
 
-    ctx = RunContext.from_spec(spec, progress, should_cancel)
+    spec = ctx.spec
+    ctx.validate()
     tests = _tests(spec)
     total = sum(_WEIGHTS[t] for t in tests)
     spans, acc = {}, 0.0

@@ -23,6 +23,7 @@ class RunContext:
     should_cancel: Callable[[], bool] | None = None
     steps: int = 0
     particle_steps: int = 0
+    sphere_steps: int = 0
     simulated_time_s: float = 0.0
     max_inertial_number: float | None = None
     warnings: list[str] = field(default_factory=list)
@@ -72,6 +73,25 @@ class RunContext:
         o = self.spec.options.shear_distance_m
         return float(o) if o is not None else self.preset.shear_distance_m
 
+    def validate(self) -> None:
+        """Refuse, before any simulation, what the options make impossible (ValueError names the field)."""
+        self.dst_normal_stresses_pa  # noqa: B018  (raises on a non-positive stress)
+        o = self.spec.options
+        lo, hi = o.residual_window_strain
+        if not 0 <= lo < hi:
+            raise ValueError("options.residual_window_strain: need 0 <= lower < upper")
+        if hi * self.preset.container_diameter_m > self.shear_distance_m:
+            raise ValueError(
+                f"options.shear_distance_m: {self.shear_distance_m * 1000:.1f} mm does not reach the residual window's "
+                f"upper strain {hi:.3f} (= {hi * self.preset.container_diameter_m * 1000:.1f} mm)")
+        if o.moving_average_span % 2 == 0:
+            raise ValueError("options.moving_average_span must be odd")
+        if self.cct_max_stress_pa <= 0:
+            raise ValueError("options.cct_max_stress_pa must be positive")
+        if self.spec.test in ("dst", "battery") and max(self.dst_normal_stresses_pa) > self.cct_max_stress_pa:
+            raise ValueError("options.dst_normal_stresses_pa: the DST preparation compresses to the CCT maximum "
+                             "first, so every DST stress must be at most options.cct_max_stress_pa")
+
     # ----------------------------------------------------------------- callbacks
     def phase(self, lo: float, hi: float) -> None:
         self._span = (lo, hi)
@@ -87,9 +107,10 @@ class RunContext:
             self._last_progress = f
             self.progress(f, phase)
 
-    def count(self, steps: int, n_bodies: int, dt_s: float) -> None:
+    def count(self, steps: int, n_bodies: int, dt_s: float, n_spheres: int = 0) -> None:
         self.steps += steps
         self.particle_steps += steps * n_bodies
+        self.sphere_steps += steps * n_spheres
         self.simulated_time_s += steps * dt_s
 
     def inertial_number(self, value: float, where: str) -> None:

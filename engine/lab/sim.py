@@ -47,7 +47,7 @@ def restore(state: dict) -> Simulation:
 def advance(ctx: RunContext, sim: Simulation, steps: int) -> None:
     steps = max(int(steps), 1)
     sim.run(steps=steps)
-    ctx.count(steps, sim.n_bodies, sim.timestep_s)
+    ctx.count(steps, sim.n_bodies, sim.timestep_s, sim.n_spheres)
 
 
 def steps_for(sim: Simulation, duration_s: float) -> int:

@@ -3,9 +3,10 @@
 The experiment read the angle with a protractor at eight places round the pile (Table 5.1);
 the thesis's simulation read four from front and side views (Table 5.2). Here each of
 ``sectors`` azimuthal sectors gets a free-surface profile (highest particle top per radial
-bin of one particle diameter) and a straight line fitted to the flank, between
-``flank_fraction`` of that sector's peak height: the cap at the top and the one-particle
-toe at the foot are not part of the slope a protractor would measure.
+bin of one particle diameter) and a straight line fitted to the flank: the contiguous bins
+from the peak outward down to the toe (the grains that ran out over the floor, or
+``flank_fraction[0]`` of the peak), leaving out a rounded cap above ``flank_fraction[1]`` of
+the peak when enough bins remain. A protractor reads the same part of the slope.
 """
 from __future__ import annotations
 
@@ -64,8 +65,16 @@ def angle_of_repose(
         prof_h.append(h_s.tolist())
         peak = float(np.max(h_s))
         i_peak = int(np.argmax(h_s))
-        # the flank lies outward of the peak; heights between the fractions of the peak
-        mask = (np.arange(h_s.size) >= i_peak) & (h_s >= max(lo * peak, toe_height_m)) & (h_s <= hi * peak)
+        # the flank: contiguous bins outward from the peak down to the first one at the toe
+        j = i_peak + 1
+        while j < h_s.size and h_s[j] > max(lo * peak, toe_height_m):
+            j += 1
+        idx = np.arange(i_peak, min(j + 1, h_s.size))
+        mask = np.zeros(h_s.size, bool)
+        mask[idx] = True
+        trimmed = mask & (h_s <= hi * peak)
+        if np.count_nonzero(trimmed) >= 3:  # a large pile: leave out its rounded cap
+            mask = trimmed
         if np.count_nonzero(mask) < 2:
             angles.append(float("nan"))
             continue
