@@ -89,3 +89,11 @@ def test_anchor_peak_exceeds_the_weight_it_lifts():
     assert peak > column_weight
     curve = r.curves["anchor"]
     assert max(curve["displacement_m"]) >= 0.03
+
+
+def test_same_seed_same_result():
+    # a tiny packing (50 mm spheres, ~60 bodies): the whole fill twice, bit for bit
+    spec = JobSpec(test="fill", seed=7, parameters={"particle_radius_m": 0.05})
+    a, b = run_job(spec), run_job(spec)
+    assert [p.value for p in a.properties] == [p.value for p in b.properties]
+    assert a.provenance.steps == b.provenance.steps
