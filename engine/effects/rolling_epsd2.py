@@ -1,0 +1,65 @@
+"""Elastic-plastic spring rolling resistance, EPSD2 / type C (Ai et al. 2011; LIGGGHTS `epsd2`).
+
+A rolling spring k_r = 2.25 kn mu_r^2 R*^2 accumulates torque from the relative rolling rotation
+(normal twisting excluded) and is capped at mu_r R* fn. No rolling dashpot (that is EPSD).
+"""
+from __future__ import annotations
+
+import math
+
+from numba import njit
+from pydantic import BaseModel, ConfigDict, Field
+
+from .base import Effect
+
+
+class Params(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    rolling_friction: float = Field(ge=0, description="mu_r, dimensionless")
+
+
+def pair_props(params: Params, contact_type: str, mat_i, mat_other) -> list[float]:
+    return [params.rolling_friction]
+
+
+@njit(cache=True)
+def apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, dt):
+    mu_r = p[1]
+    wn = w0 * n0 + w1 * n1 + w2 * n2
+    w0 -= wn * n0
+    w1 -= wn * n1
+    w2 -= wn * n2
+    m0, m1, m2 = hist[h0], hist[h0 + 1], hist[h0 + 2]
+    # keep the spring torque in the current tangent plane, magnitude preserved
+    mag_old = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+    mn = m0 * n0 + m1 * n1 + m2 * n2
+    m0 -= mn * n0
+    m1 -= mn * n1
+    m2 -= mn * n2
+    mag_new = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+    if mag_new > 0.0:
+        s = mag_old / mag_new
+        m0 *= s
+        m1 *= s
+        m2 *= s
+    kr = 2.25 * kn * mu_r * mu_r * r_eff * r_eff
+    m0 -= kr * w0 * dt
+    m1 -= kr * w1 * dt
+    m2 -= kr * w2 * dt
+    limit = mu_r * r_eff * max(fn, 0.0)
+    mag = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+    if mag > limit:
+        s = limit / mag if mag > 0.0 else 0.0
+        m0 *= s
+        m1 *= s
+        m2 *= s
+    hist[h0] = m0
+    hist[h0 + 1] = m1
+    hist[h0 + 2] = m2
+    return m0, m1, m2
+
+
+EFFECT = Effect(
+    name="rolling_epsd2", stage="rolling", params_model=Params, n_props=1, n_hist=3,
+    pair_props=pair_props, module=__name__, doc=__doc__,
+)

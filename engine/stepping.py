@@ -1,0 +1,109 @@
+"""Per-step helpers independent of the contact law: body sums, wall motion, wall resultants."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def body_sum(b, b_pos, b_vel, b_omega, b_mass, b_force, b_torque, sphere_start, is_clump, local_damping,
+             s_pos, s_force, s_torque, g0, g1, g2):
+    """Resultant force (with gravity) and torque of body b from its spheres, then local damping."""
+    m = b_mass[b]
+    f0, f1, f2 = m * g0, m * g1, m * g2
+    t0 = t1 = t2 = 0.0
+    for k in range(sphere_start[b], sphere_start[b + 1]):
+        f0 += s_force[k, 0]
+        f1 += s_force[k, 1]
+        f2 += s_force[k, 2]
+        t0 += s_torque[k, 0]
+        t1 += s_torque[k, 1]
+        t2 += s_torque[k, 2]
+        if is_clump[b]:
+            r0 = s_pos[k, 0] - b_pos[b, 0]
+            r1 = s_pos[k, 1] - b_pos[b, 1]
+            r2 = s_pos[k, 2] - b_pos[b, 2]
+            t0 += r1 * s_force[k, 2] - r2 * s_force[k, 1]
+            t1 += r2 * s_force[k, 0] - r0 * s_force[k, 2]
+            t2 += r0 * s_force[k, 1] - r1 * s_force[k, 0]
+    a = local_damping[b]
+    if a > 0.0:
+        # Cundall's non-viscous damping: reduce each component against the motion
+        f0 -= a * abs(f0) * np.sign(b_vel[b, 0])
+        f1 -= a * abs(f1) * np.sign(b_vel[b, 1])
+        f2 -= a * abs(f2) * np.sign(b_vel[b, 2])
+        t0 -= a * abs(t0) * np.sign(b_omega[b, 0])
+        t1 -= a * abs(t1) * np.sign(b_omega[b, 1])
+        t2 -= a * abs(t2) * np.sign(b_omega[b, 2])
+    b_force[b, 0], b_force[b, 1], b_force[b, 2] = f0, f1, f2
+    b_torque[b, 0], b_torque[b, 1], b_torque[b, 2] = t0, t1, t2
+
+
+@njit(cache=True)
+def move_walls(origin, vel, vel_target, ramp_time, ramp_start, mode, servo_axis, servo_target, servo_vmax,
+               servo_gain, force, k_sum, t, dt):
+    for w in range(origin.shape[0]):
+        if mode[w] == 1:
+            a0, a1, a2 = servo_axis[w, 0], servo_axis[w, 1], servo_axis[w, 2]
+            # force the wall exerts on the particles along its push axis
+            applied = -(force[w, 0] * a0 + force[w, 1] * a1 + force[w, 2] * a2)
+            err = servo_target[w] - applied
+            if k_sum[w] > 0.0:
+                speed = servo_gain[w] * err / (k_sum[w] * dt)
+            else:
+                speed = servo_vmax[w] if err > 0.0 else -servo_vmax[w]
+            speed = min(max(speed, -servo_vmax[w]), servo_vmax[w])
+            vel[w, 0], vel[w, 1], vel[w, 2] = speed * a0, speed * a1, speed * a2
+        else:
+            f = 1.0
+            if ramp_time[w] > 0.0:
+                f = min(max((t - ramp_start[w]) / ramp_time[w], 0.0), 1.0)
+            vel[w, 0] = f * vel_target[w, 0]
+            vel[w, 1] = f * vel_target[w, 1]
+            vel[w, 2] = f * vel_target[w, 2]
+        origin[w, 0] += dt * vel[w, 0]
+        origin[w, 1] += dt * vel[w, 1]
+        origin[w, 2] += dt * vel[w, 2]
+
+
+@njit(cache=True)
+def wall_resultants(n_walls, wc_wall, wc_force, wc_point, wc_k, origin, force, moment, k_sum):
+    """Per-wall force by the particles on it, moment about its reference point, contact stiffness sum."""
+    force[:] = 0.0
+    moment[:] = 0.0
+    k_sum[:] = 0.0
+    for e in range(wc_wall.shape[0]):
+        w = wc_wall[e]
+        if wc_k[e] == 0.0:
+            continue
+        f0, f1, f2 = wc_force[e, 0], wc_force[e, 1], wc_force[e, 2]
+        r0 = wc_point[e, 0] - origin[w, 0]
+        r1 = wc_point[e, 1] - origin[w, 1]
+        r2 = wc_point[e, 2] - origin[w, 2]
+        force[w, 0] += f0
+        force[w, 1] += f1
+        force[w, 2] += f2
+        moment[w, 0] += r1 * f2 - r2 * f1
+        moment[w, 1] += r2 * f0 - r0 * f2
+        moment[w, 2] += r0 * f1 - r1 * f0
+        k_sum[w] += wc_k[e]
+
+
+@njit(cache=True)
+def needs_rebuild(s_pos, pos_at_build, origin, origin_at_build, skin):
+    ds = 0.0
+    for i in range(s_pos.shape[0]):
+        d0 = s_pos[i, 0] - pos_at_build[i, 0]
+        d1 = s_pos[i, 1] - pos_at_build[i, 1]
+        d2 = s_pos[i, 2] - pos_at_build[i, 2]
+        ds = max(ds, d0 * d0 + d1 * d1 + d2 * d2)
+    dw = 0.0
+    for w in range(origin.shape[0]):
+        d0 = origin[w, 0] - origin_at_build[w, 0]
+        d1 = origin[w, 1] - origin_at_build[w, 1]
+        d2 = origin[w, 2] - origin_at_build[w, 2]
+        dw = max(dw, d0 * d0 + d1 * d1 + d2 * d2)
+    ds = math.sqrt(ds)
+    return 2.0 * ds > skin or ds + math.sqrt(dw) > skin
