@@ -11,10 +11,12 @@ from __future__ import annotations
 import hmac
 import ipaddress
 import math
+import re
 
 from fastapi import FastAPI, Request
 from fastapi.responses import JSONResponse
 
+from engine.lab.context import RunContext
 from engine.lab.presets import fidelity
 from engine.lab.spec import JobSpec
 from service.config import Settings
@@ -91,7 +93,22 @@ def estimated_simulated_time_s(spec: JobSpec) -> float:
     return stresses * per_stress_s
 
 
+def validate_spec(spec: JobSpec) -> None:
+    """The lab's own pre-run checks (e.g. DST stresses above the CCT maximum), as a 422 at submission
+    rather than a failed job later; the lab's messages start with the field path."""
+    _preset(spec)  # an unknown fidelity / misplaced particle radius, with its own field
+    try:
+        RunContext.from_spec(spec).validate()
+    except ValueError as exc:
+        message = str(exc)
+        match = re.match(r"((?:options|parameters)\.[a-z_0-9]+)(:?)\s*", message)
+        if match is None:
+            raise Invalid(message, "options") from None
+        raise Invalid(message[match.end():] if match.group(2) else message, match.group(1)) from None
+
+
 def check_limits(spec: JobSpec, settings: Settings, field_prefix: str = "") -> None:
+    validate_spec(spec)
     particles = estimated_particles(spec)
     if particles > settings.max_particles:
         raise Invalid(

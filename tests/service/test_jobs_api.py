@@ -66,6 +66,10 @@ def test_submit_single_test_and_battery(client):
     ({"parameters": {"particle_radius_m": 0.001}}, ["body", "parameters", "particle_radius_m"]),  # particle limit
     ({"options": {"speed_factor": 0.001}}, ["body", "options", "speed_factor"]),  # simulated time limit
     ({"fidelity": "thesis", "parameters": {"particle_radius_m": 0.01}}, ["body", "parameters", "particle_radius_m"]),
+    # the lab's pre-run checks, refused at submission instead of failing the job later
+    ({"options": {"cct_max_stress_pa": 20e3, "dst_normal_stresses_pa": [10e3, 30e3]}},
+     ["body", "options", "dst_normal_stresses_pa"]),
+    ({"options": {"moving_average_span": 20}}, ["body", "options", "moving_average_span"]),
 ])
 def test_submit_rejects_bad_input_naming_the_field(client, body, loc):
     r = submit(client, **body)
