@@ -1,26 +1,37 @@
 """End-to-end campaign on the DEM engine at screening fidelity (slow): 2^2 design + 2 centre runs + confirmation.
 
-Kept small so that it fits the CI budget: the runs are fills alone (no CCT/DST), which is what a
-bulk-density calibration needs (thesis section 4.5.4 calibrated particle density on the fill).
+The whole service runs as in production: two local worker processes execute the DEM jobs and the
+background thread drives the campaign runner. Kept small for the CI budget: the runs are fills
+alone (what a bulk-density calibration needs; the thesis calibrated particle density on the fill,
+section 4.5.4), with 35 mm spheres (~130 bodies) instead of the screening default of 20 mm.
 """
 from __future__ import annotations
 
 import math
+import time
 
 import pytest
 
-from conftest_s2 import API, run_to_end, s2, thesis_material_id  # noqa: F401
+from conftest_s2 import API, running_app, s2_settings, thesis_material_id
 
 pytestmark = pytest.mark.slow
+TIMEOUT_S = 1500.0
 
 
-def test_dem_campaign_at_screening_fidelity(s2):
-    client, app, settings = s2
+def test_dem_campaign_at_screening_fidelity(tmp_path):
+    settings = s2_settings(tmp_path).model_copy(update={
+        "start_workers": True, "workers": 2, "start_background": True, "tick_interval_s": 0.5})
+    with running_app(settings) as (client, app):
+        _campaign(client)
+
+
+def _campaign(client):
     body = {
         "name": "dem screening", "material_id": thesis_material_id(client), "evaluator": "dem",
         "fidelity": "screening", "test": "fill",
         "factors": [{"name": "particle_density_kg_m3", "low": 2300.0, "high": 2700.0},
                     {"name": "friction_pp", "low": 0.3, "high": 0.9}],
+        "fixed_parameters": {"particle_radius_m": 0.035},
         "design": {"type": "full", "centre_runs": 2},
         "targets": [{"test": "fill", "quantity": "bulk_density_kg_m3"}],
         "seed": 3,
@@ -29,18 +40,25 @@ def test_dem_campaign_at_screening_fidelity(s2):
     assert created.status_code == 201, created.text
     cid = created.json()["id"]
     client.post(f"{API}/campaigns/{cid}/start")
-    final = run_to_end(client, app, settings, cid)
-    assert final["status"] == "completed", final["error"]
+    started = time.monotonic()
+    while True:
+        final = client.get(f"{API}/campaigns/{cid}").json()
+        if final["status"] in ("completed", "failed") or time.monotonic() - started > TIMEOUT_S:
+            break
+        time.sleep(2.0)
+    print(f"DEM campaign took {time.monotonic() - started:.0f} s")
+    assert final["status"] == "completed", final
 
     (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()
     assert len(iteration["runs"]) == 7  # 4 corners + 2 centre replicates + confirmation
     model = client.get(f"{API}/campaigns/{cid}/models").json()["models"]["fill__bulk_density_kg_m3"]
     assert model["ok"], model.get("error")
-    # rho_b = rho_p (1 - n): with friction fixed, d rho_b / d rho_p is the solid fraction of a random
-    # packing of spheres, between random loose (~0.55) and random close (~0.64) packing less wall effects.
+    # rho_b = rho_p (1 - n): d rho_b / d rho_p (at the centre friction) is the packing's solid fraction,
+    # below random close packing (0.64) and, with a container only ~6 sphere diameters wide (the wall
+    # loosens the packing), above 0.40.
     coefficients = {c["name"]: c["estimate"] for c in model["fit"]["coefficients_natural"]}
     slope = coefficients["particle_density_kg_m3"] + coefficients.get("particle_density_kg_m3*friction_pp", 0.0) * 0.6
-    assert 0.45 < slope < 0.66
+    assert 0.40 < slope < 0.64
     # centre replicates with different seeds pack differently: the simulator's noise floor is measured
     assert model["pure_error_sd"] is not None and model["pure_error_sd"] > 0
 
