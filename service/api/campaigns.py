@@ -111,7 +111,8 @@ def confirmation(campaign_id: int, number: int | None = IterationQ, session: Ses
             "parameters": run.natural, "coded": run.coded, "responses": run.responses, "error": run.error}
 
 
-@router.get("/{campaign_id}/report", summary="Per target: measured, predicted (interval), confirmed, residual, reachability")
+@router.get("/{campaign_id}/report",
+            summary="Per target: measured, predicted (interval), confirmed, residual, reachability")
 def report(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     return {"campaign_id": campaign.id, "name": campaign.name, "material_id": campaign.material_id,

@@ -8,7 +8,8 @@ from sqlalchemy.orm import Session
 from service.db import get_session
 from service.errors import Conflict, NotFound
 from service.materials.schemas import MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
-from service.materials.store import add_measurement, create_material, find_by_name, get_material, list_materials, material_dict
+from service.materials.store import (add_measurement, create_material, find_by_name, get_material, list_materials,
+                                     material_dict)
 from service.materials.units import accepted_units
 from engine.lab.result import QUANTITIES
 from service.models.campaign import Campaign
@@ -35,7 +36,8 @@ def list_all(session: Session = Depends(get_session)):
     return [material_dict(m) for m in list_materials(session)]
 
 
-@router.post("", response_model=MaterialOut, status_code=201, summary="Create a material (optionally with measurements)")
+@router.post("", response_model=MaterialOut, status_code=201,
+             summary="Create a material (optionally with measurements)")
 def create(body: MaterialIn, session: Session = Depends(get_session)):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")

@@ -4,8 +4,6 @@ from __future__ import annotations
 from datetime import datetime, timedelta, timezone
 
 import pytest
-from sqlalchemy import select
-
 from conftest_s2 import API, campaign_body, error_loc, running_app, s2, s2_settings, thesis_material_id  # noqa: F401
 from service.models.campaign import Campaign
 from service.models.schedule import Schedule
