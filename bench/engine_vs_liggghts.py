@@ -108,9 +108,10 @@ def demcal_worker(threads: int, workload: dict, seed: int) -> dict:
                n=sim.n_bodies, phases={})
 
     def timed(name):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         done = sim.run(steps=steps[name])
-        out["phases"][name] = dict(steps=done, loop_s=time.perf_counter() - t0, atoms=sim.n_bodies)
+        out["phases"][name] = dict(steps=done, loop_s=time.perf_counter() - t0, cpu_s=time.process_time() - c0,
+                                   atoms=sim.n_bodies)
 
     timed("pour")
     timed("settle")
@@ -156,6 +157,10 @@ def print_table(label: str, res: dict) -> None:
             print(f"  {p:9s} {r['steps']:7d} {r['loop_s']:8.2f} {r['steps'] * r['atoms'] / max(r['loop_s'], 1e-12):17.3e}")
     print(f"  {'all':9s} {'':7s} {sum(ph[p]['loop_s'] for p in ph):8.2f} {throughput(ph):17.3e}"
           f"   dense phases: {throughput(ph, DENSE):.3e}")
+    work = sum(ph[p]["steps"] * ph[p]["atoms"] for p in ph)
+    cpu = res.get("cpu_s", sum(ph[p].get("cpu_s", float("nan")) for p in ph))
+    print(f"  CPU time {cpu:.1f} s -> {work / cpu:.3e} particle-steps per CPU-second"
+          + (" (whole run incl. set-up)" if "cpu_s" in res else " (stepping only)"))
     pk = res["packing"]
     print(f"  settled: h_surf = {pk['h_surf_m']:.4f} m, bulk density = {pk['bulk_density_kg_m3']:.1f} kg/m3 "
           f"({pk['n_inside']} particles, {pk['mass_kg']:.2f} kg)")
@@ -187,6 +192,7 @@ def main(argv=None) -> int:
     print("steps per phase: " + ", ".join(f"{k} {v}" for k, v in steps.items()) + (" (QUICK)" if args.quick else ""))
     sys.stdout.flush()
 
+    print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores (a loaded machine slows both engines)")
     demcal, liggghts = {}, {}
     for n in args.threads:
         demcal[n] = run_demcal(n, workload, args.seed)
@@ -208,7 +214,7 @@ def main(argv=None) -> int:
         for n in args.threads:
             r = lig.run_liggghts(n, outdir, variables)
             res = dict(phases=r["log"]["phases"], dt_s=r["log"].get("dt_s", float("nan")), max_rss_mb=r["max_rss_mb"],
-                       packing=lig.bulk_density_kg_m3(r["xyz_m"], r["radius_m"], r["mass_kg"]))
+                       packing=lig.bulk_density_kg_m3(r["xyz_m"], r["radius_m"], r["mass_kg"]), cpu_s=r["cpu_s"])
             liggghts[n] = res
             print_table(f"LIGGGHTS, {n} MPI rank(s)", res)
             sys.stdout.flush()
@@ -224,6 +230,7 @@ def main(argv=None) -> int:
             line += f", LIGGGHTS {g:.3e}, ratio {ratios[n]:.2f} (dense phases: " \
                     f"{throughput(demcal[n]['phases'], DENSE) / throughput(liggghts[n]['phases'], DENSE):.2f})"
         print(line)
+    print(f"  load average after: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     diff = float("nan")
     ref = min(args.threads)
     if ref in liggghts:

@@ -25,7 +25,8 @@ CONTAINER_RADIUS_M = 0.295
 _RSS_WRAPPER = (
     "import resource, subprocess, sys, json\n"
     "rc = subprocess.run(sys.argv[1:]).returncode\n"
-    "print(json.dumps({'rc': rc, 'max_rss_kb': resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss}))\n"
+    "u = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
+    "print(json.dumps({'rc': rc, 'max_rss_kb': u.ru_maxrss, 'cpu_s': u.ru_utime + u.ru_stime}))\n"
 )
 
 
@@ -97,7 +98,7 @@ def run_liggghts(ranks: int, outdir: str, variables: dict[str, float | str]) -> 
     log = parse_log(os.path.join(work, "log.lammps"))
     radius, mass, xyz = read_dump(os.path.join(work, "settled.txt"))
     return dict(log=log, radius_m=radius, mass_kg=mass, xyz_m=xyz, max_rss_mb=meta["max_rss_kb"] / 1024.0,
-                workdir=work)
+                cpu_s=meta.get("cpu_s", float("nan")), workdir=work)
 
 
 def surface_height_m(xyz_m: np.ndarray, radius_m: np.ndarray, cell_m: float = 0.05, r_max_m: float = 0.25) -> float:

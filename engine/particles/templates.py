@@ -180,28 +180,51 @@ def _moments_exact(centres, radii, pairs):
     return v, first, s
 
 
-def _moments_columns(centres, radii, n):
-    """Column integration of the union on an n x n grid (see module docstring)."""
+def _moments_columns(centres, radii, n, chunk_cells: int = 4_000_000):
+    """Column integration of the union on an n x n grid (see module docstring).
+
+    Columns are processed in chunks of about ``chunk_cells`` column-sphere entries so that memory
+    stays bounded for clumps of many spheres.
+    """
     lo = (centres - radii[:, None]).min(axis=0)
     hi = (centres + radii[:, None]).max(axis=0)
     hx, hy = (hi[0] - lo[0]) / n, (hi[1] - lo[1]) / n
     xs = lo[0] + hx * (np.arange(n) + 0.5)
     ys = lo[1] + hy * (np.arange(n) + 0.5)
-    x, y = (a.ravel() for a in np.meshgrid(xs, ys, indexing="ij"))
+    acc = np.zeros(10)  # V, Mx, My, Mz, Sxx, Syy, Szz, Sxy, Sxz, Syz (without the cell weight)
+    rows = max(1, chunk_cells // (n * len(radii)))
+    for i0 in range(0, n, rows):
+        x, y = (a.ravel() for a in np.meshgrid(xs[i0:i0 + rows], ys, indexing="ij"))
+        l0, l1, l2 = _column_union(x, y, centres, radii, lo[2])
+        acc += np.array([
+            l0.sum(), (x * l0).sum(), (y * l0).sum(), l1.sum(),
+            # x^2 over a cell is xc^2 + h^2/12 (exact for the midpoint cell), likewise y^2
+            ((x * x + hx * hx / 12.0) * l0).sum(), ((y * y + hy * hy / 12.0) * l0).sum(), l2.sum(),
+            (x * y * l0).sum(), (x * l1).sum(), (y * l1).sum(),
+        ])
+    w = hx * hy
+    v = w * acc[0]
+    first = w * acc[1:4]
+    s = w * np.array([[acc[4], acc[7], acc[8]], [acc[7], acc[5], acc[9]], [acc[8], acc[9], acc[6]]])
+    return v, first, s
+
+
+def _column_union(x, y, centres, radii, z_floor):
+    """Integrals of 1, z, z^2 over the union of the sphere chords of each (x, y) column."""
     dx = x[:, None] - centres[None, :, 0]
     dy = y[:, None] - centres[None, :, 1]
     h2 = radii[None, :] ** 2 - dx * dx - dy * dy
     hit = h2 > 0.0
     h = np.sqrt(np.where(hit, h2, 0.0))
-    zlo = np.where(hit, centres[None, :, 2] - h, lo[2])
-    zhi = np.where(hit, centres[None, :, 2] + h, lo[2])
+    zlo = np.where(hit, centres[None, :, 2] - h, z_floor)
+    zhi = np.where(hit, centres[None, :, 2] + h, z_floor)
     order = np.argsort(zlo, axis=1)
     zlo = np.take_along_axis(zlo, order, axis=1)
     zhi = np.take_along_axis(zhi, order, axis=1)
     l0 = np.zeros(len(x))
     l1 = np.zeros(len(x))
     l2 = np.zeros(len(x))
-    reach = np.full(len(x), lo[2])
+    reach = np.full(len(x), z_floor)
     for k in range(len(radii)):  # sweep sorted intervals, counting each z once
         a = np.maximum(zlo[:, k], reach)
         b = np.maximum(zhi[:, k], a)
@@ -209,18 +232,7 @@ def _moments_columns(centres, radii, n):
         l1 += (b * b - a * a) / 2.0
         l2 += (b**3 - a**3) / 3.0
         reach = np.maximum(reach, zhi[:, k])
-    w = hx * hy
-    v = w * l0.sum()
-    first = w * np.array([(x * l0).sum(), (y * l0).sum(), l1.sum()])
-    s = np.empty((3, 3))
-    # x^2 over a cell is xc^2 + h^2/12 (exact for the midpoint cell), likewise y^2
-    s[0, 0] = w * ((x * x + hx * hx / 12.0) * l0).sum()
-    s[1, 1] = w * ((y * y + hy * hy / 12.0) * l0).sum()
-    s[2, 2] = w * l2.sum()
-    s[0, 1] = s[1, 0] = w * (x * y * l0).sum()
-    s[0, 2] = s[2, 0] = w * (x * l1).sum()
-    s[1, 2] = s[2, 1] = w * (y * l1).sum()
-    return v, first, s
+    return l0, l1, l2
 
 
 def _inertia_about_com(v, first, s):
