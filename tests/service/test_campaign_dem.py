@@ -8,6 +8,7 @@ section 4.5.4), with 35 mm spheres (~130 bodies) instead of the screening defaul
 from __future__ import annotations
 
 import math
+import os
 import time
 
 import pytest
@@ -15,7 +16,7 @@ import pytest
 from conftest_s2 import API, running_app, s2_settings, thesis_material_id
 
 pytestmark = pytest.mark.slow
-TIMEOUT_S = 1500.0
+TIMEOUT_S = float(os.environ.get("DEMCAL_DEM_CAMPAIGN_TIMEOUT_S", "1500"))  # CI: 2 free cores
 
 
 def test_dem_campaign_at_screening_fidelity(tmp_path):
