@@ -177,6 +177,8 @@ class SimulationConfig(_Model):
     skin_m: float | None = Field(None, gt=0, description="Verlet skin; None: 0.5 x smallest radius")
     record_every: int = Field(100, ge=1, description="wall force/moment sampling interval, steps")
     threads: int | None = Field(None, ge=1, description="numba threads; None: numba's default")
+    serial_below_spheres: int = Field(
+        1000, ge=0, description="fewer spheres than this run on one thread (results do not depend on threads)")
     limit_normal_force_to_repulsive: bool = False
     kernel_cache_dir: str | None = Field(None, description="where specialised kernels are written")
     compiled_effects: list[str] = Field(

@@ -26,6 +26,7 @@ ProgressCallback = Callable[["Simulation"], "bool | None"]
 _REC = 10  # t, origin(3), force(3), moment(3)
 
 
+
 class Simulation:
     """A DEM simulation: bodies (spheres and rigid clumps), walls, contact law + effects."""
 
@@ -234,6 +235,15 @@ class Simulation:
         rec = np.concatenate(self._records)[:, w] if self._records else np.zeros((0, _REC))
         return {"time_s": rec[:, 0], "position_m": rec[:, 1:4], "force_n": rec[:, 4:7], "moment_nm": rec[:, 7:10]}
 
+    def wall_contact_loads(self, name: str) -> dict[str, np.ndarray]:
+        """Active contacts on a wall at the last step: contact points_m (k, 3), forces_n on the wall
+        (k, 3) and sphere ids (k,); e.g. for wall stress against depth."""
+        w = self.wall_index(name)
+        wc = self.wall_contacts
+        sel = (wc.wall == w) & (wc.k > 0.0)
+        sphere = np.repeat(np.arange(wc.start.shape[0] - 1), np.diff(wc.start))
+        return {"points_m": wc.point[sel].copy(), "forces_n": wc.force[sel].copy(), "sphere_ids": sphere[sel]}
+
     def clear_wall_history(self) -> None:
         self._records = []
 
@@ -322,8 +332,18 @@ class Simulation:
         total = int(round(duration_s / dt)) if steps is None else int(steps)
         if total < 0:
             raise ValueError("duration_s / steps must not be negative")
-        if self.config.threads is not None:
-            numba.set_num_threads(self.config.threads)
+        threads_before = numba.get_num_threads()
+        threads = self.config.threads or threads_before
+        if self.n_spheres < self.config.serial_below_spheres:
+            # waking worker threads twice a step costs more than a small system's work
+            threads = 1
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        try:
+            return self._run(total, dt, callback, callback_every_s)
+        finally:
+            numba.set_num_threads(threads_before)
+
+    def _run(self, total, dt, callback, callback_every_s) -> int:
         if self._kernel is None:
             self._kernel = load_kernel(self.layout, self.config.kernel_cache_dir)
         self._scal[0] = dt

@@ -17,3 +17,16 @@ def config(**kw) -> SimulationConfig:
     return SimulationConfig(materials=[MaterialSpec(**mat)], **kw)
 
 
+
+
+G = 9.81
+
+
+def tilted_gravity(angle_deg: float) -> tuple[float, float, float]:
+    """Gravity for an incline of angle_deg modelled as a level floor: downslope is +x."""
+    a = math.radians(angle_deg)
+    return (G * math.sin(a), 0.0, -G * math.cos(a))
+
+
+def fit_acceleration(times, values) -> float:
+    return float(np.polyfit(np.asarray(times), np.asarray(values), 1)[0])
