@@ -140,7 +140,8 @@ class ServoSpec(_Model):
     target_stress_pa: float | None = Field(None, ge=0)
     area_m2: float | None = Field(None, gt=0)
     max_speed_m_s: float = Field(0.05, gt=0)
-    gain_fraction: float = Field(0.2, gt=0, le=1, description="fraction of the force error closed per step")
+    gain_fraction: float = Field(
+        0.05, gt=0, le=1, description="fraction of the force error closed per step; above ~0.1 the wall chatters on its own dashpot forces")
 
     @model_validator(mode="after")
     def _target(self) -> "ServoSpec":

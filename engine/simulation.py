@@ -51,10 +51,11 @@ class Simulation:
         self._istate = np.array([2, 0, 0], np.int64)
         self._records: list[np.ndarray] = []
         self._body_template = np.zeros(0, np.int64)
-        self._old_pair_key = np.zeros(0, np.int64)
-        self._old_pair_hist = np.zeros((0, self.layout.n_hist))
-        self._old_wall_key = np.zeros(0, np.int64)
-        self._old_wall_hist = np.zeros((0, self.layout.n_hist))
+        # history to carry into the next rebuild when the numbering changed; None: the current lists
+        self._old_pair_key: np.ndarray | None = None
+        self._old_pair_hist: np.ndarray | None = None
+        self._old_wall_key: np.ndarray | None = None
+        self._old_wall_hist: np.ndarray | None = None
         self._kernel = None
         self._report: TimestepReport | None = None
         self._stale = True
@@ -114,7 +115,7 @@ class Simulation:
             pos_at_build=np.zeros((ns0 + n_new, 3)),
         )
         self._body_template = np.concatenate([self._body_template, tidx])
-        self._after_topology_change(old_sphere_index=np.arange(ns0, dtype=np.int64))
+        self._after_topology_change(np.arange(ns0, dtype=np.int64), ns0)
         return np.arange(nb0, nb0 + n)
 
     def add_spheres(self, positions_m, radii_m, material_id: int = 0, velocities_m_s=None) -> np.ndarray:
@@ -144,8 +145,7 @@ class Simulation:
         self.spheres = Spheres(*[a[keep_s] for a in s])
         self.spheres = self.spheres._replace(body=new_body_id[self.spheres.body].astype(np.int64))
         self._body_template = self._body_template[keep_b]
-        old_index = np.nonzero(keep_s)[0]
-        self._after_topology_change(old_sphere_index=old_index)
+        self._after_topology_change(np.nonzero(keep_s)[0], keep_s.shape[0])
 
     def add_wall(self, spec: WallSpec | dict) -> int:
         spec = spec if isinstance(spec, WallSpec) else WallSpec.model_validate(spec)
@@ -160,26 +160,34 @@ class Simulation:
                      "servo_target", "servo_vmax", "servo_gain", "force", "moment", "k_sum", "origin_at_build"):
             getattr(new, name)[:n_old] = getattr(old, name)
         self.walls = new
-        self._after_topology_change(old_sphere_index=np.arange(self.n_spheres, dtype=np.int64), walls_changed=True)
+        self._after_topology_change(np.arange(self.n_spheres, dtype=np.int64), self.n_spheres)
         return n_old
 
-    def _after_topology_change(self, old_sphere_index: np.ndarray, walls_changed: bool = False) -> None:
+    def _after_topology_change(self, old_sphere_index: np.ndarray, n_old: int) -> None:
         """Re-index contact history to the new sphere numbering and force a rebuild."""
         n_new = self.n_spheres
-        remap = np.full(max(int(old_sphere_index.max()) + 1 if old_sphere_index.size else 0,
-                            self.pairs.row_start.shape[0] - 1), -1, np.int64)
+        remap = np.full(n_old, -1, np.int64)
         remap[old_sphere_index] = np.arange(old_sphere_index.size)
-        p = self.pairs
-        ok = (remap[p.i] >= 0) & (remap[p.j] >= 0) if p.i.size else np.zeros(0, bool)
-        self._old_pair_key = neighbors.pair_keys(remap[p.i[ok]], remap[p.j[ok]], n_new)
-        self._old_pair_hist = p.hist[ok]
-        wc = self.wall_contacts
-        sphere = np.repeat(np.arange(wc.start.shape[0] - 1), np.diff(wc.start))
-        ok = remap[sphere] >= 0 if sphere.size else np.zeros(0, bool)
-        self._old_wall_key = neighbors.wall_keys(
-            np.concatenate([[0], np.cumsum(np.bincount(remap[sphere[ok]], minlength=n_new))]),
-            wc.wall[ok], wc.tri[ok], self.n_walls, self._n_elements())
-        self._old_wall_hist = wc.hist[ok]
+        if self._old_pair_key is not None:
+            # a change before any rebuild consumed the previous one: re-key the pending history
+            pi, pj = np.divmod(self._old_pair_key, max(n_old, 1))
+            ok = (remap[pi] >= 0) & (remap[pj] >= 0)
+            self._old_pair_key = neighbors.pair_keys(remap[pi[ok]], remap[pj[ok]], n_new)
+            self._old_pair_hist = self._old_pair_hist[ok]
+            self._old_wall_key = np.zeros(0, np.int64)
+            self._old_wall_hist = np.zeros((0, self.layout.n_hist))
+        else:
+            p = self.pairs
+            ok = (remap[p.i] >= 0) & (remap[p.j] >= 0) if p.i.size else np.zeros(0, bool)
+            self._old_pair_key = neighbors.pair_keys(remap[p.i[ok]], remap[p.j[ok]], n_new)
+            self._old_pair_hist = p.hist[ok]
+            wc = self.wall_contacts
+            sphere = np.repeat(np.arange(wc.start.shape[0] - 1), np.diff(wc.start))
+            ok = remap[sphere] >= 0 if sphere.size else np.zeros(0, bool)
+            self._old_wall_key = neighbors.wall_keys(
+                np.concatenate([[0], np.cumsum(np.bincount(remap[sphere[ok]], minlength=n_new))]),
+                wc.wall[ok], wc.tri[ok], self.n_walls, self._n_elements())
+            self._old_wall_hist = wc.hist[ok]
         self._stale = True
         self._report = None
         self._istate[0] = 2
@@ -232,7 +240,9 @@ class Simulation:
     def wall_history(self, name: str) -> dict[str, np.ndarray]:
         """Time series sampled every config.record_every steps: time_s, position_m, force_n, moment_nm."""
         w = self.wall_index(name)
-        rec = np.concatenate(self._records)[:, w] if self._records else np.zeros((0, _REC))
+        # walls are only appended, so index w means the same wall in older records (if it existed)
+        parts = [r[:, w] for r in self._records if r.shape[1] > w]
+        rec = np.concatenate(parts) if parts else np.zeros((0, _REC))
         return {"time_s": rec[:, 0], "position_m": rec[:, 1:4], "force_n": rec[:, 4:7], "moment_nm": rec[:, 7:10]}
 
     def wall_contact_loads(self, name: str) -> dict[str, np.ndarray]:
@@ -298,6 +308,11 @@ class Simulation:
         s, w = self.spheres, self.walls
         n = self.n_spheres
         skin = self._skin()
+        if self._old_pair_key is None:
+            p, wc = self.pairs, self.wall_contacts
+            self._old_pair_key, self._old_pair_hist = neighbors.pair_keys(p.i, p.j, n), p.hist
+            self._old_wall_key = neighbors.wall_keys(wc.start, wc.wall, wc.tri, self.n_walls, self._n_elements())
+            self._old_wall_hist = wc.hist
         pi, pj, row_start = neighbors.build_pairs(s.pos, s.radius, s.body, skin)
         key = neighbors.pair_keys(pi, pj, n)
         hist = neighbors.carry_history(self._old_pair_key, self._old_pair_hist, key, self.layout.n_hist)
@@ -311,8 +326,7 @@ class Simulation:
         whist = neighbors.carry_history(self._old_wall_key, self._old_wall_hist, wkey, self.layout.n_hist)
         k = wall.shape[0]
         self.wall_contacts = WallContacts(start, wall, tri, whist, np.zeros((k, 3)), np.zeros((k, 3)), np.zeros(k))
-        self._old_pair_key, self._old_pair_hist = key, hist
-        self._old_wall_key, self._old_wall_hist = wkey, whist
+        self._old_pair_key = self._old_pair_hist = self._old_wall_key = self._old_wall_hist = None
         s.pos_at_build[:] = s.pos
         w.origin_at_build[:] = w.origin
         self._stale = False
@@ -471,8 +485,9 @@ class Simulation:
                             ("c_", self.wall_contacts)):
             for name, arr in zip(tup._fields, tup):
                 out[prefix + name] = np.array(arr, copy=True)
-        out["old_pair_key"], out["old_pair_hist"] = self._old_pair_key.copy(), self._old_pair_hist.copy()
-        out["old_wall_key"], out["old_wall_hist"] = self._old_wall_key.copy(), self._old_wall_hist.copy()
+        if self._old_pair_key is not None:
+            out["old_pair_key"], out["old_pair_hist"] = self._old_pair_key.copy(), self._old_pair_hist.copy()
+            out["old_wall_key"], out["old_wall_hist"] = self._old_wall_key.copy(), self._old_wall_hist.copy()
         out["stale"] = np.array(self._stale)
         return out
 
@@ -498,8 +513,10 @@ class Simulation:
         for attr, prefix, cls_ in (("bodies", "b_", Bodies), ("spheres", "s_", Spheres), ("walls", "w_", Walls),
                                    ("pairs", "p_", Pairs), ("wall_contacts", "c_", WallContacts)):
             setattr(self, attr, cls_(*[state[prefix + f].copy() for f in cls_._fields]))
-        self._old_pair_key, self._old_pair_hist = state["old_pair_key"].copy(), state["old_pair_hist"].copy()
-        self._old_wall_key, self._old_wall_hist = state["old_wall_key"].copy(), state["old_wall_hist"].copy()
+        self._old_pair_key = self._old_pair_hist = self._old_wall_key = self._old_wall_hist = None
+        if "old_pair_key" in state:
+            self._old_pair_key, self._old_pair_hist = state["old_pair_key"].copy(), state["old_pair_hist"].copy()
+            self._old_wall_key, self._old_wall_hist = state["old_wall_key"].copy(), state["old_wall_hist"].copy()
         self._stale = bool(state["stale"])
         self._records = []
         self._report = None

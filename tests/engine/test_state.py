@@ -1,0 +1,102 @@
+"""Time-step rule and refusal, checkpoint round trip, determinism, servo walls."""
+import math
+
+import numpy as np
+import pytest
+
+from engine.config import CylinderGeom, PlaneGeom, ServoSpec, WallSpec
+from engine.simulation import Simulation
+
+from engine_helpers import config, sphere_mass
+
+R = 0.01
+KP = 1.0e6
+
+
+def _bed(seed=3, n_side=5, threads=None, **kw):
+    """A small random bed of spheres falling into a cylinder (soft, no tangential dashpot: few steps)."""
+    cfg = config(mat_normal_stiffness_n_per_m=1e5, mat_friction=0.5, mat_damping_ratio_shear=0.0, threads=threads,
+                 **kw)
+    sim = Simulation(cfg)
+    rng = np.random.default_rng(seed)
+    g = (np.arange(n_side) - (n_side - 1) / 2) * 2.4 * R
+    pos = np.array([[x, y, 0.02 + 2.4 * R * k] for k in range(n_side) for x in g for y in g])
+    pos[:, :2] += rng.uniform(-0.1 * R, 0.1 * R, (len(pos), 2))
+    radii = rng.uniform(0.8 * R, R, len(pos))
+    sim.add_spheres(pos, radii)
+    sim.add_wall(WallSpec(name="floor", geometry=PlaneGeom(), normal_stiffness_n_per_m=1e7))
+    sim.add_wall(WallSpec(name="tube", geometry=CylinderGeom(base_m=(0, 0, -0.01), radius_m=0.08, height_m=0.5)))
+    return sim
+
+
+def test_timestep_accounts_for_damping_and_rotation():
+    m = sphere_mass(R, 2500.0)
+    sim = Simulation(config(mat_normal_stiffness_n_per_m=KP, mat_damping_ratio_normal=0.8,
+                            mat_damping_ratio_shear=0.8, gravity_m_s2=(0, 0, 0)))
+    sim.add_spheres([[0, 0, 0]], [R])
+    rep = sim.timestep_report()
+    # tangential particle-particle mode: w = sqrt(3.5 kp / m), damping ratio 0.8 sqrt(3.5)
+    w = math.sqrt(3.5 * KP / m)
+    z = 0.8 * math.sqrt(3.5)
+    expected = min(2.0 * (math.sqrt(1 + z * z) - z), 1.0 / z) / w
+    assert rep.critical_s == pytest.approx(expected, rel=1e-12)
+    assert rep.limiting_mode == "particle-particle tangential"
+    assert rep.timestep_s == pytest.approx(0.3 * expected)
+    # without the tangential dashpot the step is longer
+    sim2 = Simulation(config(mat_normal_stiffness_n_per_m=KP, mat_damping_ratio_shear=0.0, gravity_m_s2=(0, 0, 0)))
+    sim2.add_spheres([[0, 0, 0]], [R])
+    assert sim2.timestep_report().critical_s > 1.5 * rep.critical_s
+
+
+def test_timestep_above_critical_is_refused():
+    sim = Simulation(config(mat_normal_stiffness_n_per_m=KP, timestep_s=1e-3))
+    sim.add_spheres([[0, 0, 0]], [R])
+    with pytest.raises(ValueError, match="above the critical time step"):
+        sim.run(steps=1)
+
+
+def test_same_seed_same_threads_is_bitwise_identical():
+    """Two threads (forced even for this small bed), and one thread: all three runs agree bitwise,
+    since every sum runs in a fixed order whatever the thread count."""
+    runs = [_bed(threads=2, serial_below_spheres=0), _bed(threads=2, serial_below_spheres=0),
+            _bed(threads=1, serial_below_spheres=0)]
+    for sim in runs:
+        sim.run(duration_s=0.2)
+    a = runs[0]
+    assert a.contact_count()[0] > 20  # they did touch
+    for b in runs[1:]:
+        assert np.array_equal(a.positions_m(), b.positions_m())
+        assert np.array_equal(a.velocities_m_s(), b.velocities_m_s())
+        assert np.array_equal(a.pairs.hist, b.pairs.hist)
+
+
+def test_checkpoint_round_trip_continues_identically(tmp_path):
+    a = _bed()
+    a.run(duration_s=0.1)
+    path = tmp_path / "state.npz"
+    a.save(path)
+    snap = a.checkpoint()
+    a.run(steps=1500)
+    for b in (Simulation.from_checkpoint(path), Simulation.from_checkpoint(snap)):
+        b.run(steps=1500)
+        assert np.array_equal(a.positions_m(), b.positions_m())
+        assert np.array_equal(a.angular_velocities_rad_s(), b.angular_velocities_rad_s())
+        assert np.array_equal(a.wall_force("floor"), b.wall_force("floor"))
+        assert b.time_s == a.time_s
+
+
+def test_servo_lid_reaches_target_force():
+    sim = _bed()
+    sim.run(duration_s=0.3)
+    top = sim.sphere_positions_m()[:, 2].max() + R
+    target = 40.0
+    sim.add_wall(WallSpec(name="lid", geometry=PlaneGeom(point_m=(0, 0, top + 0.005), normal=(0, 0, -1)),
+                          servo=ServoSpec(axis=(0, 0, -1), target_force_n=target, max_speed_m_s=0.2)))
+    sim.run(duration_s=0.5)
+    assert sim.wall_force("lid")[2] == pytest.approx(target, rel=0.02)
+    hist = sim.wall_history("lid")
+    assert hist["time_s"].size > 10 and hist["force_n"].shape[1] == 3
+    # static balance: floor and tube together carry the lid load plus the weight of the bed
+    weight = sim.body_masses_kg().sum() * 9.81
+    carried = -(sim.wall_force("floor")[2] + sim.wall_force("tube")[2])
+    assert carried == pytest.approx(target + weight, rel=0.02)
