@@ -126,6 +126,8 @@ def run_analytic(spec: JobSpec, progress=None, should_cancel=None) -> LabResult:
         _prop("dst", "friction_angle_deg", math.degrees(math.atan(slope))),
         _prop("dst", "cohesion_pa", intercept),
         _prop("dst", "mohr_coulomb_r2", 1.0 - ss_res / ss_tot if ss_tot > 0 else 1.0),
+        # the thesis's measured dilatancy (13.2 deg) is a mean over loads: no condition
+        _prop("dst", "dilatancy_angle_deg", dilatancy_deg),
     ]
     for stress, tau in zip(stresses, shear):
         props.append(_prop("dst", "residual_shear_stress_pa", tau, normal_stress_pa=stress))
