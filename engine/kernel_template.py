@@ -224,7 +224,7 @@ def sphere_walls(i, start, w_ids, t_ids, hist, out_f, out_pt, out_k, s_pos, s_ve
 TEMPLATE += '''
 
 @njit(cache=True, parallel=True)
-def update_bodies(B, S, W, P, WC, props, n_mat, dt, g0, g1, g2, repulsive_only, finish, go_on):
+def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only, finish, go_on):
     """One parallel pass per body: gather contact forces, walls, gravity; finish the step's kick and,
     when go_on, start the next one (half kick + drift). Fusing keeps it to two parallel regions a step."""
     b_pos, b_vel, b_quat, b_omega, b_mass = B.pos, B.vel, B.quat, B.omega, B.mass
@@ -240,21 +240,23 @@ def update_bodies(B, S, W, P, WC, props, n_mat, dt, g0, g1, g2, repulsive_only, 
         body_one(b, b_pos, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_start, b_clump, b_local,
                  s_body, s_offset, s_rad, s_pos, s_vel, s_mat, s_kp, s_force, s_torque, w_kind, w_origin, w_frame,
                  w_par, tri, w_kn, w_mu, w_mat, w_vel, row_start, by_j_start, by_j, pf, pti, ptj, c_start, c_wall,
-                 c_tri, c_hist, c_force, c_point, c_k, props, n_mat, dt, g0, g1, g2, repulsive_only, finish, go_on)
+                 c_tri, c_hist, c_force, c_point, c_k, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only,
+                 finish, go_on)
 
 
 @njit(cache=True)
 def body_one(b, b_pos, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_start, b_clump, b_local,
              s_body, s_offset, s_rad, s_pos, s_vel, s_mat, s_kp, s_force, s_torque, w_kind, w_origin, w_frame,
              w_par, tri, w_kn, w_mu, w_mat, w_vel, row_start, by_j_start, by_j, pf, pti, ptj, c_start, c_wall,
-             c_tri, c_hist, c_force, c_point, c_k, props, n_mat, dt, g0, g1, g2, repulsive_only, finish, go_on):
+             c_tri, c_hist, c_force, c_point, c_k, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only,
+             finish, go_on):
     half = 0.5 * dt
     for i in range(b_start[b], b_start[b + 1]):
         gather_sphere(i, row_start, by_j_start, by_j, pf, pti, ptj, s_force, s_torque)
         if c_start[i + 1] > c_start[i]:
             sphere_walls(i, c_start, c_wall, c_tri, c_hist, c_force, c_point, c_k, s_pos, s_vel, s_rad, s_mat,
                          s_kp, s_body, b_mass, b_omega, s_force, s_torque, w_kind, w_origin, w_frame, w_par,
-                         tri, w_kn, w_mu, w_mat, w_vel, props, n_mat, dt, repulsive_only)
+                         tri, w_kn, w_mu, w_mat, w_vel, props, n_mat, dt_contact, repulsive_only)
     body_sum(b, b_pos, b_vel, b_omega, b_mass, b_force, b_torque, b_start, b_clump, b_local, s_pos,
              s_force, s_torque, g0, g1, g2)
     if finish:
@@ -301,10 +303,11 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
         go_on = (not fresh) and done + 1 < n_steps
         if fresh:
             go_on = n_steps > 0
+        # a fresh state only gets its forces: springs do not advance (dt_contact 0), no kick completes
+        dtc = 0.0 if fresh else dt
         pair_forces(P.i, P.j, P.hist, P.force, P.torque_i, P.torque_j, S.pos, S.vel, S.radius, S.material, S.kp,
-                    S.body, B.mass, B.omega, props, n_mat, dt, repulsive)
-        # a fresh state only gets its forces: no step is completed by a kick
-        update_bodies(B, S, W, P, WC, props, n_mat, dt, scal[2], scal[3], scal[4], repulsive, not fresh, go_on)
+                    S.body, B.mass, B.omega, props, n_mat, dtc, repulsive)
+        update_bodies(B, S, W, P, WC, props, n_mat, dt, dtc, scal[2], scal[3], scal[4], repulsive, not fresh, go_on)
         wall_resultants(W.kind.shape[0], WC.wall, WC.force, WC.point, WC.k, W.origin, W.force, W.moment, W.k_sum)
         if not fresh:
             scal[1] += dt
