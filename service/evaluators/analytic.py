@@ -29,16 +29,9 @@ import time
 import numpy as np
 
 import engine
+from engine.lab import presets
 from engine.lab.result import BulkProperty, Cancelled, LabResult, Provenance, QUANTITIES
 from engine.lab.spec import JobSpec
-
-# Container geometry by fidelity: (radius_m, packing_height_m, mean particle diameter_m).
-_GEOMETRY = {
-    "thesis": (0.295, 0.33, 0.024),
-    "screening": (0.200, 0.37, 0.040),
-}
-_THESIS_DST_STRESSES_PA = (10.5e3, 24.0e3, 38.3e3, 52.4e3)
-_SCREENING_DST_FORCES_N = (1885.0, 3495.0, 5105.0, 6760.0)
 
 # Relative (or absolute, for angles) scatter of one realisation.
 _REL_SD_DENSITY = 0.003
@@ -55,10 +48,12 @@ def _rolling_friction(spec: JobSpec) -> float:
 def dst_normal_stresses_pa(spec: JobSpec) -> list[float]:
     if spec.options.dst_normal_stresses_pa:
         return list(spec.options.dst_normal_stresses_pa)
-    if spec.fidelity == "thesis":
-        return list(_THESIS_DST_STRESSES_PA)
-    area_m2 = math.pi * _GEOMETRY["screening"][0] ** 2
-    return [force_n / area_m2 for force_n in _SCREENING_DST_FORCES_N]
+    return list(presets.fidelity(spec.fidelity).dst_normal_stresses_pa)
+
+
+def _mean_particle_diameter_m(preset: presets.Fidelity) -> float:
+    """Solid-volume-weighted mean sphere diameter of the preset's shape mix."""
+    return sum(s.volume_fraction * (s.radius_min_m + s.radius_max_m) for s in preset.shapes)
 
 
 def _prop(test: str, quantity: str, value: float, **condition: float) -> BulkProperty:
@@ -84,10 +79,10 @@ def run_analytic(spec: JobSpec, progress=None, should_cancel=None) -> LabResult:
     _wait(float(os.environ.get("DEMCAL_ANALYTIC_DURATION_S", "0") or 0.0), progress, should_cancel)
     p = spec.parameters
     rng = np.random.default_rng(spec.seed)
-    radius_m, height_m, diameter_m = _GEOMETRY[spec.fidelity]
-    if spec.fidelity == "screening" and p.particle_radius_m:
-        diameter_m = 2.0 * p.particle_radius_m
-    area_m2 = math.pi * radius_m**2
+    preset = presets.fidelity(spec.fidelity, p.particle_radius_m)
+    diameter_m = _mean_particle_diameter_m(preset)
+    height_m = preset.packing_height_m
+    area_m2 = preset.container_area_m2
     mu_r = _rolling_friction(spec)
 
     solid_fraction = (
