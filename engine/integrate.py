@@ -32,7 +32,7 @@ def _rot_t(q, v0, v1, v2):
     return (v0 + w * t0 + (y * t2 - z * t1), v1 + w * t1 + (z * t0 - x * t2), v2 + w * t2 + (x * t1 - y * t0))
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def kick_body(b, vel, quat, omega, mass, inertia, force, torque, is_clump, dt_half):
     s = dt_half / mass[b]
     vel[b, 0] += s * force[b, 0]
@@ -61,7 +61,7 @@ def drift(pos, vel, quat, omega, is_clump, sphere_start, offset, s_pos, s_vel, d
         drift_body(b, pos, vel, quat, omega, is_clump, sphere_start, offset, s_pos, s_vel, dt)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def drift_body(b, pos, vel, quat, omega, is_clump, sphere_start, offset, s_pos, s_vel, dt):
     pos[b, 0] += dt * vel[b, 0]
     pos[b, 1] += dt * vel[b, 1]

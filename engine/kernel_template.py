@@ -17,8 +17,10 @@ from engine.stepping import body_sum, move_walls, needs_rebuild, wall_resultants
 from engine.wallgeom import MESH, primitive_distance, triangle_distance
 {EFFECT_IMPORTS}
 
+CHUNK = 128  # bodies per parallel task; pairs use twice this
 
-@njit(cache=True)
+
+@njit(cache=True, inline='always')
 def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
             r_i, r_j, m_eff, kn, mu, dt, repulsive_only):
     """Force on i (n points from i to j, v = v_i - v_j at the contact, w = omega_i - omega_j)."""
@@ -77,13 +79,24 @@ def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
 @njit(cache=True, parallel=True)
 def pair_forces(pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
                 b_mass, b_omega, props, n_mat, dt, repulsive_only):
-    # the loop body is a function of its own: numba's parfor passes are slow on large loop bodies
-    for p in prange(pi.shape[0]):
+    # chunks: the loop body is a function of its own (numba's parfor passes are slow on large bodies)
+    # and its per-call cost is paid once per chunk, not per pair
+    n = pi.shape[0]
+    n_chunks = (n + 2 * CHUNK - 1) // (2 * CHUNK)
+    for c in prange(n_chunks):
+        pair_range(c * 2 * CHUNK, min(n, (c + 1) * 2 * CHUNK), pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel,
+                   s_rad, s_mat, s_kp, s_body, b_mass, b_omega, props, n_mat, dt, repulsive_only)
+
+
+@njit(cache=True)
+def pair_range(p_lo, p_hi, pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
+               b_mass, b_omega, props, n_mat, dt, repulsive_only):
+    for p in range(p_lo, p_hi):
         pair_one(p, pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
                  b_mass, b_omega, props, n_mat, dt, repulsive_only)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def pair_one(p, pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
              b_mass, b_omega, props, n_mat, dt, repulsive_only):
     i = pi[p]
@@ -134,7 +147,7 @@ def pair_one(p, pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat,
     out_tj[p, 0], out_tj[p, 1], out_tj[p, 2] = a_j * c0 - tr0, a_j * c1 - tr1, a_j * c2 - tr2
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def gather_sphere(i, row_start, by_j_start, by_j, pf, pti, ptj, s_force, s_torque):
     """Sum the pair forces of sphere i in a fixed order (race free, deterministic)."""
     f0 = f1 = f2 = t0 = t1 = t2 = 0.0
@@ -157,7 +170,7 @@ def gather_sphere(i, row_start, by_j_start, by_j, pf, pti, ptj, s_force, s_torqu
     s_torque[i, 0], s_torque[i, 1], s_torque[i, 2] = t0, t1, t2
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _wall_geom(e, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri, s_pos):
     w = w_ids[e]
     if t_ids[e] >= 0:
@@ -165,11 +178,14 @@ def _wall_geom(e, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri, s_pos)
     return primitive_distance(w_kind[w], w_origin[w], w_frame[w], w_par[w], s_pos[i, 0], s_pos[i, 1], s_pos[i, 2])
 
 
-@njit(cache=True)
-def sphere_walls(i, start, w_ids, t_ids, hist, out_f, out_pt, out_k, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
-                 b_mass, b_omega, s_force, s_torque, w_kind, w_origin, w_frame, w_par, tri, w_kn, w_mu, w_mat,
-                 w_vel, props, n_mat, dt, repulsive_only):
+@njit(cache=True, inline='always')
+def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
     """Add the wall contacts of sphere i to its force and torque; store per-contact wall loads."""
+    start, w_ids, t_ids, hist, out_f, out_pt, out_k = WC.start, WC.wall, WC.tri, WC.hist, WC.force, WC.point, WC.k
+    s_pos, s_vel, s_rad, s_mat, s_kp, s_body = S.pos, S.vel, S.radius, S.material, S.kp, S.body
+    s_force, s_torque, b_mass, b_omega = S.force, S.torque, B.mass, B.omega
+    w_kind, w_origin, w_frame, w_par, tri = W.kind, W.origin, W.frame, W.par, W.tri
+    w_kn, w_mu, w_mat, w_vel = W.kn, W.mu, W.material, W.vel
     r_i = s_rad[i]
     b = s_body[i]
     for e in range(start[i], start[i + 1]):
@@ -226,44 +242,37 @@ TEMPLATE += '''
 @njit(cache=True, parallel=True)
 def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only, finish, go_on):
     """One parallel pass per body: gather contact forces, walls, gravity; finish the step's kick and,
-    when go_on, start the next one (half kick + drift). Fusing keeps it to two parallel regions a step."""
-    b_pos, b_vel, b_quat, b_omega, b_mass = B.pos, B.vel, B.quat, B.omega, B.mass
-    b_inertia, b_force, b_torque, b_start, b_clump, b_local = (B.inertia, B.force, B.torque, B.sphere_start,
-                                                               B.is_clump, B.local_damping)
-    s_body, s_offset, s_rad, s_pos, s_vel = S.body, S.offset, S.radius, S.pos, S.vel
-    s_mat, s_kp, s_force, s_torque = S.material, S.kp, S.force, S.torque
-    w_kind, w_origin, w_frame, w_par, tri = W.kind, W.origin, W.frame, W.par, W.tri
-    w_kn, w_mu, w_mat, w_vel = W.kn, W.mu, W.material, W.vel
-    row_start, by_j_start, by_j, pf, pti, ptj = P.row_start, P.by_j_start, P.by_j, P.force, P.torque_i, P.torque_j
-    c_start, c_wall, c_tri, c_hist, c_force, c_point, c_k = WC.start, WC.wall, WC.tri, WC.hist, WC.force, WC.point, WC.k
-    for b in prange(b_pos.shape[0]):
-        body_one(b, b_pos, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_start, b_clump, b_local,
-                 s_body, s_offset, s_rad, s_pos, s_vel, s_mat, s_kp, s_force, s_torque, w_kind, w_origin, w_frame,
-                 w_par, tri, w_kn, w_mu, w_mat, w_vel, row_start, by_j_start, by_j, pf, pti, ptj, c_start, c_wall,
-                 c_tri, c_hist, c_force, c_point, c_k, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only,
-                 finish, go_on)
+    when go_on, start the next one (half kick + drift). Fusing keeps it to two parallel regions a step.
+    Chunks of bodies keep the per-call cost of the (inlined) body code off every single body."""
+    n = B.pos.shape[0]
+    n_chunks = (n + CHUNK - 1) // CHUNK
+    for c in prange(n_chunks):
+        body_range(c * CHUNK, min(n, c * CHUNK + CHUNK), B, S, W, P, WC, props, n_mat, dt, dt_contact,
+                   g0, g1, g2, repulsive_only, finish, go_on)
 
 
 @njit(cache=True)
-def body_one(b, b_pos, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_start, b_clump, b_local,
-             s_body, s_offset, s_rad, s_pos, s_vel, s_mat, s_kp, s_force, s_torque, w_kind, w_origin, w_frame,
-             w_par, tri, w_kn, w_mu, w_mat, w_vel, row_start, by_j_start, by_j, pf, pti, ptj, c_start, c_wall,
-             c_tri, c_hist, c_force, c_point, c_k, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only,
-             finish, go_on):
+def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only, finish,
+               go_on):
+    b_pos, b_vel, b_quat, b_omega, b_mass = B.pos, B.vel, B.quat, B.omega, B.mass
+    b_inertia, b_force, b_torque, b_start, b_clump, b_local = (B.inertia, B.force, B.torque, B.sphere_start,
+                                                               B.is_clump, B.local_damping)
+    s_offset, s_pos, s_vel, s_force, s_torque = S.offset, S.pos, S.vel, S.force, S.torque
+    row_start, by_j_start, by_j, pf, pti, ptj = P.row_start, P.by_j_start, P.by_j, P.force, P.torque_i, P.torque_j
+    c_start = WC.start
     half = 0.5 * dt
-    for i in range(b_start[b], b_start[b + 1]):
-        gather_sphere(i, row_start, by_j_start, by_j, pf, pti, ptj, s_force, s_torque)
-        if c_start[i + 1] > c_start[i]:
-            sphere_walls(i, c_start, c_wall, c_tri, c_hist, c_force, c_point, c_k, s_pos, s_vel, s_rad, s_mat,
-                         s_kp, s_body, b_mass, b_omega, s_force, s_torque, w_kind, w_origin, w_frame, w_par,
-                         tri, w_kn, w_mu, w_mat, w_vel, props, n_mat, dt_contact, repulsive_only)
-    body_sum(b, b_pos, b_vel, b_omega, b_mass, b_force, b_torque, b_start, b_clump, b_local, s_pos,
-             s_force, s_torque, g0, g1, g2)
-    if finish:
-        kick_body(b, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_clump, half)
-    if go_on:
-        kick_body(b, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_clump, half)
-        drift_body(b, b_pos, b_vel, b_quat, b_omega, b_clump, b_start, s_offset, s_pos, s_vel, dt)
+    for b in range(b_lo, b_hi):
+        for i in range(b_start[b], b_start[b + 1]):
+            gather_sphere(i, row_start, by_j_start, by_j, pf, pti, ptj, s_force, s_torque)
+            if c_start[i + 1] > c_start[i]:
+                sphere_walls(i, S, B, W, WC, props, n_mat, dt_contact, repulsive_only)
+        body_sum(b, b_pos, b_vel, b_omega, b_mass, b_force, b_torque, b_start, b_clump, b_local, s_pos,
+                 s_force, s_torque, g0, g1, g2)
+        if finish:
+            kick_body(b, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_clump, half)
+        if go_on:
+            kick_body(b, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_clump, half)
+            drift_body(b, b_pos, b_vel, b_quat, b_omega, b_clump, b_start, s_offset, s_pos, s_vel, dt)
 
 
 @njit(cache=True, parallel=True)

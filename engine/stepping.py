@@ -7,7 +7,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def body_sum(b, b_pos, b_vel, b_omega, b_mass, b_force, b_torque, sphere_start, is_clump, local_damping,
              s_pos, s_force, s_torque, g0, g1, g2):
     """Resultant force (with gravity) and torque of body b from its spheres, then local damping."""
