@@ -77,27 +77,27 @@ def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
 
 
 @njit(cache=True, parallel=True)
-def pair_forces(pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
+def pair_forces(pi, pj, hist, out, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
                 b_mass, b_omega, props, n_mat, dt, repulsive_only):
     # chunks: the loop body is a function of its own (numba's parfor passes are slow on large bodies)
     # and its per-call cost is paid once per chunk, not per pair
     n = pi.shape[0]
     n_chunks = (n + 2 * CHUNK - 1) // (2 * CHUNK)
     for c in prange(n_chunks):
-        pair_range(c * 2 * CHUNK, min(n, (c + 1) * 2 * CHUNK), pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel,
+        pair_range(c * 2 * CHUNK, min(n, (c + 1) * 2 * CHUNK), pi, pj, hist, out, s_pos, s_vel,
                    s_rad, s_mat, s_kp, s_body, b_mass, b_omega, props, n_mat, dt, repulsive_only)
 
 
 @njit(cache=True)
-def pair_range(p_lo, p_hi, pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
+def pair_range(p_lo, p_hi, pi, pj, hist, out, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
                b_mass, b_omega, props, n_mat, dt, repulsive_only):
     for p in range(p_lo, p_hi):
-        pair_one(p, pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
+        pair_one(p, pi, pj, hist, out, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
                  b_mass, b_omega, props, n_mat, dt, repulsive_only)
 
 
 @njit(cache=True, inline='always')
-def pair_one(p, pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
+def pair_one(p, pi, pj, hist, out, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
              b_mass, b_omega, props, n_mat, dt, repulsive_only):
     i = pi[p]
     j = pj[p]
@@ -112,10 +112,8 @@ def pair_one(p, pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat,
     if d2sum >= reach * reach:
         for k in range(h.shape[0]):
             h[k] = 0.0
-        for k in range(3):
-            out_f[p, k] = 0.0
-            out_ti[p, k] = 0.0
-            out_tj[p, k] = 0.0
+        for k in range(9):
+            out[p, k] = 0.0
         return
     dist = math.sqrt(d2sum)
     n0, n1, n2 = d0 / dist, d1 / dist, d2 / dist
@@ -139,33 +137,33 @@ def pair_one(p, pi, pj, hist, out_f, out_ti, out_tj, s_pos, s_vel, s_rad, s_mat,
         props, row, h, delta, dist, n0, n1, n2, v0, v1, v2,
         wi0 - wj0, wi1 - wj1, wi2 - wj2, r_i, r_j, mi * mj / (mi + mj),
         kpi * kpj / (kpi + kpj), props[row, 3], dt, repulsive_only)
-    out_f[p, 0], out_f[p, 1], out_f[p, 2] = f0, f1, f2
+    out[p, 0], out[p, 1], out[p, 2] = f0, f1, f2
     c0 = n1 * f2 - n2 * f1
     c1 = n2 * f0 - n0 * f2
     c2 = n0 * f1 - n1 * f0
-    out_ti[p, 0], out_ti[p, 1], out_ti[p, 2] = a_i * c0 + tr0, a_i * c1 + tr1, a_i * c2 + tr2
-    out_tj[p, 0], out_tj[p, 1], out_tj[p, 2] = a_j * c0 - tr0, a_j * c1 - tr1, a_j * c2 - tr2
+    out[p, 3], out[p, 4], out[p, 5] = a_i * c0 + tr0, a_i * c1 + tr1, a_i * c2 + tr2
+    out[p, 6], out[p, 7], out[p, 8] = a_j * c0 - tr0, a_j * c1 - tr1, a_j * c2 - tr2
 
 
 @njit(cache=True, inline='always')
-def gather_sphere(i, row_start, by_j_start, by_j, pf, pti, ptj, s_force, s_torque):
+def gather_sphere(i, row_start, by_j_start, by_j, pl, s_force, s_torque):
     """Sum the pair forces of sphere i in a fixed order (race free, deterministic)."""
     f0 = f1 = f2 = t0 = t1 = t2 = 0.0
     for p in range(row_start[i], row_start[i + 1]):
-        f0 += pf[p, 0]
-        f1 += pf[p, 1]
-        f2 += pf[p, 2]
-        t0 += pti[p, 0]
-        t1 += pti[p, 1]
-        t2 += pti[p, 2]
+        f0 += pl[p, 0]
+        f1 += pl[p, 1]
+        f2 += pl[p, 2]
+        t0 += pl[p, 3]
+        t1 += pl[p, 4]
+        t2 += pl[p, 5]
     for k in range(by_j_start[i], by_j_start[i + 1]):
         p = by_j[k]
-        f0 -= pf[p, 0]
-        f1 -= pf[p, 1]
-        f2 -= pf[p, 2]
-        t0 += ptj[p, 0]
-        t1 += ptj[p, 1]
-        t2 += ptj[p, 2]
+        f0 -= pl[p, 0]
+        f1 -= pl[p, 1]
+        f2 -= pl[p, 2]
+        t0 += pl[p, 6]
+        t1 += pl[p, 7]
+        t2 += pl[p, 8]
     s_force[i, 0], s_force[i, 1], s_force[i, 2] = f0, f1, f2
     s_torque[i, 0], s_torque[i, 1], s_torque[i, 2] = t0, t1, t2
 
@@ -258,12 +256,12 @@ def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1,
     b_inertia, b_force, b_torque, b_start, b_clump, b_local = (B.inertia, B.force, B.torque, B.sphere_start,
                                                                B.is_clump, B.local_damping)
     s_offset, s_pos, s_vel, s_force, s_torque = S.offset, S.pos, S.vel, S.force, S.torque
-    row_start, by_j_start, by_j, pf, pti, ptj = P.row_start, P.by_j_start, P.by_j, P.force, P.torque_i, P.torque_j
+    row_start, by_j_start, by_j, pl = P.row_start, P.by_j_start, P.by_j, P.load
     c_start = WC.start
     half = 0.5 * dt
     for b in range(b_lo, b_hi):
         for i in range(b_start[b], b_start[b + 1]):
-            gather_sphere(i, row_start, by_j_start, by_j, pf, pti, ptj, s_force, s_torque)
+            gather_sphere(i, row_start, by_j_start, by_j, pl, s_force, s_torque)
             if c_start[i + 1] > c_start[i]:
                 sphere_walls(i, S, B, W, WC, props, n_mat, dt_contact, repulsive_only)
         body_sum(b, b_pos, b_vel, b_omega, b_mass, b_force, b_torque, b_start, b_clump, b_local, s_pos,
@@ -314,7 +312,7 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
             go_on = n_steps > 0
         # a fresh state only gets its forces: springs do not advance (dt_contact 0), no kick completes
         dtc = 0.0 if fresh else dt
-        pair_forces(P.i, P.j, P.hist, P.force, P.torque_i, P.torque_j, S.pos, S.vel, S.radius, S.material, S.kp,
+        pair_forces(P.i, P.j, P.hist, P.load, S.pos, S.vel, S.radius, S.material, S.kp,
                     S.body, B.mass, B.omega, props, n_mat, dtc, repulsive)
         update_bodies(B, S, W, P, WC, props, n_mat, dt, dtc, scal[2], scal[3], scal[4], repulsive, not fresh, go_on)
         wall_resultants(W.kind.shape[0], WC.wall, WC.force, WC.point, WC.k, W.origin, W.force, W.moment, W.k_sum)

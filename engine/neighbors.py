@@ -60,10 +60,14 @@ def _cell_sort(pos, lo, cell, dims):
 
 
 @njit(cache=True)
-def _scan_row(i, pos, radius, body, skin, lo, cell, dims, start, order, out, write):
-    c0 = min(int((pos[i, 0] - lo[0]) / cell), dims[0] - 1)
-    c1 = min(int((pos[i, 1] - lo[1]) / cell), dims[1] - 1)
-    c2 = min(int((pos[i, 2] - lo[2]) / cell), dims[2] - 1)
+def _scan_row(i, x0, x1, x2, r_i, b_i, skin, lo, cell, dims, start, order, c_pos, c_rad, c_body, out, cap):
+    """Neighbours j > i of sphere i within reach; writes the first `cap` into out, returns the count.
+
+    c_* are the sphere data copied in cell order, so the inner loop reads memory sequentially.
+    """
+    c0 = min(int((x0 - lo[0]) / cell), dims[0] - 1)
+    c1 = min(int((x1 - lo[1]) / cell), dims[1] - 1)
+    c2 = min(int((x2 - lo[2]) / cell), dims[2] - 1)
     count = 0
     for z in range(max(c2 - 1, 0), min(c2 + 2, dims[2])):
         for y in range(max(c1 - 1, 0), min(c1 + 2, dims[1])):
@@ -71,14 +75,14 @@ def _scan_row(i, pos, radius, body, skin, lo, cell, dims, start, order, out, wri
                 c = (z * dims[1] + y) * dims[0] + x
                 for k in range(start[c], start[c + 1]):
                     j = order[k]
-                    if j <= i or body[j] == body[i]:
+                    if j <= i or c_body[k] == b_i:
                         continue
-                    d0 = pos[j, 0] - pos[i, 0]
-                    d1 = pos[j, 1] - pos[i, 1]
-                    d2 = pos[j, 2] - pos[i, 2]
-                    reach = radius[i] + radius[j] + skin
+                    d0 = c_pos[k, 0] - x0
+                    d1 = c_pos[k, 1] - x1
+                    d2 = c_pos[k, 2] - x2
+                    reach = r_i + c_rad[k] + skin
                     if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach:
-                        if write:
+                        if count < cap:
                             out[count] = j
                         count += 1
     return count
@@ -86,14 +90,32 @@ def _scan_row(i, pos, radius, body, skin, lo, cell, dims, start, order, out, wri
 
 @njit(cache=True, parallel=True)
 def build_pairs(pos, radius, body, skin):
-    """Return (pair_i, pair_j, row_start) of all sphere pairs of different bodies within reach."""
+    """Return (pair_i, pair_j, row_start) of all sphere pairs of different bodies within reach.
+
+    One scan into fixed-width rows (widened and repeated only if a row overflows), then a compaction.
+    """
     n = pos.shape[0]
     lo, cell, dims = _grid(pos, radius, skin)
     cid, start, order = _cell_sort(pos, lo, cell, dims)
+    c_pos = np.empty((n, 3))
+    c_rad = np.empty(n)
+    c_body = np.empty(n, np.int64)
+    for k in prange(n):
+        j = order[k]
+        c_pos[k, 0], c_pos[k, 1], c_pos[k, 2] = pos[j, 0], pos[j, 1], pos[j, 2]
+        c_rad[k] = radius[j]
+        c_body[k] = body[j]
     counts = np.zeros(n, np.int64)
-    dummy = np.empty(0, np.int64)
-    for i in prange(n):
-        counts[i] = _scan_row(i, pos, radius, body, skin, lo, cell, dims, start, order, dummy, False)
+    cap = 16
+    while True:
+        buf = np.empty((n, cap), np.int64)
+        for i in prange(n):
+            counts[i] = _scan_row(i, pos[i, 0], pos[i, 1], pos[i, 2], radius[i], body[i], skin, lo, cell, dims,
+                                  start, order, c_pos, c_rad, c_body, buf[i], cap)
+        widest = counts.max() if n else 0
+        if widest <= cap:
+            break
+        cap = widest
     row_start = np.zeros(n + 1, np.int64)
     for i in range(n):
         row_start[i + 1] = row_start[i] + counts[i]
@@ -101,10 +123,11 @@ def build_pairs(pos, radius, body, skin):
     pair_i = np.empty(row_start[n], np.int64)
     for i in prange(n):
         a = row_start[i]
-        row = pair_j[a:row_start[i + 1]]
-        _scan_row(i, pos, radius, body, skin, lo, cell, dims, start, order, row, True)
+        m = counts[i]
+        row = pair_j[a:a + m]
+        row[:] = buf[i, :m]
         row.sort()
-        pair_i[a:row_start[i + 1]] = i
+        pair_i[a:a + m] = i
     return pair_i, pair_j, row_start
 
 
@@ -177,16 +200,22 @@ def build_wall_list(pos, radius, skin, w_type, w_origin, w_frame, w_par, w_tri_s
     return start, wall, tri_idx
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def carry_history(old_key, old_hist, new_key, n_hist):
-    """History rows of new contacts looked up by key in the old (sorted) keys; new contacts get 0."""
+    """History rows of new contacts looked up by key in the old keys; new contacts get 0.
+
+    Both key arrays are ascending (rows sorted by sphere, then partner), so one merge pass does it.
+    """
     out = np.zeros((new_key.shape[0], n_hist))
     m = old_key.shape[0]
-    if m == 0:
-        return out
-    for p in prange(new_key.shape[0]):
-        k = np.searchsorted(old_key, new_key[p])
-        if k < m and old_key[k] == new_key[p]:
+    k = 0
+    for p in range(new_key.shape[0]):
+        key = new_key[p]
+        while k < m and old_key[k] < key:
+            k += 1
+        if k == m:
+            break
+        if old_key[k] == key:
             for h in range(n_hist):
                 out[p, h] = old_hist[k, h]
     return out

@@ -24,6 +24,7 @@ from .walls import build_walls, set_motion, set_servo, wall_triangles
 
 ProgressCallback = Callable[["Simulation"], "bool | None"]
 _REC = 10  # t, origin(3), force(3), moment(3)
+CHECKPOINT_FORMAT = 2  # 2: pair loads packed in one (m, 9) array
 
 
 
@@ -318,8 +319,7 @@ class Simulation:
         hist = neighbors.carry_history(self._old_pair_key, self._old_pair_hist, key, self.layout.n_hist)
         by_j_start, by_j = neighbors.transpose_index(pj, n)
         m = pi.shape[0]
-        self.pairs = Pairs(pi, pj, row_start, by_j_start, by_j, hist, np.zeros((m, 3)), np.zeros((m, 3)),
-                           np.zeros((m, 3)))
+        self.pairs = Pairs(pi, pj, row_start, by_j_start, by_j, hist, np.zeros((m, 9)))
         start, wall, tri = neighbors.build_wall_list(s.pos, s.radius, skin, w.kind, w.origin, w.frame, w.par,
                                                      w.tri_start, w.tri, w.box_lo, w.box_hi)
         wkey = neighbors.wall_keys(start, wall, tri, self.n_walls, self._n_elements())
@@ -459,7 +459,7 @@ class Simulation:
 
     def contact_count(self) -> tuple[int, int]:
         """(particle-particle, particle-wall) contacts active at the last force evaluation."""
-        pp = int(np.count_nonzero(np.any(self.pairs.force != 0.0, axis=1)))
+        pp = int(np.count_nonzero(np.any(self.pairs.load[:, :3] != 0.0, axis=1)))
         pw = int(np.count_nonzero(self.wall_contacts.k))
         return pp, pw
 
@@ -480,7 +480,8 @@ class Simulation:
         out: dict[str, np.ndarray] = {"config_json": np.array(self.config.model_dump_json()),
                                       "walls_json": np.array(json.dumps([_wall_json(w) for w in self.wall_specs])),
                                       "scal": self._scal.copy(), "istate": self._istate.copy(),
-                                      "body_template": self._body_template.copy()}
+                                      "body_template": self._body_template.copy(),
+                                      "format": np.array(CHECKPOINT_FORMAT)}
         for prefix, tup in (("b_", self.bodies), ("s_", self.spheres), ("w_", self.walls), ("p_", self.pairs),
                             ("c_", self.wall_contacts)):
             for name, arr in zip(tup._fields, tup):
@@ -506,6 +507,10 @@ class Simulation:
 
     def restore(self, state: dict) -> None:
         """Put back a checkpoint taken from a simulation with the same materials and effects."""
+        found = int(state["format"]) if "format" in state else 1
+        if found != CHECKPOINT_FORMAT:
+            raise ValueError(f"checkpoint format {found} is not this engine's ({CHECKPOINT_FORMAT}); "
+                             "re-run the step that wrote it")
         self._scal[:] = state["scal"]
         self._istate[:] = state["istate"]
         self._body_template = state["body_template"].copy()

@@ -21,7 +21,8 @@ Walls = namedtuple("Walls", [
     "mode", "servo_axis", "servo_target", "servo_vmax", "servo_gain", "tri", "tri_start", "box_lo", "box_hi",
     "force", "moment", "k_sum", "origin_at_build",
 ])
-Pairs = namedtuple("Pairs", ["i", "j", "row_start", "by_j_start", "by_j", "hist", "force", "torque_i", "torque_j"])
+# load row of a pair: force on i (3), torque on i (3), torque on j (3); one row keeps a pair in one cache line pair
+Pairs = namedtuple("Pairs", ["i", "j", "row_start", "by_j_start", "by_j", "hist", "load"])
 WallContacts = namedtuple("WallContacts", ["start", "wall", "tri", "hist", "force", "point", "k"])
 
 MODE_KINEMATIC, MODE_SERVO = 0, 1
@@ -42,7 +43,7 @@ def empty_spheres() -> Spheres:
 def empty_pairs(n_spheres: int, n_hist: int) -> Pairs:
     z = np.zeros(0, np.int64)
     return Pairs(z, z.copy(), np.zeros(n_spheres + 1, np.int64), np.zeros(n_spheres + 1, np.int64), z.copy(),
-                 np.zeros((0, n_hist)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
+                 np.zeros((0, n_hist)), np.zeros((0, 9)))
 
 
 def empty_wall_contacts(n_spheres: int, n_hist: int) -> WallContacts:
