@@ -165,6 +165,11 @@ class WallSpec(_Model):
     material_id: int = Field(0, ge=0, description="row of the materials table used for effects/damping")
     velocity_m_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
     ramp_time_s: float = Field(0.0, ge=0, description="velocity grows linearly from 0 over this time")
+    angular_velocity_rad_s: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0), description="rigid rotation of the wall (e.g. a drum, a tilting plane)")
+    rotation_centre_m: tuple[float, float, float] | None = Field(
+        None, description="a point on the rotation axis, carried with the wall's translation; None: the wall's "
+                          "reference point")
     servo: ServoSpec | None = None
 
 

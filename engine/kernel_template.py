@@ -183,7 +183,7 @@ def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
     s_pos, s_vel, s_rad, s_mat, s_kp, s_body = S.pos, S.vel, S.radius, S.material, S.kp, S.body
     s_force, s_torque, b_mass, b_omega = S.force, S.torque, B.mass, B.omega
     w_kind, w_origin, w_frame, w_par, tri = W.kind, W.origin, W.frame, W.par, W.tri
-    w_kn, w_mu, w_mat, w_vel = W.kn, W.mu, W.material, W.vel
+    w_kn, w_mu, w_mat, w_vel, w_omega, w_centre = W.kn, W.mu, W.material, W.vel, W.omega, W.centre
     r_i = s_rad[i]
     b = s_body[i]
     for e in range(start[i], start[i + 1]):
@@ -213,9 +213,14 @@ def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
         delta = r_i - dist
         a_i = r_i - 0.5 * delta
         wi0, wi1, wi2 = b_omega[b, 0], b_omega[b, 1], b_omega[b, 2]
-        v0 = s_vel[i, 0] - w_vel[w, 0] + a_i * (wi1 * n2 - wi2 * n1)
-        v1 = s_vel[i, 1] - w_vel[w, 1] + a_i * (wi2 * n0 - wi0 * n2)
-        v2 = s_vel[i, 2] - w_vel[w, 2] + a_i * (wi0 * n1 - wi1 * n0)
+        # wall surface velocity at the contact point: translation + omega_w x (point - centre)
+        r0 = s_pos[i, 0] + a_i * n0 - w_centre[w, 0]
+        r1 = s_pos[i, 1] + a_i * n1 - w_centre[w, 1]
+        r2 = s_pos[i, 2] + a_i * n2 - w_centre[w, 2]
+        ww0, ww1, ww2 = w_omega[w, 0], w_omega[w, 1], w_omega[w, 2]
+        v0 = s_vel[i, 0] - w_vel[w, 0] - (ww1 * r2 - ww2 * r1) + a_i * (wi1 * n2 - wi2 * n1)
+        v1 = s_vel[i, 1] - w_vel[w, 1] - (ww2 * r0 - ww0 * r2) + a_i * (wi2 * n0 - wi0 * n2)
+        v2 = s_vel[i, 2] - w_vel[w, 2] - (ww0 * r1 - ww1 * r0) + a_i * (wi0 * n1 - wi1 * n0)
         kp = s_kp[i]
         kw = w_kn[w]
         row = n_mat * n_mat + s_mat[i] * n_mat + w_mat[w]
@@ -300,11 +305,10 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
             return 0, 0
         # start a step from the synchronised state: half kick + drift of every body, walls move
         start_step(B, S, dt)
-        move_walls(W.origin, W.vel, W.vel_target, W.ramp_time, W.ramp_start, W.mode, W.servo_axis,
-                   W.servo_target, W.servo_vmax, W.servo_gain, W.force, W.k_sum, scal[1], dt)
+        move_walls(W, scal[1], dt)
         istate[0] = 1
     while True:
-        if needs_rebuild(S.pos, S.pos_at_build, W.origin, W.origin_at_build, scal[5]):
+        if needs_rebuild(S.pos, S.pos_at_build, W, scal[5]):
             return done, 1
         fresh = istate[0] == 2
         go_on = (not fresh) and done + 1 < n_steps
@@ -332,7 +336,6 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
         if not go_on:
             istate[0] = 0
             return done, 0
-        move_walls(W.origin, W.vel, W.vel_target, W.ramp_time, W.ramp_start, W.mode, W.servo_axis,
-                   W.servo_target, W.servo_vmax, W.servo_gain, W.force, W.k_sum, scal[1], dt)
+        move_walls(W, scal[1], dt)
         istate[0] = 1
 '''

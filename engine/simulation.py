@@ -15,16 +15,18 @@ import numpy as np
 from . import neighbors
 from .config import ServoSpec, SimulationConfig, WallSpec
 from .effects import get as get_effect
+from .history import PendingHistory
 from .kernelgen import layout_for, load_kernel
 from .pairtable import build_props
 from .state import (Bodies, Pairs, Spheres, WallContacts, Walls, empty_bodies, empty_pairs, empty_spheres,
                     empty_wall_contacts)
 from .timestep import TimestepReport, critical_timestep, rotation_factor
-from .walls import build_walls, set_motion, set_servo, wall_triangles
+from .wallgeom import MESH
+from .walls import build_walls, mesh_bounds, set_motion, set_rotation, set_servo, wall_triangles
 
 ProgressCallback = Callable[["Simulation"], "bool | None"]
 _REC = 10  # t, origin(3), force(3), moment(3)
-CHECKPOINT_FORMAT = 2  # 2: pair loads packed in one (m, 9) array
+CHECKPOINT_FORMAT = 2  # 2: pair loads in one (m, 9) array, rotating walls, decoded pending history
 
 
 
@@ -53,10 +55,7 @@ class Simulation:
         self._records: list[np.ndarray] = []
         self._body_template = np.zeros(0, np.int64)
         # history to carry into the next rebuild when the numbering changed; None: the current lists
-        self._old_pair_key: np.ndarray | None = None
-        self._old_pair_hist: np.ndarray | None = None
-        self._old_wall_key: np.ndarray | None = None
-        self._old_wall_hist: np.ndarray | None = None
+        self._pending: PendingHistory | None = None
         self._kernel = None
         self._report: TimestepReport | None = None
         self._stale = True
@@ -152,47 +151,52 @@ class Simulation:
         spec = spec if isinstance(spec, WallSpec) else WallSpec.model_validate(spec)
         if any(w.name == spec.name for w in self.wall_specs):
             raise ValueError(f"a wall named {spec.name!r} exists already")
-        old = self.walls
+        new = build_walls(self.wall_specs + [spec], self.n_materials, self.time_s)
+        n_old = self.n_walls
+        self._install_walls(new, np.arange(n_old, dtype=np.int64), np.arange(n_old, dtype=np.int64))
         self.wall_specs.append(spec)
-        new = build_walls(self.wall_specs, self.n_materials, self.time_s)
-        n_old = old.kind.shape[0]
-        # keep the state (position, motion) of the walls that were there
-        for name in ("origin", "vel", "vel_target", "ramp_time", "ramp_start", "mode", "servo_axis",
-                     "servo_target", "servo_vmax", "servo_gain", "force", "moment", "k_sum", "origin_at_build"):
-            getattr(new, name)[:n_old] = getattr(old, name)
-        self.walls = new
-        self._after_topology_change(np.arange(self.n_spheres, dtype=np.int64), self.n_spheres)
         return n_old
 
-    def _after_topology_change(self, old_sphere_index: np.ndarray, n_old: int) -> None:
-        """Re-index contact history to the new sphere numbering and force a rebuild."""
-        n_new = self.n_spheres
+    def remove_wall(self, name: str) -> None:
+        """Take a wall away (e.g. lift a bucket off, open a box); the other walls keep their state and history."""
+        w = self.wall_index(name)
+        keep = np.array([k for k in range(self.n_walls) if k != w], np.int64)
+        specs = [s for k, s in enumerate(self.wall_specs) if k != w]
+        new = build_walls(specs, self.n_materials, self.time_s)
+        self._install_walls(new, keep, np.arange(keep.size, dtype=np.int64))
+        self.wall_specs = specs
+        self._records = [r[:, keep[keep < r.shape[1]]] if r.shape[1] > w else r for r in self._records]
+
+    def _install_walls(self, new, old_ids: np.ndarray, new_ids: np.ndarray) -> None:
+        """Switch to wall arrays `new` in which old wall old_ids[k] is new_ids[k]: carry its motion state,
+        its current (possibly rotated) geometry and its contacts' history."""
+        old = self.walls
+        for name in ("origin", "vel", "vel_target", "ramp_time", "ramp_start", "mode", "servo_axis",
+                     "servo_target", "servo_vmax", "servo_gain", "force", "moment", "k_sum", "origin_at_build",
+                     "frame", "omega", "centre", "reach", "swept", "box_lo", "box_hi"):
+            getattr(new, name)[new_ids] = getattr(old, name)[old_ids]
+        wall_remap = np.full(old.kind.shape[0], -1, np.int64)
+        wall_remap[old_ids] = new_ids
+        tri_remap = np.full(old.tri.shape[0], -1, np.int64)
+        for o, n in zip(old_ids, new_ids):
+            a, b = old.tri_start[o], old.tri_start[o + 1]
+            new.tri[new.tri_start[n]:new.tri_start[n] + (b - a)] = old.tri[a:b]
+            tri_remap[a:b] = np.arange(new.tri_start[n], new.tri_start[n] + (b - a))
+        self.walls = new
+        ident = np.arange(self.n_spheres, dtype=np.int64)
+        self._after_topology_change(ident, self.n_spheres, wall_remap, tri_remap)
+
+    def _after_topology_change(self, old_sphere_index: np.ndarray, n_old: int, wall_remap=None,
+                               tri_remap=None) -> None:
+        """Re-index contact history to the new sphere (and wall) numbering and force a rebuild."""
         remap = np.full(n_old, -1, np.int64)
         remap[old_sphere_index] = np.arange(old_sphere_index.size)
-        if self._old_pair_key is not None:
-            # a change before any rebuild consumed the previous one: re-key the pending history
-            pi, pj = np.divmod(self._old_pair_key, max(n_old, 1))
-            ok = (remap[pi] >= 0) & (remap[pj] >= 0)
-            self._old_pair_key = neighbors.pair_keys(remap[pi[ok]], remap[pj[ok]], n_new)
-            self._old_pair_hist = self._old_pair_hist[ok]
-            self._old_wall_key = np.zeros(0, np.int64)
-            self._old_wall_hist = np.zeros((0, self.layout.n_hist))
-        else:
-            p = self.pairs
-            ok = (remap[p.i] >= 0) & (remap[p.j] >= 0) if p.i.size else np.zeros(0, bool)
-            self._old_pair_key = neighbors.pair_keys(remap[p.i[ok]], remap[p.j[ok]], n_new)
-            self._old_pair_hist = p.hist[ok]
-            wc = self.wall_contacts
-            sphere = np.repeat(np.arange(wc.start.shape[0] - 1), np.diff(wc.start))
-            ok = remap[sphere] >= 0 if sphere.size else np.zeros(0, bool)
-            self._old_wall_key = neighbors.wall_keys(
-                np.concatenate([[0], np.cumsum(np.bincount(remap[sphere[ok]], minlength=n_new))]),
-                wc.wall[ok], wc.tri[ok], self.n_walls, self._n_elements())
-            self._old_wall_hist = wc.hist[ok]
+        pending = self._pending or PendingHistory.from_lists(self.pairs, self.wall_contacts)
+        self._pending = pending.remapped(remap, wall_remap, tri_remap)
         self._stale = True
         self._report = None
         self._istate[0] = 2
-        if n_new:
+        if self.n_spheres:
             self._update_spheres()
 
     def _n_elements(self) -> int:
@@ -218,9 +222,19 @@ class Simulation:
         servo = servo if isinstance(servo, ServoSpec) else ServoSpec.model_validate(servo)
         set_servo(self.walls, self.wall_index(name), servo)
 
+    def set_wall_rotation(self, name: str, angular_velocity_rad_s, centre_m=None) -> None:
+        """Spin a wall rigidly about an axis through centre_m (None: its reference point), rad/s."""
+        set_rotation(self.walls, self.wall_index(name), angular_velocity_rad_s, centre_m)
+        self._stale = True
+
+    def wall_frame(self, name: str) -> np.ndarray:
+        """Rows: the wall's current local axes u, v, w (w is a plane's normal or a cylinder's axis)."""
+        return self.walls.frame[self.wall_index(name)].copy()
+
     def translate_wall(self, name: str, displacement_m) -> None:
         w = self.wall_index(name)
         self.walls.origin[w] += np.asarray(displacement_m, dtype=np.float64)
+        self.walls.centre[w] += np.asarray(displacement_m, dtype=np.float64)
         self._stale = True
 
     def wall_position(self, name: str) -> np.ndarray:
@@ -241,7 +255,7 @@ class Simulation:
     def wall_history(self, name: str) -> dict[str, np.ndarray]:
         """Time series sampled every config.record_every steps: time_s, position_m, force_n, moment_nm."""
         w = self.wall_index(name)
-        # walls are only appended, so index w means the same wall in older records (if it existed)
+        # remove_wall drops its column from older records, so index w is the same wall in all of them
         parts = [r[:, w] for r in self._records if r.shape[1] > w]
         rec = np.concatenate(parts) if parts else np.zeros((0, _REC))
         return {"time_s": rec[:, 0], "position_m": rec[:, 1:4], "force_n": rec[:, 4:7], "moment_nm": rec[:, 7:10]}
@@ -309,24 +323,27 @@ class Simulation:
         s, w = self.spheres, self.walls
         n = self.n_spheres
         skin = self._skin()
-        if self._old_pair_key is None:
-            p, wc = self.pairs, self.wall_contacts
-            self._old_pair_key, self._old_pair_hist = neighbors.pair_keys(p.i, p.j, n), p.hist
-            self._old_wall_key = neighbors.wall_keys(wc.start, wc.wall, wc.tri, self.n_walls, self._n_elements())
-            self._old_wall_hist = wc.hist
+        pending = self._pending or PendingHistory.from_lists(self.pairs, self.wall_contacts)
+        for k in np.nonzero(np.any(w.omega != 0.0, axis=1))[0]:
+            # how far from its axis a rotating wall can meet a sphere: bounds the surface's sweep per step
+            w.reach[k] = float(np.sqrt(((s.pos - w.centre[k]) ** 2).sum(axis=1).max())) + skin if n else 0.0
+            if w.kind[k] == MESH:
+                mesh_bounds(w, k)
+        w.swept[:] = 0.0
         pi, pj, row_start = neighbors.build_pairs(s.pos, s.radius, s.body, skin)
-        key = neighbors.pair_keys(pi, pj, n)
-        hist = neighbors.carry_history(self._old_pair_key, self._old_pair_hist, key, self.layout.n_hist)
+        old_key, old_hist = pending.pair_lookup(n)
+        hist = neighbors.carry_history(old_key, old_hist, neighbors.pair_keys(pi, pj, n), self.layout.n_hist)
         by_j_start, by_j = neighbors.transpose_index(pj, n)
         m = pi.shape[0]
         self.pairs = Pairs(pi, pj, row_start, by_j_start, by_j, hist, np.zeros((m, 9)))
         start, wall, tri = neighbors.build_wall_list(s.pos, s.radius, skin, w.kind, w.origin, w.frame, w.par,
                                                      w.tri_start, w.tri, w.box_lo, w.box_hi)
         wkey = neighbors.wall_keys(start, wall, tri, self.n_walls, self._n_elements())
-        whist = neighbors.carry_history(self._old_wall_key, self._old_wall_hist, wkey, self.layout.n_hist)
+        old_key, old_hist = pending.wall_lookup(self.n_walls, self._n_elements())
+        whist = neighbors.carry_history(old_key, old_hist, wkey, self.layout.n_hist)
         k = wall.shape[0]
         self.wall_contacts = WallContacts(start, wall, tri, whist, np.zeros((k, 3)), np.zeros((k, 3)), np.zeros(k))
-        self._old_pair_key = self._old_pair_hist = self._old_wall_key = self._old_wall_hist = None
+        self._pending = None
         s.pos_at_build[:] = s.pos
         w.origin_at_build[:] = w.origin
         self._stale = False
@@ -486,9 +503,8 @@ class Simulation:
                             ("c_", self.wall_contacts)):
             for name, arr in zip(tup._fields, tup):
                 out[prefix + name] = np.array(arr, copy=True)
-        if self._old_pair_key is not None:
-            out["old_pair_key"], out["old_pair_hist"] = self._old_pair_key.copy(), self._old_pair_hist.copy()
-            out["old_wall_key"], out["old_wall_hist"] = self._old_wall_key.copy(), self._old_wall_hist.copy()
+        if self._pending is not None:
+            out.update(self._pending.to_arrays("pending_"))
         out["stale"] = np.array(self._stale)
         return out
 
@@ -518,10 +534,7 @@ class Simulation:
         for attr, prefix, cls_ in (("bodies", "b_", Bodies), ("spheres", "s_", Spheres), ("walls", "w_", Walls),
                                    ("pairs", "p_", Pairs), ("wall_contacts", "c_", WallContacts)):
             setattr(self, attr, cls_(*[state[prefix + f].copy() for f in cls_._fields]))
-        self._old_pair_key = self._old_pair_hist = self._old_wall_key = self._old_wall_hist = None
-        if "old_pair_key" in state:
-            self._old_pair_key, self._old_pair_hist = state["old_pair_key"].copy(), state["old_pair_hist"].copy()
-            self._old_wall_key, self._old_wall_hist = state["old_wall_key"].copy(), state["old_wall_hist"].copy()
+        self._pending = PendingHistory.from_arrays(state, "pending_")
         self._stale = bool(state["stale"])
         self._records = []
         self._report = None

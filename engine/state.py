@@ -19,7 +19,7 @@ Spheres = namedtuple("Spheres", [
 Walls = namedtuple("Walls", [
     "kind", "origin", "frame", "par", "kn", "mu", "material", "vel", "vel_target", "ramp_time", "ramp_start",
     "mode", "servo_axis", "servo_target", "servo_vmax", "servo_gain", "tri", "tri_start", "box_lo", "box_hi",
-    "force", "moment", "k_sum", "origin_at_build",
+    "force", "moment", "k_sum", "origin_at_build", "omega", "centre", "reach", "swept",
 ])
 # load row of a pair: force on i (3), torque on i (3), torque on j (3); one row keeps a pair in one cache line pair
 Pairs = namedtuple("Pairs", ["i", "j", "row_start", "by_j_start", "by_j", "hist", "load"])

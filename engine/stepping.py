@@ -42,30 +42,69 @@ def body_sum(b, b_pos, b_vel, b_omega, b_mass, b_force, b_torque, sphere_start, 
 
 
 @njit(cache=True)
-def move_walls(origin, vel, vel_target, ramp_time, ramp_start, mode, servo_axis, servo_target, servo_vmax,
-               servo_gain, force, k_sum, t, dt):
+def move_walls(W, t, dt):
+    """Advance every wall by one step: servo or prescribed (ramped) translation, then rigid rotation."""
+    origin, vel, mode = W.origin, W.vel, W.mode
     for w in range(origin.shape[0]):
         if mode[w] == 1:
-            a0, a1, a2 = servo_axis[w, 0], servo_axis[w, 1], servo_axis[w, 2]
+            a0, a1, a2 = W.servo_axis[w, 0], W.servo_axis[w, 1], W.servo_axis[w, 2]
             # force the wall exerts on the particles along its push axis
-            applied = -(force[w, 0] * a0 + force[w, 1] * a1 + force[w, 2] * a2)
-            err = servo_target[w] - applied
-            if k_sum[w] > 0.0:
-                speed = servo_gain[w] * err / (k_sum[w] * dt)
+            applied = -(W.force[w, 0] * a0 + W.force[w, 1] * a1 + W.force[w, 2] * a2)
+            err = W.servo_target[w] - applied
+            vmax = W.servo_vmax[w]
+            if W.k_sum[w] > 0.0:
+                speed = W.servo_gain[w] * err / (W.k_sum[w] * dt)
             else:
-                speed = servo_vmax[w] if err > 0.0 else -servo_vmax[w]
-            speed = min(max(speed, -servo_vmax[w]), servo_vmax[w])
+                speed = vmax if err > 0.0 else -vmax
+            speed = min(max(speed, -vmax), vmax)
             vel[w, 0], vel[w, 1], vel[w, 2] = speed * a0, speed * a1, speed * a2
         else:
             f = 1.0
-            if ramp_time[w] > 0.0:
-                f = min(max((t - ramp_start[w]) / ramp_time[w], 0.0), 1.0)
-            vel[w, 0] = f * vel_target[w, 0]
-            vel[w, 1] = f * vel_target[w, 1]
-            vel[w, 2] = f * vel_target[w, 2]
-        origin[w, 0] += dt * vel[w, 0]
-        origin[w, 1] += dt * vel[w, 1]
-        origin[w, 2] += dt * vel[w, 2]
+            if W.ramp_time[w] > 0.0:
+                f = min(max((t - W.ramp_start[w]) / W.ramp_time[w], 0.0), 1.0)
+            vel[w, 0] = f * W.vel_target[w, 0]
+            vel[w, 1] = f * W.vel_target[w, 1]
+            vel[w, 2] = f * W.vel_target[w, 2]
+        for k in range(3):
+            origin[w, k] += dt * vel[w, k]
+            W.centre[w, k] += dt * vel[w, k]
+        o0, o1, o2 = W.omega[w, 0], W.omega[w, 1], W.omega[w, 2]
+        rate = math.sqrt(o0 * o0 + o1 * o1 + o2 * o2)
+        if rate > 0.0:
+            _rotate_wall(W, w, o0 / rate, o1 / rate, o2 / rate, rate * dt)
+            W.swept[w] += rate * dt * W.reach[w]
+
+
+@njit(cache=True)
+def _rotate_wall(W, w, e0, e1, e2, angle):
+    """Turn wall w by `angle` about the unit axis e through its rotation centre (Rodrigues' matrix)."""
+    c, s = math.cos(angle), math.sin(angle)
+    r = np.empty((3, 3))
+    e = (e0, e1, e2)
+    for i in range(3):
+        for j in range(3):
+            r[i, j] = (1.0 - c) * e[i] * e[j] + (c if i == j else 0.0)
+    r[0, 1] -= s * e2
+    r[0, 2] += s * e1
+    r[1, 0] += s * e2
+    r[1, 2] -= s * e0
+    r[2, 0] -= s * e1
+    r[2, 1] += s * e0
+    _rotate_vec(r, W.origin[w], W.centre[w])
+    zero = np.zeros(3)
+    for row in range(3):
+        _rotate_vec(r, W.frame[w, row], zero)
+    for t in range(W.tri_start[w], W.tri_start[w + 1]):
+        for v in range(3):
+            _rotate_vec(r, W.tri[t, v], zero)
+
+
+@njit(cache=True)
+def _rotate_vec(r, x, about):
+    d0, d1, d2 = x[0] - about[0], x[1] - about[1], x[2] - about[2]
+    x[0] = about[0] + r[0, 0] * d0 + r[0, 1] * d1 + r[0, 2] * d2
+    x[1] = about[1] + r[1, 0] * d0 + r[1, 1] * d1 + r[1, 2] * d2
+    x[2] = about[2] + r[2, 0] * d0 + r[2, 1] * d1 + r[2, 2] * d2
 
 
 @njit(cache=True)
@@ -92,7 +131,8 @@ def wall_resultants(n_walls, wc_wall, wc_force, wc_point, wc_k, origin, force, m
 
 
 @njit(cache=True)
-def needs_rebuild(s_pos, pos_at_build, origin, origin_at_build, skin):
+def needs_rebuild(s_pos, pos_at_build, W, skin):
+    """True when a sphere or a wall surface may have moved far enough to make the lists incomplete."""
     ds = 0.0
     for i in range(s_pos.shape[0]):
         d0 = s_pos[i, 0] - pos_at_build[i, 0]
@@ -100,10 +140,12 @@ def needs_rebuild(s_pos, pos_at_build, origin, origin_at_build, skin):
         d2 = s_pos[i, 2] - pos_at_build[i, 2]
         ds = max(ds, d0 * d0 + d1 * d1 + d2 * d2)
     dw = 0.0
+    origin, at_build = W.origin, W.origin_at_build
     for w in range(origin.shape[0]):
-        d0 = origin[w, 0] - origin_at_build[w, 0]
-        d1 = origin[w, 1] - origin_at_build[w, 1]
-        d2 = origin[w, 2] - origin_at_build[w, 2]
-        dw = max(dw, d0 * d0 + d1 * d1 + d2 * d2)
+        d0 = origin[w, 0] - at_build[w, 0]
+        d1 = origin[w, 1] - at_build[w, 1]
+        d2 = origin[w, 2] - at_build[w, 2]
+        # a rotating wall's surface near the spheres moves at most |omega| dt x reach per step
+        dw = max(dw, math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + W.swept[w])
     ds = math.sqrt(ds)
-    return 2.0 * ds > skin or ds + math.sqrt(dw) > skin
+    return 2.0 * ds > skin or ds + dw > skin

@@ -89,9 +89,11 @@ def build_walls(specs: list[WallSpec], n_materials: int, t_now: float = 0.0) -> 
         tri=np.concatenate(tris) if tris else np.zeros((0, 3, 3)),
         tri_start=np.array(tri_start, np.int64), box_lo=box_lo, box_hi=box_hi,
         force=np.zeros((n, 3)), moment=np.zeros((n, 3)), k_sum=np.zeros(n), origin_at_build=origin.copy(),
+        omega=np.zeros((n, 3)), centre=origin.copy(), reach=np.zeros(n), swept=np.zeros(n),
     )
     for w, spec in enumerate(specs):
         set_motion(walls, w, spec.velocity_m_s, spec.ramp_time_s, t_now)
+        set_rotation(walls, w, spec.angular_velocity_rad_s, spec.rotation_centre_m)
         if spec.servo is not None:
             set_servo(walls, w, spec.servo)
     return walls
@@ -104,6 +106,23 @@ def set_motion(walls: Walls, w: int, velocity_m_s, ramp_time_s: float = 0.0, t_n
     walls.ramp_start[w] = t_now
     if ramp_time_s == 0.0:
         walls.vel[w] = walls.vel_target[w]
+
+
+def set_rotation(walls: Walls, w: int, angular_velocity_rad_s, centre_m=None) -> None:
+    """Spin wall w at a constant angular velocity about an axis through centre_m (None: its reference point)."""
+    omega = np.asarray(angular_velocity_rad_s, dtype=np.float64)
+    if omega.shape != (3,) or not np.all(np.isfinite(omega)):
+        raise ValueError("angular_velocity_rad_s must be three finite numbers")
+    walls.omega[w] = omega
+    walls.centre[w] = walls.origin[w] if centre_m is None else np.asarray(centre_m, dtype=np.float64)
+
+
+def mesh_bounds(walls: Walls, w: int) -> None:
+    """Refresh the bounding box of a mesh wall (relative to its origin) after it rotated."""
+    t = walls.tri[walls.tri_start[w]:walls.tri_start[w + 1]].reshape(-1, 3)
+    if t.size:
+        walls.box_lo[w] = t.min(axis=0)
+        walls.box_hi[w] = t.max(axis=0)
 
 
 def set_servo(walls: Walls, w: int, servo) -> None:

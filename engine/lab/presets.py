@@ -38,6 +38,9 @@ class AorGeometry:
     bucket_height_m: float = 0.370
     fill_height_m: float = 0.370
     lift_speed_m_s: float = 0.005
+    # the thesis's bucket stands on its (cut-off) bottom, narrow end down (section 5.2.1);
+    # True stands it on its wide rim, so that lifting it moves the wall away from the grains
+    wide_end_down: bool = False
     bucket_friction: float = 0.67  # plastic, Table 4.4
     floor_friction: float = 0.86  # plywood, Table 4.4
 
@@ -135,9 +138,12 @@ SCREENING = Fidelity(
     default_speed_factor=40.0,
     # Spheres without rolling resistance roll away on a flat floor and form no pile at all, so the
     # screening angle of repose uses pyramid clumps (four spheres of half the screening radius, about
-    # the same grain size), in a bucket scaled by 0.6 (~190 clumps instead of ~900), lifted at 0.1 m/s
-    # instead of 5 mm/s (still slow against the outflow: grains leave at ~sqrt(g d) ~ 0.6 m/s).
-    aor=AorGeometry(scale=0.6, lift_speed_m_s=0.1),
+    # the same grain size) in a bucket scaled by 0.6 (~120 clumps after levelling instead of ~600).
+    # Its 156 mm opening is only ~4 clump sizes (the thesis's: ~7): narrow end down, lifting it
+    # wedges the grains in the converging wall and a slow lift carries a plug up with the bucket, so
+    # the scaled bucket stands on its wide rim. Lift 50 mm/s instead of 5 mm/s: the grains then leave
+    # the rim an order of magnitude slower than they avalanche (~sqrt(g d) ~ 0.6 m/s). docs/lab.md.
+    aor=AorGeometry(scale=0.6, lift_speed_m_s=0.05, wide_end_down=True),
     aor_shapes=(ShapeFraction("pyramid", 0.010, 0.010, 1.0),),
     anchor=AnchorGeometry(bin_width_m=0.40),
 )

@@ -31,6 +31,8 @@ def run_aor(ctx: RunContext) -> AorOutcome:
                       bucket_top_radius_m=aor.scale * aor.bucket_top_radius_m,
                       bucket_height_m=aor.scale * aor.bucket_height_m, fill_height_m=aor.scale * aor.fill_height_m,
                       scale=1.0)
+    if aor.wide_end_down:  # the frustum's radii as they stand on the floor: wide rim at the bottom
+        aor = replace(aor, bucket_bottom_radius_m=aor.bucket_top_radius_m, bucket_top_radius_m=aor.bucket_bottom_radius_m)
     shapes = preset.aor_shapes
     r0, r1, h = aor.bucket_bottom_radius_m, aor.bucket_top_radius_m, aor.bucket_height_m
     fill_height = min(aor.fill_height_m, h)
@@ -38,7 +40,8 @@ def run_aor(ctx: RunContext) -> AorOutcome:
     volume = math.pi * fill_height / 3.0 * (r0**2 + r0 * r_fill + r_fill**2)
     r_max = largest_radius_m(preset, shapes)
     ctx.report(0.0, "aor: generating particles")
-    packing, column_top = rain_packing(preset, ctx.spec.seed + 1, volume, r0, shapes=shapes,
+    # rain inside the narrower end, so that no body starts outside the walls
+    packing, column_top = rain_packing(preset, ctx.spec.seed + 1, volume, min(r0, r1), shapes=shapes,
                                        column_solid_fraction=0.12)  # narrow column: wall-excluded volume
     sim = labsim.new_simulation(params, bucket_walls(aor, column_top + 2 * r_max, params.wall_stiffness_n_per_m,
                                                      mu_bucket, mu_floor), packing)

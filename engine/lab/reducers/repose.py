@@ -4,9 +4,12 @@ The experiment read the angle with a protractor at eight places round the pile (
 the thesis's simulation read four from front and side views (Table 5.2). Here each of
 ``sectors`` azimuthal sectors gets a free-surface profile (highest particle top per radial
 bin of one particle diameter) and a straight line fitted to the flank: the contiguous bins
-from the peak outward down to the toe (the grains that ran out over the floor, or
-``flank_fraction[0]`` of the peak), leaving out a rounded cap above ``flank_fraction[1]`` of
-the peak when enough bins remain. A protractor reads the same part of the slope.
+from the peak outward while the surface stands above the toe (the layer of grains that ran
+out over the floor, or ``flank_fraction[0]`` of the peak), leaving out a rounded cap above
+``flank_fraction[1]`` of the peak when enough bins remain. A protractor reads the same part
+of the slope. The first bin at the toe is not part of the flank: on a pile a few grains high
+the step from the last flank grain down to the run-out layer is one grain high over one bin,
+whatever the slope, and fitting it reads the grain's shape instead of the pile's angle.
 """
 from __future__ import annotations
 
@@ -65,11 +68,11 @@ def angle_of_repose(
         prof_h.append(h_s.tolist())
         peak = float(np.max(h_s))
         i_peak = int(np.argmax(h_s))
-        # the flank: contiguous bins outward from the peak down to the first one at the toe
+        # the flank: contiguous bins outward from the peak while the surface is above the toe
         j = i_peak + 1
         while j < h_s.size and h_s[j] > max(lo * peak, toe_height_m):
             j += 1
-        idx = np.arange(i_peak, min(j + 1, h_s.size))
+        idx = np.arange(i_peak, j)
         mask = np.zeros(h_s.size, bool)
         mask[idx] = True
         trimmed = mask & (h_s <= hi * peak)
