@@ -12,10 +12,12 @@ import json
 import math
 import sys
 
-from .designs import augment_ccd, foldover, make_design
+from typing import TYPE_CHECKING
+
 from .factors import DoeError, Factor, parse_factor
-from .fit import fit_response
-from .designs import Design
+
+if TYPE_CHECKING:  # pyDOE3 and statsmodels take ~2 s to import: only the commands that use them pay
+    from .designs import Design
 
 
 def _err(msg: str) -> int:
@@ -31,6 +33,8 @@ def _split(values) -> list[str]:
 
 
 def _design_cmd(args) -> int:
+    from .designs import augment_ccd, foldover, make_design
+
     try:
         factors = [parse_factor(f) for f in args.factor]
         gens = _split(args.generators) if args.generators is not None else None
@@ -51,7 +55,7 @@ def _design_cmd(args) -> int:
     return 0
 
 
-def design_csv(design: Design) -> str:
+def design_csv(design: "Design") -> str:
     """Runs as CSV; alias structure and notes as leading '#' comment lines."""
     buf = io.StringIO()
     lines = [f"{design.kind}; seed {design.base_seed}"]
@@ -92,6 +96,9 @@ def _number(row_no: int, col: str, text) -> float:
 
 
 def _analyze_cmd(args) -> int:
+    from .designs import Design
+    from .fit import fit_response
+
     try:
         rows = read_runs_csv(args.file)
         specs = _split([args.factors])
