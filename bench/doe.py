@@ -7,7 +7,6 @@ constrained calibration with reachability. Usage: python bench/doe.py [repeats]
 """
 from __future__ import annotations
 
-import math
 import sys
 import time
 from pathlib import Path
@@ -17,19 +16,9 @@ _HERE = Path(__file__).resolve().parent
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 sys.path.insert(0, str(_HERE.parent))
 
-from doe import AnalyticEvaluator, Factor, calibrate, fit_responses, make_design, run_design
+from doe import AnalyticEvaluator, calibrate, fit_responses, make_design, run_design  # noqa: E402
+from doe.synthetic import FACTORS, NOISE, RESPONSES  # noqa: E402
 
-FACTORS = [Factor("particle_density_kg_m3", 2000, 3000, "kg/m3"), Factor("friction_pp", 0.2, 0.8),
-           Factor("friction_pw", 0.1, 0.5), Factor("stiffness_n_m", 1e6, 1e7, "N/m", log=True)]
-NOISE = {"bulk_density_kg_m3": 5.0, "friction_angle_deg": 0.3, "confined_modulus_mpa": 0.05,
-         "wall_friction_angle_deg": 0.3}
-RESPONSES = {
-    "bulk_density_kg_m3": lambda p: 0.6 * p["particle_density_kg_m3"] * (1 - 0.05 * p["friction_pp"]),
-    "friction_angle_deg": lambda p: 20 + 25 * p["friction_pp"] + 8 * p["friction_pw"]
-    + 10 * p["friction_pp"] * p["friction_pw"],
-    "confined_modulus_mpa": lambda p: 2 + 3 * math.log10(p["stiffness_n_m"] / 1e6) + 2 * p["friction_pp"],
-    "wall_friction_angle_deg": lambda p: 5 + 40 * p["friction_pw"],
-}
 TRUE = {"particle_density_kg_m3": 2650.0, "friction_pp": 0.45, "friction_pw": 0.3, "stiffness_n_m": 3e6}
 
 
