@@ -7,7 +7,7 @@ rho_b g D / (4 mu_w) (z depth below the free surface, D the diameter, rho_b the 
 How the columns are made to meet Janssen's assumptions:
 
 * Wall friction fully mobilised, in one direction. After pouring and levelling, the tubes slide upward
-  at 10 mm/s (0.5 mm before measuring, 1.5 mm while measuring; a contact slips after about a micron),
+  at 10 mm/s (0.5 mm before measuring, 1.5 mm while measuring; a contact slips after a few microns),
   so every wall contact slides (or its sphere rolls) upward relative to the material and the wall
   shear sits at its steady limit, pointing up, at every depth. A static wall leaves each contact with
   whatever tangential spring the settling gave it (partly mobilised, in either direction); lowering the
@@ -137,13 +137,18 @@ def test_wall_stress_follows_janssen(column_run):
 
 @pytest.mark.slow
 def test_wall_friction_mobilised_uniformly(column_run):
-    """Janssen's premise: tau = mu_w sigma_h with one mu_w at every depth, the wall holding the material up."""
+    """Janssen's premise: tau = mu_w sigma_h with one mu_w at every depth, the wall holding the material up.
+
+    Walls left static after the pour fail this (2 % of contacts at the Coulomb limit, mobilised ratio from
+    -0.06 near the top to 0.29 deep); slid upward, 71 % slide and the ratio is 0.27-0.32 at every depth
+    (slightly lower in the loosely held top bin).
+    """
     profiles, mu = column_run["profiles"], column_run["wall_friction"]
     by_bin = sum(p.shear_up_force_sum_n for p in profiles) / sum(p.normal_force_sum_n for p in profiles)
-    assert np.all(np.abs(by_bin / mu - 1.0) < 0.15), by_bin
-    assert 0.4 * WALL_FRICTION < mu <= WALL_FRICTION  # macroscopic friction cannot exceed the contact's
+    assert np.all(np.abs(by_bin / mu - 1.0) < 0.2), by_bin
+    assert 0.5 * WALL_FRICTION < mu <= WALL_FRICTION  # the macroscopic ratio cannot exceed the contacts'
     sliding = sum(p.sliding_count.sum() for p in profiles) / sum(p.contact_count.sum() for p in profiles)
-    assert sliding > 0.3, sliding  # a large share of contacts sit at the Coulomb limit
+    assert sliding > 0.5, sliding
 
 
 @pytest.mark.slow
