@@ -61,8 +61,9 @@ def run_aor(ctx: RunContext) -> AorOutcome:
         ctx.report(0.1 + 0.8 * min((z_rim - z_start) / h, 1.0), "aor: lifting the bucket")
         if z_rim > float(np.max(labsim.sphere_tops_m(sim))) + 0.5 * r_max:
             break
-        if z_rim - z_start > 3.0 * h:
-            ctx.warn("aor: particles still above the bucket rim after lifting it three bucket heights")
+        if z_rim - z_start > 3.0 * h:  # a plug wedged in the bucket rides up with it: no pile to measure
+            ctx.warn("aor: grains still above the bucket rim after lifting it three bucket heights (jammed in "
+                     "the bucket); the angle is read from a pile that is not all on the floor")
             break
     for name in ("bucket", "bucket_extension"):
         sim.set_wall_velocity(name, (0.0, 0.0, 0.0))
