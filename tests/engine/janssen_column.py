@@ -137,10 +137,6 @@ class WallStressProfile:
         self.samples += 1
 
     @property
-    def band_area_m2(self) -> np.ndarray:
-        return 2.0 * math.pi * self.cylinder_radius_m * np.diff(self.depth_edges_m)
-
-    @property
     def mean_normal_force_n(self) -> np.ndarray:
         return self.normal_force_sum_n / self.samples
 
