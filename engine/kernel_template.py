@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit, prange
 
 from engine.integrate import drift_body, kick_body
+from engine.springs import onto_plane_keep_length
 from engine.stepping import body_sum, move_walls, needs_rebuild, wall_resultants
 from engine.wallgeom import MESH, primitive_distance, triangle_distance
 {EFFECT_IMPORTS}
@@ -40,20 +41,7 @@ def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
     t0 = v0 - vn * n0
     t1 = v1 - vn * n1
     t2 = v2 - vn * n2
-    u0, u1, u2 = hist[0], hist[1], hist[2]
-    un = u0 * n0 + u1 * n1 + u2 * n2
-    if un != 0.0:
-        # rotate the spring into the current tangent plane, keeping its length
-        mag_old = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-        u0 -= un * n0
-        u1 -= un * n1
-        u2 -= un * n2
-        mag_new = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-        if mag_new > 0.0:
-            s = mag_old / mag_new
-            u0 *= s
-            u1 *= s
-            u2 *= s
+    u0, u1, u2 = onto_plane_keep_length(hist[0], hist[1], hist[2], n0, n1, n2)
     u0 += t0 * dt
     u1 += t1 * dt
     u2 += t2 * dt

@@ -35,7 +35,7 @@ def contact_area(delta, r_i, r_j, dist):
     return math.pi * a2
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def apply(p, delta, r_i, r_j, dist):
     return -p[1] * contact_area(delta, r_i, r_j, dist)
 

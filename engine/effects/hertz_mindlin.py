@@ -45,7 +45,7 @@ def timestep_limit(params: Params, density_kg_m3: float, r_min_m: float) -> floa
     return math.pi * r_min_m * math.sqrt(density_kg_m3 / g) / (0.1631 * nu + 0.8766)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def apply(p, delta, r_eff, kn, ks):
     root = math.sqrt(r_eff * delta)
     e_star = p[1]

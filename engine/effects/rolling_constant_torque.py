@@ -22,7 +22,7 @@ def pair_props(params: Params, contact_type: str, mat_i, mat_other) -> list[floa
     return [params.rolling_friction]
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, dt):
     wn = w0 * n0 + w1 * n1 + w2 * n2
     w0 -= wn * n0

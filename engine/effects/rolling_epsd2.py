@@ -10,6 +10,7 @@ import math
 from numba import njit
 from pydantic import BaseModel, ConfigDict, Field
 
+from ..springs import onto_plane_keep_length
 from .base import Effect
 
 
@@ -22,26 +23,15 @@ def pair_props(params: Params, contact_type: str, mat_i, mat_other) -> list[floa
     return [params.rolling_friction]
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, dt):
     mu_r = p[1]
     wn = w0 * n0 + w1 * n1 + w2 * n2
     w0 -= wn * n0
     w1 -= wn * n1
     w2 -= wn * n2
-    m0, m1, m2 = hist[h0], hist[h0 + 1], hist[h0 + 2]
     # keep the spring torque in the current tangent plane, magnitude preserved
-    mag_old = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
-    mn = m0 * n0 + m1 * n1 + m2 * n2
-    m0 -= mn * n0
-    m1 -= mn * n1
-    m2 -= mn * n2
-    mag_new = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
-    if mag_new > 0.0:
-        s = mag_old / mag_new
-        m0 *= s
-        m1 *= s
-        m2 *= s
+    m0, m1, m2 = onto_plane_keep_length(hist[h0], hist[h0 + 1], hist[h0 + 2], n0, n1, n2)
     kr = 2.25 * kn * mu_r * mu_r * r_eff * r_eff
     m0 -= kr * w0 * dt
     m1 -= kr * w1 * dt
