@@ -70,16 +70,18 @@ def test_mohr_coulomb_fit_of_a_well_behaved_run(mid_friction_dst):
     assert mid_friction_dst.value("dst", "mohr_coulomb_r2") > 0.95
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "known defect (issue 3): the screening AoR set-up (pyramid clumps, 0.6-scale bucket) gave 26.7 deg at "
-    "mu_pp 0.1 and 27.0 deg at 0.86 in CI, against Table 5.3's 12 -> 38 deg; remove this marker once fixed"))
 def test_angle_of_repose_rises_with_friction():
-    # Table 5.3: 12 deg at mu_pp 0.1, 38 deg at 0.86
+    # Table 5.3: 12 deg at mu_pp 0.1, 38 deg at 0.86, a rise of 26 deg. Asked: a rise of at least
+    # 5 deg, 1.5 x the spread of the thesis's own readings of one pile (Table 5.2: 43, 36, 38, 36 deg,
+    # standard deviation 3.3 deg); the screening pile is 2-4 clumps high (docs/lab.md), so its
+    # mean over 8 directions scatters more than a thesis-fidelity pile's would.
     low = run_job(JobSpec(test="aor", seed=3, parameters={"friction_pp": 0.1}))
     high = run_job(JobSpec(test="aor", seed=3, parameters={"friction_pp": 0.86}))
     a_low, a_high = (r.value("aor", "angle_of_repose_deg") for r in (low, high))
-    assert a_high > a_low + 5.0
-    assert len([p for p in high.properties if "sector" in p.condition]) >= 4
+    assert a_high > a_low + 5.0, (a_low, a_high)
+    for r in (low, high):
+        assert len([p for p in r.properties if "sector" in p.condition]) >= 6
+        assert not [w for w in r.provenance.warnings if "aor" in w], r.provenance.warnings
 
 
 def test_anchor_peak_exceeds_the_weight_it_lifts():
