@@ -32,7 +32,8 @@ def run_aor(ctx: RunContext) -> AorOutcome:
                       bucket_height_m=aor.scale * aor.bucket_height_m, fill_height_m=aor.scale * aor.fill_height_m,
                       scale=1.0)
     if aor.wide_end_down:  # the frustum's radii as they stand on the floor: wide rim at the bottom
-        aor = replace(aor, bucket_bottom_radius_m=aor.bucket_top_radius_m, bucket_top_radius_m=aor.bucket_bottom_radius_m)
+        aor = replace(aor, bucket_bottom_radius_m=aor.bucket_top_radius_m,
+                      bucket_top_radius_m=aor.bucket_bottom_radius_m)
     shapes = preset.aor_shapes
     r0, r1, h = aor.bucket_bottom_radius_m, aor.bucket_top_radius_m, aor.bucket_height_m
     fill_height = min(aor.fill_height_m, h)
