@@ -186,6 +186,9 @@ class SimulationConfig(_Model):
     serial_below_spheres: int = Field(
         1000, ge=0, description="fewer spheres than this run on one thread (results do not depend on threads)")
     limit_normal_force_to_repulsive: bool = False
+    reorder_every_rebuilds: int = Field(
+        20, ge=0, description="renumber bodies internally in cell order every this many neighbour rebuilds, for "
+                              "memory locality (0: never); public body ids never change")
     kernel_cache_dir: str | None = Field(None, description="where specialised kernels are written")
     compiled_effects: list[str] = Field(
         default_factory=list,

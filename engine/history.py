@@ -39,13 +39,18 @@ class PendingHistory:
         """Follow a renumbering; entries mapped to -1 (deleted spheres, walls, triangles) are dropped."""
         pi, pj = sphere_remap[self.pair_i], sphere_remap[self.pair_j]
         ok = (pi >= 0) & (pj >= 0)
+        # pairs are stored with i < j; where a renumbering swaps the two, the relative quantities in the
+        # history (spring of i against j, rolling spring) change sign (see engine/effects/base.py)
+        swap = pi > pj
+        pi, pj = np.where(swap, pj, pi), np.where(swap, pi, pj)
+        pair_hist = np.where(swap[:, None], -self.pair_hist, self.pair_hist)
         ws = sphere_remap[self.wall_sphere]
         ww = self.wall_wall if wall_remap is None else wall_remap[self.wall_wall]
         wt = self.wall_tri
         if tri_remap is not None and tri_remap.size:
             wt = np.where(wt >= 0, tri_remap[np.maximum(wt, 0)], -1)
         keep_w = (ws >= 0) & (ww >= 0) & ((self.wall_tri < 0) | (wt >= 0))
-        return PendingHistory(pi[ok], pj[ok], self.pair_hist[ok], ws[keep_w], ww[keep_w], wt[keep_w],
+        return PendingHistory(pi[ok], pj[ok], pair_hist[ok], ws[keep_w], ww[keep_w], wt[keep_w],
                               self.wall_hist[keep_w])
 
     def pair_lookup(self, n_spheres: int) -> tuple[np.ndarray, np.ndarray]:

@@ -17,6 +17,7 @@ from .config import ServoSpec, SimulationConfig, WallSpec
 from .effects import get as get_effect
 from .history import PendingHistory
 from .kernelgen import layout_for, load_kernel
+from .ordering import cell_order, permute, sphere_rows
 from .pairtable import build_props
 from .state import (Bodies, Pairs, Spheres, WallContacts, Walls, empty_bodies, empty_pairs, empty_spheres,
                     empty_wall_contacts)
@@ -54,6 +55,10 @@ class Simulation:
         self._istate = np.array([2, 0, 0], np.int64)
         self._records: list[np.ndarray] = []
         self._body_template = np.zeros(0, np.int64)
+        # public body id of each internal body (bodies are kept in cell order internally; see ordering.py)
+        self._body_user = np.zeros(0, np.int64)
+        self._user_rows: tuple[np.ndarray, np.ndarray] | None = None
+        self._rebuilds_since_order = 0
         # history to carry into the next rebuild when the numbering changed; None: the current lists
         self._pending: PendingHistory | None = None
         self._kernel = None
@@ -115,6 +120,7 @@ class Simulation:
             pos_at_build=np.zeros((ns0 + n_new, 3)),
         )
         self._body_template = np.concatenate([self._body_template, tidx])
+        self._body_user = np.concatenate([self._body_user, np.arange(nb0, nb0 + n, dtype=np.int64)])
         self._after_topology_change(np.arange(ns0, dtype=np.int64), ns0)
         return np.arange(nb0, nb0 + n)
 
@@ -133,6 +139,8 @@ class Simulation:
         b, s = self.bodies, self.spheres
         if mask.shape != (b.pos.shape[0],):
             raise ValueError(f"mask must have one entry per body ({b.pos.shape[0]})")
+        new_user_id = np.cumsum(~mask) - 1
+        mask = mask[self._body_user]  # public order -> internal order
         keep_b = ~mask
         keep_s = keep_b[s.body]
         new_body_id = np.cumsum(keep_b) - 1
@@ -145,6 +153,7 @@ class Simulation:
         self.spheres = Spheres(*[a[keep_s] for a in s])
         self.spheres = self.spheres._replace(body=new_body_id[self.spheres.body].astype(np.int64))
         self._body_template = self._body_template[keep_b]
+        self._body_user = new_user_id[self._body_user[keep_b]].astype(np.int64)
         self._after_topology_change(np.nonzero(keep_s)[0], keep_s.shape[0])
 
     def add_wall(self, spec: WallSpec | dict) -> int:
@@ -193,6 +202,7 @@ class Simulation:
         remap[old_sphere_index] = np.arange(old_sphere_index.size)
         pending = self._pending or PendingHistory.from_lists(self.pairs, self.wall_contacts)
         self._pending = pending.remapped(remap, wall_remap, tri_remap)
+        self._user_rows = None
         self._stale = True
         self._report = None
         self._istate[0] = 2
@@ -267,7 +277,10 @@ class Simulation:
         wc = self.wall_contacts
         sel = (wc.wall == w) & (wc.k > 0.0)
         sphere = np.repeat(np.arange(wc.start.shape[0] - 1), np.diff(wc.start))
-        return {"points_m": wc.point[sel].copy(), "forces_n": wc.force[sel].copy(), "sphere_ids": sphere[sel]}
+        public = np.empty(self.n_spheres, np.int64)
+        public[self._rows()[1]] = np.arange(self.n_spheres)
+        return {"points_m": wc.point[sel].copy(), "forces_n": wc.force[sel].copy(),
+                "sphere_ids": public[sphere[sel]]}
 
     def clear_wall_history(self) -> None:
         self._records = []
@@ -323,6 +336,11 @@ class Simulation:
         s, w = self.spheres, self.walls
         n = self.n_spheres
         skin = self._skin()
+        every = self.config.reorder_every_rebuilds
+        if every and self._rebuilds_since_order % every == 0:
+            self._reorder(skin)
+            s = self.spheres
+        self._rebuilds_since_order += 1
         pending = self._pending or PendingHistory.from_lists(self.pairs, self.wall_contacts)
         for k in np.nonzero(np.any(w.omega != 0.0, axis=1))[0]:
             # how far from its axis a rotating wall can meet a sphere: bounds the surface's sweep per step
@@ -347,6 +365,25 @@ class Simulation:
         s.pos_at_build[:] = s.pos
         w.origin_at_build[:] = w.origin
         self._stale = False
+
+    def _reorder(self, skin: float) -> None:
+        """Renumber bodies in cell order (public ids unchanged); history follows the spheres."""
+        order = cell_order(self.bodies.pos, 2.0 * float(self.spheres.radius.max()) + skin)
+        if np.array_equal(order, np.arange(order.size)):
+            return
+        pending = self._pending or PendingHistory.from_lists(self.pairs, self.wall_contacts)
+        self.bodies, self.spheres, remap = permute(self.bodies, self.spheres, order)
+        self._pending = pending.remapped(remap)
+        self._body_template = self._body_template[order]
+        self._body_user = self._body_user[order]
+        self._user_rows = None
+
+    def _rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """(internal body rows, internal sphere rows) in public order."""
+        if self._user_rows is None:
+            bodies = np.argsort(self._body_user, kind="stable").astype(np.int64)
+            self._user_rows = (bodies, sphere_rows(self.bodies.sphere_start, bodies))
+        return self._user_rows
 
     def run(self, duration_s: float | None = None, steps: int | None = None,
             callback: ProgressCallback | None = None, callback_every_s: float | None = None) -> int:
@@ -425,41 +462,44 @@ class Simulation:
         return int(self.walls.kind.shape[0])
 
     def positions_m(self) -> np.ndarray:
-        """Body centres of mass, (n_bodies, 3) (a copy)."""
-        return self.bodies.pos.copy()
+        """Body centres of mass, (n_bodies, 3), in public body order (a copy)."""
+        return self.bodies.pos[self._rows()[0]]
 
     def velocities_m_s(self) -> np.ndarray:
-        return self.bodies.vel.copy()
+        return self.bodies.vel[self._rows()[0]]
 
     def angular_velocities_rad_s(self) -> np.ndarray:
-        return self.bodies.omega.copy()
+        return self.bodies.omega[self._rows()[0]]
 
     def orientations(self) -> np.ndarray:
         """Unit quaternions (w, x, y, z), body -> world."""
-        return self.bodies.quat.copy()
+        return self.bodies.quat[self._rows()[0]]
 
     def body_masses_kg(self) -> np.ndarray:
-        return self.bodies.mass.copy()
+        return self.bodies.mass[self._rows()[0]]
 
     def body_template_index(self) -> np.ndarray:
-        return self._body_template.copy()
+        return self._body_template[self._rows()[0]]
 
     def sphere_positions_m(self) -> np.ndarray:
-        return self.spheres.pos.copy()
+        """Sphere centres, grouped by body in public body order."""
+        return self.spheres.pos[self._rows()[1]]
 
     def sphere_velocities_m_s(self) -> np.ndarray:
-        return self.spheres.vel.copy()
+        return self.spheres.vel[self._rows()[1]]
 
     def sphere_radii_m(self) -> np.ndarray:
-        return self.spheres.radius.copy()
+        return self.spheres.radius[self._rows()[1]]
 
     def sphere_body_ids(self) -> np.ndarray:
-        return self.spheres.body.copy()
+        """Public body id of every sphere (same order as sphere_positions_m)."""
+        return self._body_user[self.spheres.body[self._rows()[1]]]
 
     def set_velocities(self, velocities_m_s, angular_velocities_rad_s=None) -> None:
-        self.bodies.vel[:] = np.asarray(velocities_m_s, dtype=np.float64).reshape(-1, 3)
+        rows = self._rows()[0]
+        self.bodies.vel[rows] = np.asarray(velocities_m_s, dtype=np.float64).reshape(-1, 3)
         if angular_velocities_rad_s is not None:
-            self.bodies.omega[:] = np.asarray(angular_velocities_rad_s, dtype=np.float64).reshape(-1, 3)
+            self.bodies.omega[rows] = np.asarray(angular_velocities_rad_s, dtype=np.float64).reshape(-1, 3)
         self._update_spheres()
 
     def kinetic_energy(self) -> float:
@@ -498,6 +538,8 @@ class Simulation:
                                       "walls_json": np.array(json.dumps([_wall_json(w) for w in self.wall_specs])),
                                       "scal": self._scal.copy(), "istate": self._istate.copy(),
                                       "body_template": self._body_template.copy(),
+                                      "body_user": self._body_user.copy(),
+                                      "rebuilds_since_order": np.array(self._rebuilds_since_order),
                                       "format": np.array(CHECKPOINT_FORMAT)}
         for prefix, tup in (("b_", self.bodies), ("s_", self.spheres), ("w_", self.walls), ("p_", self.pairs),
                             ("c_", self.wall_contacts)):
@@ -530,6 +572,9 @@ class Simulation:
         self._scal[:] = state["scal"]
         self._istate[:] = state["istate"]
         self._body_template = state["body_template"].copy()
+        self._body_user = state["body_user"].copy()
+        self._rebuilds_since_order = int(state["rebuilds_since_order"])
+        self._user_rows = None
         self.wall_specs = [WallSpec.model_validate(w) for w in json.loads(str(state["walls_json"]))]
         for attr, prefix, cls_ in (("bodies", "b_", Bodies), ("spheres", "s_", Spheres), ("walls", "w_", Walls),
                                    ("pairs", "p_", Pairs), ("wall_contacts", "c_", WallContacts)):

@@ -10,6 +10,10 @@ Stages (the order the pair kernel runs them in, with the numba function's signat
   returns the torque on particle i (particle j gets the opposite); ``w`` is the relative angular
   velocity omega_i - omega_j, ``hist[h0:h0 + n_hist]`` are this effect's history slots.
 
+History slots must hold quantities of i relative to j that change sign when i and j swap roles: the
+engine renumbers particles for locality and stores each pair once with i < j, negating the history
+of pairs whose order flips.
+
 ``p`` (length ``1 + n_props``) is this effect's slice of the pair-property row; ``p[0]`` is written by the framework (1 where the
 effect is on for the pair) and the kernel skips the call where it is 0.
 """
