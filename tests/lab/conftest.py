@@ -1,7 +1,9 @@
 """Session-scoped DEM runs shared by the slow lab tests (each is minutes of CPU: run once).
 
 All at screening fidelity (Appendix A set-up, 20 mm spheres); where a trend test only needs a
-fill and a short CCT, the CCT runs 2 cycles (E' from cycle 2, as the thesis averaged cycles 2..N).
+fill and a CCT, the CCT runs the thesis's 4 cycles and E' averages cycles 2..4 as the thesis did (with
+2 cycles, cycle 2 alone scattered enough to take the stiff/soft ratio from 1.7 down to 1.4: the
+packing is still compacting).
 """
 from __future__ import annotations
 
@@ -26,7 +28,7 @@ TABLE_46_47 = {"friction_pp": 0.1, "friction_pw": 0.62}
 
 
 def _fill_and_cct(**parameters):
-    ctx = RunContext.from_spec(JobSpec(test="cct", seed=3, parameters=parameters, options={"cct_cycles": 2}))
+    ctx = RunContext.from_spec(JobSpec(test="cct", seed=3, parameters=parameters, options={"cct_cycles": 4}))
     fill = run_fill(ctx)
     cct = run_cct(ctx, fill)
     return fill.properties, cct.reduction
@@ -68,6 +70,14 @@ def frictionless_battery() -> LabResult:
 
 
 @pytest.fixture(scope="session")
+def low_friction_dst() -> LabResult:
+    """mu_pp = 0.1 (Table 4.8's second column), four loads: little dilation and stick-slip, so the residual
+    stresses of a ~10-grain-wide screening box settle; at mu_pp 0.3 the shear stress still climbs and
+    slips by +-15 % inside the 8-10 % window, scattering R^2 between 0.86 and 0.97 with the seed."""
+    return run_job(JobSpec(test="dst", seed=3, parameters={"friction_pp": 0.1}))
+
+
+@pytest.fixture(scope="session")
 def mid_friction_dst() -> LabResult:
-    """mu_pp = 0.3, four loads: the Mohr-Coulomb fit of a low-friction (little stick-slip) packing."""
+    """mu_pp = 0.3, four loads: the middle point of the phi(mu_pp) trend."""
     return run_job(JobSpec(test="dst", seed=3, parameters={"friction_pp": 0.3}))

@@ -66,8 +66,9 @@ def test_friction_angle_rises_with_interparticle_friction(frictionless_battery, 
     assert phis[0] < phis[1] < phis[2]
 
 
-def test_mohr_coulomb_fit_of_a_well_behaved_run(mid_friction_dst):
-    assert mid_friction_dst.value("dst", "mohr_coulomb_r2") > 0.95
+def test_mohr_coulomb_fit_of_a_well_behaved_run(low_friction_dst):
+    # the thesis's own envelopes are straight lines through four loads (Eqs. 3.1-3.2, Table 4.10)
+    assert low_friction_dst.value("dst", "mohr_coulomb_r2") > 0.95
 
 
 def test_angle_of_repose_rises_with_friction():
