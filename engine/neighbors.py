@@ -89,10 +89,32 @@ def _scan_row(i, x0, x1, x2, r_i, b_i, skin, lo, cell, dims, start, order, c_pos
 
 
 @njit(cache=True, parallel=True)
+def _scan_all(pos, radius, body, skin, lo, cell, dims, start, order, c_pos, c_rad, c_body, buf, counts):
+    cap = buf.shape[1]
+    for i in prange(pos.shape[0]):
+        counts[i] = _scan_row(i, pos[i, 0], pos[i, 1], pos[i, 2], radius[i], body[i], skin, lo, cell, dims,
+                              start, order, c_pos, c_rad, c_body, buf[i], cap)
+
+
+@njit(cache=True, parallel=True)
+def _compact(buf, counts, row_start, pair_i, pair_j):
+    for i in prange(counts.shape[0]):
+        a = row_start[i]
+        m = counts[i]
+        for k in range(m):
+            pair_j[a + k] = buf[i, k]
+        pair_j[a:a + m].sort()
+        for k in range(m):
+            pair_i[a + k] = i
+
+
+@njit(cache=True, parallel=True)
 def build_pairs(pos, radius, body, skin):
     """Return (pair_i, pair_j, row_start) of all sphere pairs of different bodies within reach.
 
     One scan into fixed-width rows (widened and repeated only if a row overflows), then a compaction.
+    The scan is a function of its own: a prange inside the retry loop, over a re-bound buffer, was
+    mis-compiled by numba (rows landed in the wrong place once a row overflowed).
     """
     n = pos.shape[0]
     lo, cell, dims = _grid(pos, radius, skin)
@@ -107,27 +129,18 @@ def build_pairs(pos, radius, body, skin):
         c_body[k] = body[j]
     counts = np.zeros(n, np.int64)
     cap = 16
-    while True:
-        buf = np.empty((n, cap), np.int64)
-        for i in prange(n):
-            counts[i] = _scan_row(i, pos[i, 0], pos[i, 1], pos[i, 2], radius[i], body[i], skin, lo, cell, dims,
-                                  start, order, c_pos, c_rad, c_body, buf[i], cap)
-        widest = counts.max() if n else 0
-        if widest <= cap:
-            break
-        cap = widest
+    buf = np.empty((n, cap), np.int64)
+    _scan_all(pos, radius, body, skin, lo, cell, dims, start, order, c_pos, c_rad, c_body, buf, counts)
+    widest = counts.max() if n else 0
+    if widest > cap:
+        buf = np.empty((n, widest), np.int64)
+        _scan_all(pos, radius, body, skin, lo, cell, dims, start, order, c_pos, c_rad, c_body, buf, counts)
     row_start = np.zeros(n + 1, np.int64)
     for i in range(n):
         row_start[i + 1] = row_start[i] + counts[i]
     pair_j = np.empty(row_start[n], np.int64)
     pair_i = np.empty(row_start[n], np.int64)
-    for i in prange(n):
-        a = row_start[i]
-        m = counts[i]
-        row = pair_j[a:a + m]
-        row[:] = buf[i, :m]
-        row.sort()
-        pair_i[a:a + m] = i
+    _compact(buf, counts, row_start, pair_i, pair_j)
     return pair_i, pair_j, row_start
 
 

@@ -336,6 +336,11 @@ class Simulation:
         s, w = self.spheres, self.walls
         n = self.n_spheres
         skin = self._skin()
+        if not np.isfinite(s.pos).all():
+            bad = int(self._body_user[s.body[np.nonzero(~np.isfinite(s.pos).all(axis=1))[0][0]]])
+            raise FloatingPointError(
+                f"body {bad} has a non-finite position at t = {self.time_s:.6g} s: the run became unstable "
+                "(time step too large for the stiffness or damping, or a wall moved through particles)")
         every = self.config.reorder_every_rebuilds
         if every and self._rebuilds_since_order % every == 0:
             self._reorder(skin)
