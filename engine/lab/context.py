@@ -73,6 +73,11 @@ class RunContext:
         o = self.spec.options.shear_distance_m
         return float(o) if o is not None else self.preset.shear_distance_m
 
+    @property
+    def rain_drop_height_m(self) -> float:
+        o = self.spec.options.fill_drop_height_m
+        return float(o) if o is not None else self.preset.rain_drop_height_m
+
     def validate(self) -> None:
         """Refuse, before any simulation, what the options make impossible (ValueError names the field)."""
         self.dst_normal_stresses_pa  # noqa: B018  (raises on a non-positive stress)

@@ -31,10 +31,10 @@ def simulation_config(params: MicroParameters) -> SimulationConfig:
     return SimulationConfig(materials=[material], effects=effects, gravity_m_s2=(0.0, 0.0, -GRAVITY_M_S2))
 
 
-def new_simulation(params: MicroParameters, walls: list[WallSpec], packing=None) -> Simulation:
+def new_simulation(params: MicroParameters, walls: list[WallSpec], packing=None, velocities_m_s=None) -> Simulation:
     sim = Simulation(simulation_config(params))
     if packing is not None:
-        sim.add_packing(packing)
+        sim.add_packing(packing, velocities_m_s=velocities_m_s)
     for spec in walls:
         sim.add_wall(spec)
     return sim

@@ -62,6 +62,9 @@ class TestOptions(BaseModel):
     anchor_friction: float | None = Field(None, ge=0, description="particle-anchor friction (bare steel 0.54)")
     anchor_bin_width_m: float | None = Field(None, gt=0, description="square bin side; unset: the fidelity's")
     anchor_pull_distance_m: float | None = Field(None, gt=0, description="anchor travel recorded (default 0.1 m)")
+    fill_drop_height_m: float | None = Field(
+        None, ge=0, description="fill: extra fall height of the rainfall column; unset: the fidelity's (thesis 1.9 m)"
+    )
     include_aor: bool = False
     include_anchor: bool = False
     anchor_packing_height_m: float | None = None
