@@ -37,6 +37,20 @@ QUANTITIES: dict[str, dict[str, str]] = {
 }
 
 
+def known_test(test: str) -> str:
+    """The test name if QUANTITIES has it; else a ValueError listing the names (API 422 messages)."""
+    if test not in QUANTITIES:
+        raise ValueError(f"unknown test {test!r}; one of {sorted(QUANTITIES)}")
+    return test
+
+
+def known_quantity(test: str | None, quantity: str) -> str:
+    """The quantity if ``test`` reports it (``test`` None: its own error was raised already)."""
+    if test is not None and quantity not in QUANTITIES[test]:
+        raise ValueError(f"quantity {quantity!r} is not reported by {test!r}; one of {sorted(QUANTITIES[test])}")
+    return quantity
+
+
 class BulkProperty(BaseModel):
     """One simulated bulk property, keyed like a measurement."""
 

@@ -7,7 +7,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 
 from doe.constraints import parse_constraint
 from doe.factors import DoeError
-from engine.lab.result import QUANTITIES
+from engine.lab.result import QUANTITIES, known_quantity, known_test
 from engine.lab.spec import MicroParameters, TestOptions
 
 # Design factors must be scalar MicroParameters fields (the lab varies those).
@@ -73,17 +73,12 @@ class TargetIn(BaseModel):
     @field_validator("test")
     @classmethod
     def _known_test(cls, test: str) -> str:
-        if test not in QUANTITIES:
-            raise ValueError(f"unknown test {test!r}; one of {sorted(QUANTITIES)}")
-        return test
+        return known_test(test)
 
     @field_validator("quantity")
     @classmethod
     def _known_quantity(cls, quantity: str, info: ValidationInfo) -> str:
-        test = info.data.get("test")
-        if test is not None and quantity not in QUANTITIES[test]:
-            raise ValueError(f"{test!r} has no quantity {quantity!r}; one of {sorted(QUANTITIES[test])}")
-        return quantity
+        return known_quantity(info.data.get("test"), quantity)
 
 
 class PriorIn(BaseModel):

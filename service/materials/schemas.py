@@ -6,7 +6,7 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
-from engine.lab.result import QUANTITIES
+from engine.lab.result import QUANTITIES, known_quantity, known_test
 from service.errors import Invalid
 from service.materials.units import UnitError, condition_si_unit, to_si
 
@@ -31,9 +31,7 @@ class MeasurementIn(BaseModel):
     @field_validator("test")
     @classmethod
     def _known_test(cls, test: str) -> str:
-        if test not in QUANTITIES:
-            raise ValueError(f"unknown test {test!r}; one of {sorted(QUANTITIES)}")
-        return test
+        return known_test(test)
 
     @field_validator("values")
     @classmethod
@@ -45,13 +43,7 @@ class MeasurementIn(BaseModel):
     @field_validator("quantity")
     @classmethod
     def _check_quantity(cls, quantity: str, info: ValidationInfo) -> str:
-        test = info.data.get("test")
-        if test is None:  # the test itself was wrong; that error names it
-            return quantity
-        names = QUANTITIES[test]
-        if quantity not in names:
-            raise ValueError(f"quantity {quantity!r} is not measured by {test!r}; one of {sorted(names)}")
-        return quantity
+        return known_quantity(info.data.get("test"), quantity)
 
     def to_si(self) -> dict[str, Any]:
         """SI fields for the ORM row; UnitError names the offending field in its args."""
