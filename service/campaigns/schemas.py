@@ -7,7 +7,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 
 from doe.constraints import parse_constraint
 from doe.factors import DoeError
-from engine.lab.result import QUANTITIES, known_quantity, known_test
+from engine.lab.result import known_quantity, known_test
 from engine.lab.spec import MicroParameters, TestOptions
 
 # Design factors must be scalar MicroParameters fields (the lab varies those).
