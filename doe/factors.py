@@ -149,12 +149,12 @@ def parse_factor(text: str) -> Factor:
     return Factor(name, low_v, high_v, unit, log)
 
 
-def coded_matrix(factors, natural_rows) -> np.ndarray:
+def coded_matrix(factors, natural_rows, row_label: str = "run") -> np.ndarray:
     """Rows of natural values (dicts keyed by factor name) -> n x k coded array."""
     out = np.empty((len(natural_rows), len(factors)))
     for i, row in enumerate(natural_rows):
         for j, f in enumerate(factors):
             if f.name not in row:
-                raise DoeError(f"run {i}: no value for factor {f.name!r}")
+                raise DoeError(f"{row_label} {i}: no value for factor {f.name!r}")
             out[i, j] = f.to_coded(float(row[f.name]))
     return out

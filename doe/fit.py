@@ -23,7 +23,7 @@ from scipy import stats
 
 from .designs import Design
 from .effects import EffectsResult, compute_effects
-from .factors import DoeError
+from .factors import DoeError, coded_matrix
 from .terms import (Term, mask_to_term, model_matrix, natural_transform, parents, parse_term,
                     sort_terms, term_label, term_name)
 
@@ -254,14 +254,7 @@ class ResponseFit:
     def _rows_coded(self, points) -> np.ndarray:
         if isinstance(points, dict):
             points = [points]
-        factors = self.design.factors
-        out = np.empty((len(points), len(factors)))
-        for i, pt in enumerate(points):
-            for j, f in enumerate(factors):
-                if f.name not in pt:
-                    raise DoeError(f"prediction point {i}: no value for factor {f.name!r}")
-                out[i, j] = f.to_coded(float(pt[f.name]))
-        return out
+        return coded_matrix(self.design.factors, points, row_label="prediction point")
 
     def predict_coded(self, coded: np.ndarray) -> np.ndarray:
         return model_matrix(coded, self.terms) @ self.params
