@@ -13,7 +13,7 @@ import numba
 import numpy as np
 
 from . import neighbors
-from .config import ServoSpec, SimulationConfig, WallSpec
+from .config import MaterialSpec, ServoSpec, SimulationConfig, WallSpec
 from .effects import get as get_effect
 from .history import PendingHistory
 from .kernelgen import layout_for, load_kernel
@@ -155,6 +155,24 @@ class Simulation:
         self._body_template = self._body_template[keep_b]
         self._body_user = new_user_id[self._body_user[keep_b]].astype(np.int64)
         self._after_topology_change(np.nonzero(keep_s)[0], keep_s.shape[0])
+
+    # material fields that act only through the pair table: changing them needs no new time step
+    # and no per-body data (density and stiffness do)
+    MUTABLE_MATERIAL_FIELDS = ("friction", "damping_ratio_normal", "damping_ratio_shear")
+
+    def set_material(self, material_id: int, **changes) -> None:
+        """Change a material's friction or damping between runs, e.g. a packing prepared at low friction
+        and tested at the calibrated one. Contact history is kept: a sticking contact stays stuck."""
+        if not 0 <= material_id < self.n_materials:
+            raise ValueError(f"material_id {material_id} out of range ({self.n_materials} materials)")
+        bad = sorted(set(changes) - set(self.MUTABLE_MATERIAL_FIELDS))
+        if bad:
+            raise ValueError(f"cannot change {bad} of a material in a running simulation; only "
+                             f"{list(self.MUTABLE_MATERIAL_FIELDS)}")
+        materials = list(self.config.materials)
+        materials[material_id] = MaterialSpec.model_validate({**materials[material_id].model_dump(), **changes})
+        self.config = self.config.model_copy(update={"materials": materials})
+        self.props = build_props(self.config, self.layout)
 
     def add_wall(self, spec: WallSpec | dict) -> int:
         spec = spec if isinstance(spec, WallSpec) else WallSpec.model_validate(spec)

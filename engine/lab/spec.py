@@ -65,6 +65,11 @@ class TestOptions(BaseModel):
     fill_drop_height_m: float | None = Field(
         None, ge=0, description="fill: extra fall height of the rainfall column; unset: the fidelity's (thesis 1.9 m)"
     )
+    fill_friction_pp: float | None = Field(
+        None, ge=0, description="fill: inter-particle friction while the packing is rained, settled and "
+        "levelled (a denser packing at lower friction); parameters.friction_pp is set before the CCT/DST. "
+        "Unset: parameters.friction_pp throughout",
+    )
     include_aor: bool = False
     include_anchor: bool = False
     anchor_packing_height_m: float | None = None

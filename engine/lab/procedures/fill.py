@@ -92,7 +92,10 @@ def run_fill(ctx: RunContext) -> FillOutcome:
     # the lid exists from the start, parked above the column: adding a wall later would reset the
     # tangential history of every wall contact of the settled packing
     walls.append(lid_wall(preset, lid_parked_z, params.wall_stiffness_n_per_m, params.friction_pw))
-    sim = labsim.new_simulation(params, walls, packing,
+    preparation_friction = ctx.spec.options.fill_friction_pp
+    prep_params = params if preparation_friction is None else params.model_copy(
+        update={"friction_pp": preparation_friction})
+    sim = labsim.new_simulation(prep_params, walls, packing,
                                 velocities_m_s=drop_velocities_m_s(packing.n_bodies, ctx.rain_drop_height_m))
     record: list = []
     # the first settle only has to bring the heap near rest before levelling (ratio 1e-4); the
@@ -103,6 +106,9 @@ def run_fill(ctx: RunContext) -> FillOutcome:
     height = float(np.max(labsim.sphere_tops_m(sim)))
     props = bulk_properties(PackingState(solid_volume_m3(sim), params.particle_density_kg_m3, height,
                                          preset.container_area_m2, sim.n_bodies))
+    if preparation_friction is not None:
+        # the packing keeps its structure; the tests that start from it see the calibrated friction
+        sim.set_material(0, friction=params.friction_pp)
     curves = {"fill_settling": {"time_s": [t for t, _ in record], "kinetic_energy_ratio": [k for _, k in record]}}
     ctx.report(1.0, "fill: done")
     return FillOutcome(sim.checkpoint(), props, height, curves)
