@@ -40,12 +40,14 @@ def main() -> None:
     ap.add_argument("--speed-factor", type=float, default=None)
     ap.add_argument("--cycles", type=int, default=None)
     ap.add_argument("--drop-height", type=float, default=None, help="fill_drop_height_m (m); unset: the preset's")
+    ap.add_argument("--fill-friction", type=float, default=None,
+                    help="fill_friction_pp: friction while the packing is prepared; unset: friction_pp")
     ap.add_argument("--fidelity", default="thesis", help="screening: a one-minute rehearsal of this script")
     ap.add_argument("--jobs", type=int, default=2, help="DST loads run at once, one thread each")
     args = ap.parse_args()
     spec = JobSpec(test="battery", fidelity=args.fidelity, seed=args.seed,
                    options={"speed_factor": args.speed_factor, "cct_cycles": args.cycles,
-                            "fill_drop_height_m": args.drop_height})
+                            "fill_drop_height_m": args.drop_height, "fill_friction_pp": args.fill_friction})
     started = time.perf_counter()
     out: dict = {"spec": spec.model_dump(), "stages": {}}
 
