@@ -119,7 +119,7 @@ THESIS = Fidelity(
     lab_shear_speed_m_s=0.001,
     shear_distance_m=0.070,
     default_speed_factor=10.0,
-    # Section 4.5.3 generated the particles 0.1-4.7 m above the floor (mean fall ~2.4 m); our column
+    # Section 4.5.4 generated the particles 0.1-4.7 m above the floor (mean fall ~2.4 m); our column
     # over the whole container is ~1 m tall (mean height ~0.5 m), so it starts 1.9 m "higher".
     rain_drop_height_m=1.9,
 )

@@ -27,7 +27,7 @@ def test_dropped_column_matches_free_fall_from_the_drop_height():
 
 
 def test_thesis_fill_drops_from_the_thesis_column_mean_height():
-    # section 4.5.3: particles generated 0.1-4.7 m above the floor; our ~1 m column's mean height is
+    # section 4.5.4: particles generated 0.1-4.7 m above the floor; our ~1 m column's mean height is
     # ~0.5 m, so 1.9 m more gives the thesis's mean fall of ~2.4 m
     assert RunContext.from_spec(JobSpec(fidelity="thesis")).rain_drop_height_m == 1.9
     assert RunContext.from_spec(JobSpec(fidelity="screening")).rain_drop_height_m == 0.0
