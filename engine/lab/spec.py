@@ -68,7 +68,7 @@ class TestOptions(BaseModel):
     fill_friction_pp: float | None = Field(
         None, ge=0, description="fill: inter-particle friction while the packing is rained, settled and "
         "levelled (a denser packing at lower friction); parameters.friction_pp is set before the CCT/DST. "
-        "Unset: parameters.friction_pp throughout",
+        "Unset: parameters.friction_pp throughout. Shear-box fill only (not the AoR bucket or anchor bin)",
     )
     include_aor: bool = False
     include_anchor: bool = False
