@@ -2,10 +2,12 @@
 import math
 
 import numpy as np
+import pytest
 
 from engine.config import MaterialSpec, SimulationConfig
 from engine.lab.context import RunContext
-from engine.lab.procedures.fill import drop_velocities_m_s
+from engine.lab.presets import THESIS
+from engine.lab.procedures.fill import COLUMN_SOLID_FRACTION, drop_velocities_m_s
 from engine.lab.spec import JobSpec
 from engine.simulation import Simulation
 
@@ -27,9 +29,14 @@ def test_dropped_column_matches_free_fall_from_the_drop_height():
 
 
 def test_thesis_fill_drops_from_the_thesis_column_mean_height():
-    # section 4.5.4: particles generated 0.1-4.7 m above the floor; our ~1 m column's mean height is
-    # ~0.5 m, so 1.9 m more gives the thesis's mean fall of ~2.4 m
-    assert RunContext.from_spec(JobSpec(fidelity="thesis")).rain_drop_height_m == 1.9
+    # section 4.5.4: particles generated 0.1-4.7 m above the floor, a mean fall of 2.4 m. Our column
+    # (fill_margin x the expected solid volume at COLUMN_SOLID_FRACTION over the container) is
+    # uniform, so its mean height is half its height; with the drop height the mean fall must match.
+    thesis_mean_fall_m = 0.5 * (0.1 + 4.7)
+    column_height_m = THESIS.fill_margin * THESIS.expected_solid_fraction * THESIS.packing_height_m \
+        / COLUMN_SOLID_FRACTION
+    drop_m = RunContext.from_spec(JobSpec(fidelity="thesis")).rain_drop_height_m
+    assert drop_m + 0.5 * column_height_m == pytest.approx(thesis_mean_fall_m, abs=0.1)
     assert RunContext.from_spec(JobSpec(fidelity="screening")).rain_drop_height_m == 0.0
     spec = JobSpec(fidelity="thesis", options={"fill_drop_height_m": 0.0})
     assert RunContext.from_spec(spec).rain_drop_height_m == 0.0
