@@ -20,14 +20,18 @@ from engine.lab.context import RunContext
 from engine.lab.spec import JobSpec
 
 
+def _provenance(ctx: RunContext, wall_time_s: float) -> dict:
+    return {"wall_time_s": wall_time_s, "steps": ctx.steps, "particle_steps": ctx.particle_steps,
+            "simulated_time_s": ctx.simulated_time_s, "max_inertial_number": ctx.max_inertial_number,
+            "warnings": list(ctx.warnings)}
+
+
 def _dst_load(spec_json: str, precompressed: dict, packing_height_m: float, target_pa: float) -> dict:
     from engine.lab.procedures.dst import run_one
 
     ctx = RunContext.from_spec(JobSpec.model_validate_json(spec_json))
     run = run_one(ctx, precompressed, packing_height_m, target_pa)
-    return {"target_pa": target_pa, "wall_time_s": ctx.wall_time_s, "steps": ctx.steps,
-            "particle_steps": ctx.particle_steps, "simulated_time_s": ctx.simulated_time_s,
-            "max_inertial_number": ctx.max_inertial_number, "warnings": list(ctx.warnings),
+    return {"target_pa": target_pa, **_provenance(ctx, ctx.wall_time_s),
             "residual_normal_stress_pa": run.reduction.residual_normal_stress_pa,
             "residual_shear_stress_pa": run.reduction.residual_shear_stress_pa,
             "dilatancy_angle_deg": run.reduction.dilatancy_angle_deg}
@@ -57,11 +61,6 @@ def main() -> None:
             json.dump(out, fh, indent=1)
         print(f"[{time.perf_counter() - started:8.0f} s] {name}: {values}", flush=True)
 
-    def provenance(ctx):
-        return {"wall_time_s": time.perf_counter() - started, "steps": ctx.steps,
-                "particle_steps": ctx.particle_steps, "simulated_time_s": ctx.simulated_time_s,
-                "max_inertial_number": ctx.max_inertial_number, "warnings": list(ctx.warnings)}
-
     from engine.lab.procedures.cct import run_cct
     from engine.lab.procedures.fill import run_fill
     from engine.lab.reducers.dst import mohr_coulomb_fit
@@ -69,9 +68,9 @@ def main() -> None:
     ctx = RunContext.from_spec(spec, progress=lambda f, p: None)
     ctx.validate()
     fill = run_fill(ctx)
-    save("fill", {**provenance(ctx), **fill.properties})
+    save("fill", {**_provenance(ctx, time.perf_counter() - started), **fill.properties})
     cct = run_cct(ctx, fill)
-    save("cct", {**provenance(ctx), "confined_modulus_pa": cct.reduction.confined_modulus_pa,
+    save("cct", {**_provenance(ctx, time.perf_counter() - started), "confined_modulus_pa": cct.reduction.confined_modulus_pa,
                  "bulk_stiffness_n_per_m": cct.reduction.bulk_stiffness_n_per_m,
                  "modulus_per_cycle_pa": cct.reduction.modulus_per_cycle_pa,
                  "window_stress_mid_pa": cct.reduction.window_stress_mid_pa,
