@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 
-from . import integrate, neighbors, springs, stepping, wallgeom
+from . import blocks, integrate, neighbors, springs, stepping, wallgeom
 from .effects import get as get_effect
 from .effects.base import Effect
 from .kernel_template import TEMPLATE
@@ -75,6 +75,7 @@ def _hooks(layout: Layout) -> dict[str, str]:
         "STIFFNESS_HOOKS": "\n".join(hooks["stiffness"]),
         "NORMAL_EXTRA_HOOKS": "\n".join(hooks["normal_extra"]),
         "ROLLING_HOOKS": "\n".join(hooks["rolling"]),
+        "ROOT_KNT": "math.sqrt(knt * m_eff)" if hooks["stiffness"] else "root_km",
     }
 
 
@@ -97,7 +98,7 @@ _LOADED: dict[str, ModuleType] = {}
 def load_kernel(layout: Layout, configured_dir: str | None = None) -> ModuleType:
     src = kernel_source(layout)
     digest = hashlib.sha256(src.encode())
-    for mod in (integrate, neighbors, springs, stepping, wallgeom, *[sys.modules[e.module] for e in layout.effects]):
+    for mod in (blocks, integrate, neighbors, springs, stepping, wallgeom, *[sys.modules[e.module] for e in layout.effects]):
         digest.update(inspect.getsource(mod).encode())
     name = "demcal_kernel_" + digest.hexdigest()[:16]
     if name in _LOADED:
