@@ -15,7 +15,7 @@ from numba import njit, prange
 
 from engine.integrate import drift_body, kick_body
 from engine.springs import onto_plane_keep_length
-from engine.stepping import body_sum, move_walls, needs_rebuild, wall_resultants
+from engine.stepping import body_sum, lists_stale, moved_sq, move_walls, needs_rebuild, wall_resultants
 from engine.wallgeom import MESH, primitive_distance, triangle_distance
 {EFFECT_IMPORTS}
 
@@ -246,15 +246,17 @@ def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
 TEMPLATE += '''
 
 @njit(cache=True, parallel=True)
-def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only, finish, go_on):
-    """One parallel pass per body: gather contact forces, walls, gravity; finish the step's kick and,
-    when go_on, start the next one (half kick + drift). Fusing keeps it to two parallel regions a step.
-    Chunks of bodies keep the per-call cost of the (inlined) body code off every single body."""
+def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only, finish, go_on,
+                  moved):
+    """One parallel pass per body: take the contact forces, walls, gravity; finish the step's kick and,
+    when go_on, start the next one (half kick + drift). Fusing keeps the step to three parallel regions.
+    Chunks of bodies keep the per-call cost of the (inlined) body code off every single body; each chunk
+    writes the largest squared sphere displacement since the last rebuild into moved[chunk]."""
     n = B.pos.shape[0]
     n_chunks = (n + CHUNK - 1) // CHUNK
     for c in prange(n_chunks):
-        body_range(c * CHUNK, min(n, c * CHUNK + CHUNK), B, S, W, P, WC, props, n_mat, dt, dt_contact,
-                   g0, g1, g2, repulsive_only, finish, go_on)
+        moved[c] = body_range(c * CHUNK, min(n, c * CHUNK + CHUNK), B, S, W, P, WC, props, n_mat, dt,
+                              dt_contact, g0, g1, g2, repulsive_only, finish, go_on)
 
 
 @njit(cache=True)
@@ -266,7 +268,9 @@ def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1,
     s_offset, s_pos, s_vel, s_force, s_torque = S.offset, S.pos, S.vel, S.force, S.torque
     acc = P.acc
     c_start = WC.start
+    at_build = S.pos_at_build
     half = 0.5 * dt
+    moved = 0.0
     for b in range(b_lo, b_hi):
         for i in range(b_start[b], b_start[b + 1]):
             take_sphere(i, acc, s_force, s_torque)
@@ -279,6 +283,9 @@ def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1,
         if go_on:
             kick_body(b, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_clump, half)
             drift_body(b, b_pos, b_vel, b_quat, b_omega, b_clump, b_start, s_offset, s_pos, s_vel, dt)
+            for i in range(b_start[b], b_start[b + 1]):
+                moved = max(moved, moved_sq(i, s_pos, at_build))
+    return moved
 
 
 @njit(cache=True, parallel=True)
@@ -303,6 +310,8 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
     dt = scal[0]
     repulsive = scal[6] != 0.0
     done = 0
+    moved = np.zeros((B.pos.shape[0] + CHUNK - 1) // CHUNK)
+    full_check = True  # positions changed outside the body pass: scan every sphere once
     if istate[0] == 0:
         if n_steps == 0:
             return 0, 0
@@ -311,7 +320,11 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
         move_walls(W, scal[1], dt)
         istate[0] = 1
     while True:
-        if needs_rebuild(S.pos, S.pos_at_build, W, scal[5]):
+        if full_check:
+            stale = needs_rebuild(S.pos, S.pos_at_build, W, scal[5])
+        else:
+            stale = lists_stale(moved.max() if moved.shape[0] else 0.0, W, scal[5])
+        if stale:
             return done, 1
         fresh = istate[0] == 2
         go_on = (not fresh) and done + 1 < n_steps
@@ -320,7 +333,9 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
         # a fresh state only gets its forces: springs do not advance (dt_contact 0), no kick completes
         dtc = 0.0 if fresh else dt
         pair_forces(P, S, B, props, n_mat, dtc, repulsive)
-        update_bodies(B, S, W, P, WC, props, n_mat, dt, dtc, scal[2], scal[3], scal[4], repulsive, not fresh, go_on)
+        update_bodies(B, S, W, P, WC, props, n_mat, dt, dtc, scal[2], scal[3], scal[4], repulsive, not fresh, go_on,
+                      moved)
+        full_check = False
         wall_resultants(W.kind.shape[0], WC.wall, WC.force, WC.point, WC.k, W.origin, W.force, W.moment, W.k_sum)
         if not fresh:
             scal[1] += dt
