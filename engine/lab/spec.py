@@ -29,6 +29,11 @@ class MicroParameters(BaseModel):
     particle_radius_m: float | None = Field(
         None, gt=0, description="screening fidelity only: mono-sized sphere radius (default 0.02 m)"
     )
+    clump_aspect_ratio: float = Field(
+        1.0, ge=1.0, le=3.0,
+        description="screening fidelity only: grains are two-sphere clumps of this length/width "
+        "(1 = spheres), each of the solid volume of the sphere it replaces (engine/lab/shape.py)",
+    )
     effects: dict[str, dict[str, Any]] = Field(
         default_factory=dict,
         description="optional contact effects by registered name, e.g. {'rolling_epsd2': {'rolling_friction': 0.1}}",
