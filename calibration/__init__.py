@@ -1,0 +1,11 @@
+"""The calibration loop on plain records, without a database (design-notes: Optuna's pattern).
+
+compare the model with measurements -> see where it fails (``localise``) -> learn which physical
+effect is missing (``attribute``) -> add it and watch the error fall (``loop``). ``service/``
+stores the loop's state and queues its batteries; a notebook runs it with any batch evaluator.
+
+Modules: ``keys`` (the (test, quantity, condition) key), ``records`` (measured targets, noise),
+``evaluators`` (batch evaluators), ``fitting`` (response surfaces of targets), ``calibrate``
+(optimum through doe.optimise), ``localise``, ``attribute``, ``verdict``, ``loop``, ``stats``,
+``standin`` (closed-form battery with every candidate effect, for tests and tier-A benches).
+"""
