@@ -1,0 +1,181 @@
+"""Calibration of one design: optimum through doe.optimise, confirmation batteries, adequacy.
+
+The fitted response surfaces give the optimum theta*; batteries at theta* with a few seeds (the
+confirmation) give the model's actual values there. If they miss the surfaces by more than the
+surfaces' own uncertainty, the surrogate is inadequate (curvature, a box too wide): that is fixed
+by a narrower design around theta*, never blamed on physics.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from doe.designs import Design, make_design
+from doe.constraints import Target
+from doe.factors import DoeError, as_factors
+from doe.optimise import CalibrationResult, calibrate
+
+from .fitting import TargetModel, run_values
+from .keys import ResponseKey, find
+
+# coded step of the central differences on the fitted polynomials (exact for quadratics)
+_FD_STEP = 1e-3
+
+
+def generators_for(k: int) -> list[str] | None:
+    """Half fraction of highest resolution: 2^(4-1) IV (D=ABC, the thesis's Table A.8), 2^(5-1) V..."""
+    if k <= 3:
+        return None
+    letters = "ABCDEFGHJKLMNOPQRSTUVWXYZ"[:k]
+    return [f"{letters[-1]}={letters[:-1]}"]
+
+
+def build_design(factors: Sequence[dict], centre_runs: int, seed: int) -> Design:
+    return make_design([dict(f) for f in factors], generators_for(len(factors)), center_runs=centre_runs,
+                       seed=seed, full=len(factors) <= 3)
+
+
+def doe_targets(models: Sequence[TargetModel], default_relative: float) -> list[Target]:
+    out = []
+    for m in models:
+        if m.fit is None:
+            continue
+        u = math.sqrt(m.target.mean_variance(default_relative).variance)
+        out.append(Target(m.key.name, m.target.mean, u, m.key.test, m.key.label))
+    return out
+
+
+def optimum(models: Sequence[TargetModel], *, default_relative: float, priors=(), constraints=(), fixed=None,
+            seed: int = 0, bounds=None, n_starts: int = 6) -> CalibrationResult:
+    fits = {m.key.name: m.fit for m in models if m.fit is not None}
+    targets = doe_targets(models, default_relative)
+    if not targets:
+        raise DoeError("no target could be modelled")
+    return calibrate(fits, targets, priors=list(priors), constraints=list(constraints), fixed=fixed,
+                     seed=seed, bounds=bounds, n_starts=n_starts)
+
+
+def coded_gradient(fit, design: Design, parameters: dict[str, float], free: Sequence[str]) -> np.ndarray:
+    """d prediction / d coded factor at ``parameters``, for the ``free`` factors (central differences)."""
+    names = design.names
+    u0 = np.array([float(design.factor(n).to_coded(parameters[n])) for n in names])
+    grad = np.zeros(len(free))
+    for j, name in enumerate(free):
+        i = names.index(name)
+        up, down = u0.copy(), u0.copy()
+        up[i] += _FD_STEP
+        down[i] -= _FD_STEP
+        grad[j] = float(fit.predict_coded(up[None, :])[0] - fit.predict_coded(down[None, :])[0]) / (2 * _FD_STEP)
+    return grad
+
+
+@dataclass
+class Confirmation:
+    """Batteries at theta*: their mean per target and the pooled seed-to-seed scatter."""
+
+    seeds: list[int]
+    runs: list[list[dict]]
+    mean: dict[ResponseKey, float] = field(default_factory=dict)
+    sim_sd: dict[ResponseKey, float] = field(default_factory=dict)
+    sim_df: dict[ResponseKey, int] = field(default_factory=dict)
+
+
+def confirm(models: Sequence[TargetModel], runs: list[list[dict]], seeds: list[int]) -> Confirmation:
+    conf = Confirmation(list(seeds), runs)
+    values = [run_values(r) for r in runs]
+    for m in models:
+        if m.key is None:
+            continue
+        key = find(values[0].keys(), m.key)
+        if key is None:
+            continue
+        ys = np.array([v.get(key, math.nan) for v in values])
+        conf.mean[m.key] = float(np.mean(ys))
+        # pool the centre replicates' pure error with the confirmation replicates' scatter
+        ss, df = 0.0, 0
+        if m.pure_error_sd is not None and m.pure_error_df > 0:
+            ss, df = m.pure_error_sd**2 * m.pure_error_df, m.pure_error_df
+        if ys.size >= 2:
+            ss += float(np.sum((ys - ys.mean()) ** 2))
+            df += ys.size - 1
+        if df > 0 and ss > 0:
+            conf.sim_sd[m.key], conf.sim_df[m.key] = math.sqrt(ss / df), df
+    return conf
+
+
+@dataclass
+class Adequacy:
+    """Confirmation mean against the surrogate's prediction, target by target."""
+
+    rows: list[dict]
+    adequate: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"adequate": self.adequate, "targets": self.rows,
+                "meaning": "the fitted response surfaces predict the batteries at the optimum within their "
+                           "uncertainty" if self.adequate else
+                           "the response surfaces miss the batteries at the optimum: a narrower design "
+                           "around it (or axial points) is needed before judging the physics"}
+
+
+def adequacy(models: Sequence[TargetModel], result: CalibrationResult, conf: Confirmation,
+             limit: float = 3.0) -> Adequacy:
+    rows, worst = [], 0.0
+    params = result.parameters
+    for m in models:
+        if m.fit is None or m.key not in conf.mean:
+            continue
+        pred = m.fit.predict([params])[0]
+        se = pred["se_mean"] or 0.0
+        sim = conf.sim_sd.get(m.key, 0.0)
+        sd = math.sqrt(se**2 + sim**2 / max(len(conf.seeds), 1))
+        z = (conf.mean[m.key] - pred["mean"]) / sd if sd > 0 else 0.0
+        worst = max(worst, abs(z))
+        rows.append({"response": m.key.name, "label": m.key.label, "surrogate": pred["mean"],
+                     "confirmed": conf.mean[m.key], "z": z})
+    return Adequacy(rows, worst <= limit)
+
+
+def natural_per_coded(factor, value: float) -> float:
+    """d natural / d coded of a factor at ``value`` (log factors: proportional to the value)."""
+    if factor.log:
+        return math.log(10.0) * value * factor.half_range_t
+    return factor.half_range_t
+
+
+def active_bounds(design: Design, theta: dict[str, float], tol: float = 1e-6) -> list[dict]:
+    """Factors of ``theta`` sitting on a bound of the design box."""
+    out = []
+    for f in design.factors:
+        u = float(f.to_coded(theta[f.name]))
+        if u <= -1.0 + tol:
+            out.append({"parameter": f.name, "side": "low", "value": theta[f.name]})
+        elif u >= 1.0 - tol:
+            out.append({"parameter": f.name, "side": "high", "value": theta[f.name]})
+    return out
+
+
+def prior_rows(priors: Sequence[dict], theta: dict[str, float]) -> list[dict]:
+    return [{"parameter": p["parameter"], "value": p["value"], "uncertainty": p["uncertainty"],
+             "source": p.get("source", ""), "standardised_residual": (theta[p["parameter"]] - p["value"]) / p["uncertainty"]}
+            for p in priors]
+
+
+def gauss_newton_step(design: Design, residuals, theta: dict[str, float]) -> np.ndarray:
+    """Coded step minimising |r + J du| with theta + du inside the box (scipy's bounded least squares)."""
+    from scipy.optimize import lsq_linear
+
+    u = np.array([float(design.factor(n).to_coded(theta[n])) for n in residuals.free])
+    sol = lsq_linear(residuals.J, -residuals.r, bounds=(-1.0 - u, 1.0 - u))
+    return sol.x
+
+
+def move(design: Design, theta: dict[str, float], free: Sequence[str], du: np.ndarray) -> dict[str, float]:
+    out = dict(theta)
+    for name, d in zip(free, du):
+        f = design.factor(name)
+        out[name] = float(f.to_natural(float(np.clip(float(f.to_coded(theta[name])) + d, -1.0, 1.0))))
+    return out
