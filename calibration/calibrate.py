@@ -20,6 +20,8 @@ from doe.optimise import CalibrationResult, calibrate
 
 from .fitting import TargetModel, run_values
 from .keys import ResponseKey, find
+from .localise import Residuals
+from .records import Noise, VarianceTerm
 
 # coded step of the central differences on the fitted polynomials (exact for quadratics)
 _FD_STEP = 1e-3
@@ -49,27 +51,26 @@ def doe_targets(models: Sequence[TargetModel], default_relative: float) -> list[
 
 
 def optimum(models: Sequence[TargetModel], *, default_relative: float, priors=(), constraints=(), fixed=None,
-            seed: int = 0, bounds=None, n_starts: int = 6) -> CalibrationResult:
+            seed: int = 0, bounds=None, n_starts: int = 6, allow_extrapolation: bool = False) -> CalibrationResult:
     fits = {m.key.name: m.fit for m in models if m.fit is not None}
     targets = doe_targets(models, default_relative)
     if not targets:
         raise DoeError("no target could be modelled")
     return calibrate(fits, targets, priors=list(priors), constraints=list(constraints), fixed=fixed,
-                     seed=seed, bounds=bounds, n_starts=n_starts)
+                     seed=seed, bounds=bounds, n_starts=n_starts, allow_extrapolation=allow_extrapolation)
 
 
 def coded_gradient(fit, design: Design, parameters: dict[str, float], free: Sequence[str]) -> np.ndarray:
     """d prediction / d coded factor at ``parameters``, for the ``free`` factors (central differences)."""
     names = design.names
     u0 = np.array([float(design.factor(n).to_coded(parameters[n])) for n in names])
-    grad = np.zeros(len(free))
-    for j, name in enumerate(free):
-        i = names.index(name)
-        up, down = u0.copy(), u0.copy()
-        up[i] += _FD_STEP
-        down[i] -= _FD_STEP
-        grad[j] = float(fit.predict_coded(up[None, :])[0] - fit.predict_coded(down[None, :])[0]) / (2 * _FD_STEP)
-    return grad
+    cols = [names.index(n) for n in free]
+    points = np.repeat(u0[None, :], 2 * len(cols), axis=0)
+    for j, i in enumerate(cols):
+        points[2 * j, i] += _FD_STEP
+        points[2 * j + 1, i] -= _FD_STEP
+    values = fit.predict_coded(points)
+    return (values[0::2] - values[1::2]) / (2 * _FD_STEP)
 
 
 @dataclass
@@ -179,3 +180,48 @@ def move(design: Design, theta: dict[str, float], free: Sequence[str], du: np.nd
         f = design.factor(name)
         out[name] = float(f.to_natural(float(np.clip(float(f.to_coded(theta[name])) + d, -1.0, 1.0))))
     return out
+
+
+def residuals_at(design: Design, models: Sequence[TargetModel], theta: dict[str, float], conf: Confirmation,
+                 priors: Sequence[dict], default_relative: float) -> Residuals:
+    """Whitened residuals of the confirmation batteries at ``theta`` against the measurements, the
+    priors as pseudo-observations, and the Jacobian from the fitted surfaces (coded units).
+
+    A parameter pinned at a bound of the box with the misfit pushing it outward cannot absorb
+    anything more in that direction (friction saturating at its ceiling): its column is marked
+    not absorbing, so the diagnosis does not project the missing effect away with it.
+    """
+    free = list(design.names)
+    keys, measured, model, noise, rows = [], [], [], [], []
+    m = len(conf.seeds)
+    for tm in models:
+        if tm.fit is None or tm.key not in conf.mean:
+            continue
+        meas = tm.target.mean_variance(default_relative)
+        sim_sd = conf.sim_sd.get(tm.key, 0.0)
+        sim = VarianceTerm(sim_sd**2 / m, conf.sim_df.get(tm.key, math.inf), "centre and confirmation replicates")
+        n = Noise(meas, sim)
+        keys.append(tm.target.key)
+        measured.append(tm.target.mean)
+        model.append(conf.mean[tm.key])
+        noise.append(n)
+        rows.append(-coded_gradient(tm.fit, design, theta, free) / n.sd)
+    prior_names, prior_r = [], []
+    for p in priors:
+        f = design.factor(p["parameter"])
+        prior_names.append(p["parameter"])
+        prior_r.append((p["value"] - theta[p["parameter"]]) / p["uncertainty"])
+        g = np.zeros(len(free))
+        g[free.index(p["parameter"])] = -natural_per_coded(f, theta[p["parameter"]]) / p["uncertainty"]
+        rows.append(g)
+    J = np.array(rows).reshape(len(rows), len(free))
+    r = np.concatenate([(np.array(measured) - np.array(model)) / np.array([x.sd for x in noise]), prior_r])
+    grad_s = 2.0 * J.T @ r          # d(sum r^2)/du
+    pinned = {b["parameter"]: b["side"] for b in active_bounds(design, theta)}
+    absorbing = []
+    for j, name in enumerate(free):
+        side = pinned.get(name)
+        outward = (side == "high" and grad_s[j] < 0) or (side == "low" and grad_s[j] > 0)
+        absorbing.append(not outward)
+    return Residuals(keys, np.array(measured), np.array(model), noise, prior_names, np.array(prior_r),
+                     J, free, absorbing)

@@ -27,7 +27,7 @@ from .evaluators import BatchEvaluator
 from .fitting import TargetModel, fit_targets, run_values
 from .keys import find
 from .localise import ALPHA, Localisation, Residuals, localise
-from .records import Measured, Noise, VarianceTerm
+from .records import Measured
 
 
 @dataclass
@@ -224,41 +224,7 @@ class CalibrationLoop:
 
     def residuals(self, design, models: list[TargetModel], theta: dict[str, float], conf: cal.Confirmation,
                   priors: list[dict]) -> Residuals:
-        c = self.config
-        free = list(design.names)
-        keys, measured, model, noise, rows = [], [], [], [], []
-        m = len(conf.seeds)
-        for tm in models:
-            if tm.fit is None or tm.key not in conf.mean:
-                continue
-            meas = tm.target.mean_variance(c.default_relative_uncertainty)
-            sim_sd = conf.sim_sd.get(tm.key, 0.0)
-            sim = VarianceTerm(sim_sd**2 / m, conf.sim_df.get(tm.key, math.inf), "centre and confirmation replicates")
-            n = Noise(meas, sim)
-            keys.append(tm.target.key)
-            measured.append(tm.target.mean)
-            model.append(conf.mean[tm.key])
-            noise.append(n)
-            rows.append(-cal.coded_gradient(tm.fit, design, theta, free) / n.sd)
-        prior_names, prior_r = [], []
-        for p in priors:
-            f = design.factor(p["parameter"])
-            prior_names.append(p["parameter"])
-            prior_r.append((p["value"] - theta[p["parameter"]]) / p["uncertainty"])
-            g = np.zeros(len(free))
-            g[free.index(p["parameter"])] = -cal.natural_per_coded(f, theta[p["parameter"]]) / p["uncertainty"]
-            rows.append(g)
-        J = np.array(rows).reshape(len(rows), len(free))
-        r = np.concatenate([(np.array(measured) - np.array(model)) / np.array([x.sd for x in noise]), prior_r])
-        grad_s = 2.0 * J.T @ r          # d(sum r^2)/du
-        pinned = {b["parameter"]: b["side"] for b in cal.active_bounds(design, theta)}
-        absorbing = []
-        for j, name in enumerate(free):
-            side = pinned.get(name)
-            outward = (side == "high" and grad_s[j] < 0) or (side == "low" and grad_s[j] > 0)
-            absorbing.append(not outward)
-        return Residuals(keys, np.array(measured), np.array(model), noise, prior_names, np.array(prior_r),
-                         J, free, absorbing)
+        return cal.residuals_at(design, models, theta, conf, priors, self.config.default_relative_uncertainty)
 
     # -- diagnosis ---------------------------------------------------------------------------
     def candidate_pool(self, it: Iteration) -> list[Candidate]:

@@ -191,8 +191,19 @@ def campaign_report(args) -> int:
                       "min|z| in box", "status"],
                      [[c if not isinstance(c, list) else "[" + ", ".join(_fmt(x) for x in c) + "]" for c in row]
                       for row in rows]))
-    if r.get("next_step"):
-        text += f"\n\nconfirmation: {r['next_step'].get('verdict')}: {r['next_step'].get('reason')}"
+    if r.get("meaning"):
+        text += f"\n\n{r['verdict']}: {r['meaning']}"
+    lof = r.get("lack_of_fit")
+    if lof:
+        text += (f"\nlack of fit: chi2 {_fmt(lof['statistic'])} on {lof['dof']} dof (per dof {_fmt(lof['chi2_per_dof'])}, "
+                 f"noise band {_fmt(lof['noise_band'][0])}-{_fmt(lof['noise_band'][1])}), p {_fmt(lof['p_value'])}")
+    for b in (r.get("conflicts") or {}).get("active_bounds", []):
+        text += f"\nat a bound: {b['parameter']} at its {b['side']} end, pushing {b['pushes']}"
+    for p in (r.get("conflicts") or {}).get("priors_pulled", []):
+        text += f"\nprior conflict: {p['meaning']}"
+    if r.get("surrogate_check"):
+        text += (f"\nresponse surfaces at the optimum: {r['surrogate_check'].get('verdict')}: "
+                 f"{r['surrogate_check'].get('reason')}")
     return _emit(args, r, text)
 
 

@@ -24,7 +24,7 @@ from engine.lab.spec import JobSpec, MicroParameters, TestOptions
 from service.campaigns import analysis
 from service.campaigns.design import build_design, design_view
 from service.campaigns.report import build_report
-from service.campaigns.responses import responses_of
+from calibration.keys import responses_of
 from service.campaigns.schemas import CampaignCreate
 from service.errors import ApiError, TooMany
 from service.models.base import utcnow
@@ -197,12 +197,12 @@ class CampaignRunner:
 
     # -- analysis and report -----------------------------------------------------------------
     def _targets(self, session, campaign, config):
+        from calibration.keys import select
         from service.materials.store import get_material
-        from service.campaigns.responses import select_targets
 
         material = get_material(session, campaign.material_id)
         wanted = [t.model_dump() for t in config.targets] if config.targets is not None else None
-        return select_targets(material.measurements if material else [], wanted)
+        return select(material.measurements if material else [], wanted)
 
     def _analysis(self, session, campaign, config, it) -> bool:
         runs = [r for r in it.runs if r.kind == "design"]
@@ -225,9 +225,9 @@ class CampaignRunner:
         targets = self._targets(session, campaign, config)
         confirmation = next(r for r in it.runs if r.kind == "confirmation")
         design_runs = [r for r in it.runs if r.kind == "design"]
-        observed = {name: resp["value"] for name, resp in (confirmation.responses or {}).items()}
-        next_step = analysis.confirmation_check(config, it.design["doe"], design_runs, targets, it.optimum, observed)
-        report = build_report(config, it.models, it.optimum, confirmation, targets, next_step)
+        assessment = analysis.assess(config, it.design["doe"], design_runs, targets, it.optimum,
+                                     list((confirmation.responses or {}).values()), confirmation.seed)
+        report = build_report(config, it.models, it.optimum, confirmation, targets, assessment)
         now = utcnow()
         if not self._set_phase(session, it, "report", "done", report=report,
                                confirmation={"job_id": confirmation.job_id, "seed": confirmation.seed,

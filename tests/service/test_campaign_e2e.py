@@ -61,8 +61,10 @@ def test_analytic_campaign_from_creation_to_report(s2):
     # E' was published as an average only: its uncertainty is the stated 5 % assumption, flagged
     assert modulus["uncertainty_assumed"] and math.isclose(modulus["measured_uncertainty"], 0.05 * 8.69e6)
     assert density["uncertainty_assumed"] is False
-    # Round particles without rolling resistance cap the analytic friction angle at 12 + 30 = 42 deg, so
-    # 60.6 deg (an angular aggregate) is > 3 standard uncertainties (3.03 deg) beyond reach: the missing effect.
+    # Round particles without rolling resistance cap the stand-in's friction angle (calibration/standin.py) at
+    # the ceiling 28 deg + 0.8 x dilatancy (at most 2 + 6 deg) + box friction 2 x mu_pw (mu_pw 0.62): about
+    # 36 deg, safely below 42 deg, so 60.6 deg (an angular aggregate) is > 3 standard uncertainties (3.03 deg)
+    # beyond reach: the missing effect.
     assert phi["reachable"] is False and phi["reachability"] > (60.6 - 42.0) / 3.03 - 1e-9
     assert report["verdict"] == "targets out of reach"
     assert report["unreachable"] == ["dst__friction_angle_deg"]
@@ -123,8 +125,8 @@ def test_next_iteration_with_an_effect_keeps_the_first(s2):
     assert iterations[0]["parameters"]["effects"] == {} and iterations[1]["parameters"]["effects"] == effects
     assert client.get(f"{API}/campaigns/{cid}/report", params={"number": 1}).json()["targets"] == first["targets"]
     second = {r["quantity"]: r for r in client.get(f"{API}/campaigns/{cid}/report").json()["targets"]}
-    # with rolling friction 0.3 the stand-in's friction angle reaches 12 + 30 (1 - e^(-1/0.35)) + 25 x 0.3/0.38
-    # = 60.0 deg at mu_pp = 1: 60.6 deg is now within 3 u
+    # with rolling friction 0.3 the stand-in's ceiling rises by 20 x 0.3/0.38 = 15.8 deg and the dilatancy by
+    # 5 x 0.3/0.4 = 3.75 deg (x 0.8 in phi): about 55 deg at mu_pp = 1, so 60.6 deg is now within 3 u (9.1 deg)
     assert second["friction_angle_deg"]["reachable"] is True
     with app.state.session_factory() as session:
         jobs = session.query(Job).filter(Job.campaign_id == cid).all()
