@@ -21,7 +21,7 @@ from doe.optimise import CalibrationResult, calibrate
 from .fitting import TargetModel, run_values
 from .keys import ResponseKey, find
 from .localise import Residuals
-from .records import Noise, VarianceTerm
+from .records import Noise, VarianceTerm, measurement_variances
 
 # coded step of the central differences on the fitted polynomials (exact for quadratics)
 _FD_STEP = 1e-3
@@ -42,10 +42,11 @@ def build_design(factors: Sequence[dict], centre_runs: int, seed: int) -> Design
 
 def doe_targets(models: Sequence[TargetModel], default_relative: float) -> list[Target]:
     out = []
+    variances = measurement_variances([m.target for m in models], default_relative)
     for m in models:
         if m.fit is None:
             continue
-        u = math.sqrt(m.target.mean_variance(default_relative).variance)
+        u = math.sqrt(variances[m.target.key].variance)
         out.append(Target(m.key.name, m.target.mean, u, m.key.test, m.key.label))
     return out
 
@@ -85,8 +86,17 @@ class Confirmation:
 
 
 def confirm(models: Sequence[TargetModel], runs: list[list[dict]], seeds: list[int]) -> Confirmation:
+    """Mean of the batteries at theta* per target, and the simulator's seed-to-seed scatter.
+
+    The scatter pools the centre replicates' pure error with the confirmation replicates, and,
+    like the measurement scatter (``records.measurement_variances``), pools the conditions of one
+    (test, quantity) family on a relative scale (absolute for angles): one packing's randomness
+    moves E' at every stress alike, and 2-3 degrees of freedom per target would give t tails.
+    """
     conf = Confirmation(list(seeds), runs)
     values = [run_values(r) for r in runs]
+    family: dict[tuple[str, str], list[float]] = {}
+    members: dict[tuple[str, str], list[ResponseKey]] = {}
     for m in models:
         if m.key is None:
             continue
@@ -94,16 +104,29 @@ def confirm(models: Sequence[TargetModel], runs: list[list[dict]], seeds: list[i
         if key is None:
             continue
         ys = np.array([v.get(key, math.nan) for v in values])
-        conf.mean[m.key] = float(np.mean(ys))
-        # pool the centre replicates' pure error with the confirmation replicates' scatter
+        mean = float(np.mean(ys))
+        conf.mean[m.key] = mean
+        relative = not m.key.quantity.endswith("_deg")
+        scale = abs(mean) if relative and mean != 0 else 1.0
         ss, df = 0.0, 0
         if m.pure_error_sd is not None and m.pure_error_df > 0:
             ss, df = m.pure_error_sd**2 * m.pure_error_df, m.pure_error_df
         if ys.size >= 2:
             ss += float(np.sum((ys - ys.mean()) ** 2))
             df += ys.size - 1
-        if df > 0 and ss > 0:
-            conf.sim_sd[m.key], conf.sim_df[m.key] = math.sqrt(ss / df), df
+        fam = (m.key.test, m.key.quantity)
+        acc = family.setdefault(fam, [0.0, 0])
+        acc[0] += ss / scale**2
+        acc[1] += df
+        members.setdefault(fam, []).append(m.key)
+    for fam, keys in members.items():
+        ss, df = family[fam]
+        if df <= 0 or ss <= 0:
+            continue
+        for key in keys:
+            relative = not key.quantity.endswith("_deg")
+            scale = abs(conf.mean[key]) if relative and conf.mean[key] != 0 else 1.0
+            conf.sim_sd[key], conf.sim_df[key] = math.sqrt(ss / df) * scale, df
     return conf
 
 
@@ -123,9 +146,10 @@ class Adequacy:
 
 
 def adequacy(models: Sequence[TargetModel], result: CalibrationResult, conf: Confirmation,
-             limit: float = 3.0) -> Adequacy:
+             limit: float = 3.0, at: dict[str, float] | None = None) -> Adequacy:
+    """Do the surfaces predict the batteries at the optimum (or at ``at``, after polishing)?"""
     rows, worst = [], 0.0
-    params = result.parameters
+    params = at or result.parameters
     for m in models:
         if m.fit is None or m.key not in conf.mean:
             continue
@@ -147,14 +171,15 @@ def natural_per_coded(factor, value: float) -> float:
     return factor.half_range_t
 
 
-def active_bounds(design: Design, theta: dict[str, float], tol: float = 1e-6) -> list[dict]:
-    """Factors of ``theta`` sitting on a bound of the design box."""
+def active_bounds(design: Design, theta: dict[str, float], box: dict | None = None, tol: float = 1e-6) -> list[dict]:
+    """Factors of ``theta`` sitting on a bound of ``box`` ({name: (low, high)}; default the design's)."""
     out = []
     for f in design.factors:
-        u = float(f.to_coded(theta[f.name]))
-        if u <= -1.0 + tol:
+        low, high = (box or {}).get(f.name, (f.low, f.high))
+        span = abs(high - low) or 1.0
+        if theta[f.name] <= low + tol * span:
             out.append({"parameter": f.name, "side": "low", "value": theta[f.name]})
-        elif u >= 1.0 - tol:
+        elif theta[f.name] >= high - tol * span:
             out.append({"parameter": f.name, "side": "high", "value": theta[f.name]})
     return out
 
@@ -182,6 +207,25 @@ def move(design: Design, theta: dict[str, float], free: Sequence[str], du: np.nd
     return out
 
 
+def narrowed(factors: Sequence[dict], parameters: dict[str, float], shrink: float = 0.35,
+             floors: dict[str, float] | None = None) -> list[dict]:
+    """Factors narrowed to ``shrink`` of their range about theta*, kept inside the old range.
+
+    ``floors`` keeps an effect's 'off' strength as its low level, so that the effect can still
+    be found absent (the likelihood-ratio test is then nested).
+    """
+    out = []
+    for f in as_factors([dict(x) for x in factors]):
+        centre = float(f.to_coded(parameters[f.name]))
+        lo_c = min(max(centre - shrink, -1.0), 1.0 - 2 * shrink)
+        lo, hi = float(f.to_natural(lo_c)), float(f.to_natural(lo_c + 2 * shrink))
+        if floors and f.name in floors:
+            lo = floors[f.name]
+            hi = max(hi, float(f.to_natural(min(1.0, float(f.to_coded(lo)) + 2 * shrink))))
+        out.append({"name": f.name, "low": lo, "high": hi, "unit": f.unit, "log": f.log})
+    return out
+
+
 def residuals_at(design: Design, models: Sequence[TargetModel], theta: dict[str, float], conf: Confirmation,
                  priors: Sequence[dict], default_relative: float) -> Residuals:
     """Whitened residuals of the confirmation batteries at ``theta`` against the measurements, the
@@ -194,10 +238,11 @@ def residuals_at(design: Design, models: Sequence[TargetModel], theta: dict[str,
     free = list(design.names)
     keys, measured, model, noise, rows = [], [], [], [], []
     m = len(conf.seeds)
+    variances = measurement_variances([tm.target for tm in models], default_relative)
     for tm in models:
         if tm.fit is None or tm.key not in conf.mean:
             continue
-        meas = tm.target.mean_variance(default_relative)
+        meas = variances[tm.target.key]
         sim_sd = conf.sim_sd.get(tm.key, 0.0)
         sim = VarianceTerm(sim_sd**2 / m, conf.sim_df.get(tm.key, math.inf), "centre and confirmation replicates")
         n = Noise(meas, sim)

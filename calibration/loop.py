@@ -40,6 +40,8 @@ class LoopConfig:
     confirmation_seeds: int = 2
     default_relative_uncertainty: float = 0.05
     max_iterations: int = 3
+    max_refinements: int = 0
+    refine_shrink: float = 0.35
     candidates: list[str] | None = None      # None: every registered candidate
     seed: int = 0
 
@@ -168,32 +170,49 @@ class CalibrationLoop:
         return [1_000_003 * (self.config.seed + 1) + 7 * number + j for j in range(self.config.confirmation_seeds)]
 
     def iterate(self, factors: list[dict], fixed: dict, number: int = 1, added_effect: str | None = None) -> Iteration:
-        """Design, fit, optimum, confirmation at the optimum and, where the surfaces miss the
-        batteries there, Gauss-Newton steps on the batteries themselves; then localise."""
+        """Design, fit, optimum, confirmation at the optimum; where the surfaces miss the batteries
+        there, Gauss-Newton steps on the batteries themselves and, if they still miss, one narrower
+        design about the optimum (``refine_shrink`` of each range); then localise."""
         c = self.config
         factors = [dict(f) for f in factors]
-        design = cal.build_design(factors, c.centre_runs, c.seed + 7919 * number)
-        records = design.records("std")
-        runs = self._evaluate(fixed, [{f.name: r[f.name] for f in design.factors} for r in records],
-                              [r["seed"] for r in records])
-        models = fit_targets(design, runs, self.targets)
-        priors = [p for p in c.priors if p["parameter"] in design.names]
-        result = cal.optimum(models, default_relative=c.default_relative_uncertainty, priors=priors,
-                             constraints=c.constraints, seed=c.seed + number)
-        seeds = self.confirmation_seeds(number)
-        theta = dict(result.parameters)
-        conf = cal.confirm(models, self._evaluate(fixed, [theta] * len(seeds), seeds), seeds)
-        adequacy = cal.adequacy(models, result, conf)
-        runs_total = len(runs) + len(seeds)
-        steps = 0
-        if not adequacy.adequate:
-            theta, conf, steps = self._polish(design, models, fixed, theta, conf, priors)
-            runs_total += steps * len(seeds)
+        floors = {f["name"]: f["low"] for f in factors if f["name"].startswith("effects.") or
+                  f["name"] == "clump_aspect_ratio"}
+        runs_total, steps_total = 0, 0
+        for refinement in range(c.max_refinements + 1):
+            design = cal.build_design(factors, c.centre_runs, c.seed + 7919 * number + 104729 * refinement)
+            records = design.records("std")
+            runs = self._evaluate(fixed, [{f.name: r[f.name] for f in design.factors} for r in records],
+                                  [r["seed"] for r in records])
+            models = fit_targets(design, runs, self.targets)
+            priors = [p for p in c.priors if p["parameter"] in design.names]
+            result = cal.optimum(models, default_relative=c.default_relative_uncertainty, priors=priors,
+                                 constraints=c.constraints, seed=c.seed + number)
+            seeds = self.confirmation_seeds(number)
+            theta = dict(result.parameters)
+            conf = cal.confirm(models, self._evaluate(fixed, [theta] * len(seeds), seeds), seeds)
+            adequacy = cal.adequacy(models, result, conf)
+            runs_total += len(runs) + len(seeds)
+            if not adequacy.adequate:
+                theta, conf, steps = self._polish(design, models, fixed, theta, conf, priors)
+                runs_total += steps * len(seeds)
+                steps_total += steps
+                adequacy = cal.adequacy(models, result, conf, at=theta)
+            if adequacy.adequate or refinement == c.max_refinements:
+                break
+            factors = cal.narrowed(factors, theta, shrink=c.refine_shrink, floors=floors)
         residuals = self.residuals(design, models, theta, conf, priors)
-        loc = localise(residuals, active_bounds=cal.active_bounds(design, theta),
+        box = self._user_box(factors)
+        loc = localise(residuals, active_bounds=cal.active_bounds(design, theta, box),
                        priors=cal.prior_rows(priors, theta), reachability=result.reachability, seed=c.seed + number)
         return Iteration(number, factors, fixed, design, models, result, conf, adequacy, residuals, loc,
-                         steps, added_effect, runs_total, theta)
+                         steps_total, added_effect, runs_total, theta)
+
+    def _user_box(self, factors: list[dict]) -> dict[str, tuple[float, float]]:
+        """Bounds that mean something to the user: the configured ranges (a narrowed design's edges
+        are not conflicts), and an added effect's own range."""
+        box = {f["name"]: (f["low"], f["high"]) for f in factors}
+        box.update({f["name"]: (f["low"], f["high"]) for f in self.config.factors})
+        return box
 
     def _polish(self, design, models, fixed, theta, conf, priors, max_steps: int = 4):
         """Bounded Gauss-Newton on the batteries at the optimum, with the surfaces' Jacobian.
@@ -282,11 +301,33 @@ class CalibrationLoop:
                    float(c.reference(MicroParameters.model_validate(it.parameters))))
             factors.append({"name": c.factor, "low": ref / 4.0, "high": ref * 4.0, "log": True})
         else:
+            # the whole plausible range, or twice the screen's estimate if that is larger: a linear
+            # signature underestimates a saturating effect, and a strength pinned at the top of its
+            # range is extended by ``iterate`` anyway
             off = c.off_value or 0.0
             gamma = ranked.strength - off if ranked and ranked.strength is not None else c.step
-            top = off + min(max(2.0 * gamma, 1.5 * c.step), PLAUSIBLE_SLACK * (c.plausible_range[1] - off))
+            top = off + min(max(2.0 * gamma, c.plausible_range[1] - off), PLAUSIBLE_SLACK * (c.plausible_range[1] - off))
             factors.append({"name": c.factor, "low": off, "high": top})
         return factors, fixed
+
+    def iterate_effect(self, factors: list[dict], fixed: dict, number: int, name: str) -> Iteration:
+        """``iterate`` with an effect's strength as a factor; a strength pinned at the top of its
+        range, pushing outward, is given a range twice as wide (up to PLAUSIBLE_SLACK x the
+        plausible top) and the iteration redone once."""
+        c = all_candidates()[name]
+        it = self.iterate(factors, fixed, number, added_effect=name)
+        if c.is_switch:
+            return it
+        off = c.off_value or 0.0
+        cap = off + PLAUSIBLE_SLACK * (c.plausible_range[1] - off)
+        pinned = any(b["parameter"] == c.factor and b["side"] == "high" for b in it.localisation.conflicts["active_bounds"])
+        top = factors[-1]["high"]
+        if pinned and top < cap:
+            wider = [dict(f) for f in factors[:-1]] + [{**factors[-1], "high": min(cap, off + 2.0 * (top - off))}]
+            again = self.iterate(wider, fixed, number, added_effect=name)
+            again.runs += it.runs
+            return again
+        return it
 
     def accept(self, before: Iteration, after: Iteration, name: str) -> Decision:
         c = all_candidates()[name]
@@ -323,7 +364,7 @@ class CalibrationLoop:
             for name in options[:2]:
                 number += 1
                 factors, fixed = self.with_effect(current, diag, name)
-                nxt = self.iterate(factors, fixed, number, added_effect=name)
+                nxt = self.iterate_effect(factors, fixed, number, name)
                 iterations.append(nxt)
                 decision = self.accept(current, nxt, name)
                 decisions.append(decision)

@@ -121,3 +121,44 @@ class Noise:
 
 def _df(df: float) -> float | None:
     return None if math.isinf(df) else float(df)
+
+
+def _relative(measured: Measured) -> bool:
+    """Scatter that scales with the value (densities, moduli, stresses, forces) or not (angles)."""
+    return measured.unit != "deg" and not measured.key.quantity.endswith("_deg")
+
+
+def measurement_variances(targets: list[Measured], default_relative: float) -> dict:
+    """Variance of each target's mean, pooling replicate scatter within a (test, quantity) family.
+
+    Why pool: three replicates give a variance on 2 degrees of freedom, so a residual whitened by
+    it has t_2 tails and no test can see a real misfit through them. The conditions of one family
+    (E' at four stresses, shear stress at four loads) share a coefficient of variation (an
+    absolute scatter for angles), so their replicates are pooled (one-way ANOVA within groups):
+    s_pooled^2 = sum (n_i - 1) s_i^2 / sum (n_i - 1), with that many degrees of freedom. Stated
+    uncertainties stay as stated; targets without replicates take the pooled value of their family
+    when there is one, else the assumed ``default_relative``.
+    """
+    families: dict[tuple[str, str], list[Measured]] = {}
+    for t in targets:
+        families.setdefault((t.key.test, t.key.quantity), []).append(t)
+    out = {}
+    for members in families.values():
+        ss, df = 0.0, 0
+        for t in members:
+            sd = t.sd
+            if t.stated_uncertainty is None and sd is not None and sd > 0:
+                scale = abs(t.mean) if _relative(t) else 1.0
+                if scale > 0:
+                    ss += (t.n - 1) * (sd / scale) ** 2
+                    df += t.n - 1
+        for t in members:
+            if t.stated_uncertainty is not None and t.stated_uncertainty > 0:
+                out[t.key] = t.mean_variance(default_relative)
+            elif df > 0 and (len(members) > 1 or t.n > 1):
+                scale = abs(t.mean) if _relative(t) else 1.0
+                out[t.key] = VarianceTerm(ss / df * scale**2 / t.n, df,
+                                          "replicates pooled over conditions" if len(members) > 1 else "replicates")
+            else:
+                out[t.key] = t.mean_variance(default_relative)
+    return out
