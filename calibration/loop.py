@@ -214,20 +214,37 @@ class CalibrationLoop:
         box.update({f["name"]: (f["low"], f["high"]) for f in self.config.factors})
         return box
 
-    def _polish(self, design, models, fixed, theta, conf, priors, max_steps: int = 4):
-        """Bounded Gauss-Newton on the batteries at the optimum, with the surfaces' Jacobian.
+    def _polish(self, design, models, fixed, theta, conf, priors, max_steps: int = 6, coded_step: float = 0.1):
+        """Bounded Gauss-Newton on the batteries themselves, from the surfaces' optimum.
 
         Why: a two-level surface of a saturating response is biased inside its box, so its optimum
-        is not the simulator's. The surfaces' gradients are still good, so steps
-        du = argmin |r + J du| inside the box, each checked by batteries at the new point (same
-        seeds), move to the simulator's own optimum for a few batteries instead of a new design.
+        is not the simulator's, and its gradients can point the wrong way too. The Jacobian is
+        therefore taken from the batteries by forward differences of ``coded_step`` (inward at a
+        bound, same seeds: common random numbers), updated by Broyden's rule after each step; each
+        step minimises |r + J du| inside the box and is kept only if the batteries' misfit falls.
+        Costs (k + steps) x seeds batteries.
         """
         seeds = conf.seeds
         res = self.residuals(design, models, theta, conf, priors)
         chi2 = res.chi2()
         taken = 0
+        n_t = len(res.keys)
+        J = res.J.copy()
+        for j, name in enumerate(res.free):
+            f = design.factor(name)
+            u = float(f.to_coded(theta[name]))
+            h = coded_step if u + coded_step <= 1.0 else -coded_step
+            trial = cal.move(design, theta, res.free, np.eye(len(res.free))[j] * h)
+            trial_conf = cal.confirm(models, self._evaluate(fixed, [trial] * len(seeds), seeds), seeds)
+            taken += 1
+            trial_res = self.residuals(design, models, trial, trial_conf, priors)
+            if len(trial_res.keys) == n_t:
+                J[:n_t, j] = (trial_res.r[:n_t] - res.r[:n_t]) / h
+        res.J = J
         for _ in range(max_steps):
             step = cal.gauss_newton_step(design, res, theta)
+            if float(np.max(np.abs(step))) < 1e-3:
+                break
             accepted = False
             for shrink in (1.0, 0.5, 0.25):
                 trial = cal.move(design, theta, res.free, shrink * step)
@@ -235,6 +252,11 @@ class CalibrationLoop:
                 taken += 1
                 trial_res = self.residuals(design, models, trial, trial_conf, priors)
                 if trial_res.chi2() < chi2:
+                    du = np.array([float(design.factor(n).to_coded(trial[n]) - design.factor(n).to_coded(theta[n]))
+                                   for n in res.free])
+                    dr = trial_res.r - res.r
+                    J = J + np.outer(dr - J @ du, du) / float(du @ du)     # Broyden's good update
+                    trial_res.J = J
                     theta, conf, res, chi2, accepted = trial, trial_conf, trial_res, trial_res.chi2(), True
                     break
             if not accepted:

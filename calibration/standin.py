@@ -56,7 +56,7 @@ class Gains:
     # friction and dilatancy (degrees)
     phi_floor_deg: float = 18.0
     phi_ceiling_deg: float = 28.0
-    phi_ceiling_rolling_deg: float = 20.0
+    phi_ceiling_rolling_deg: float = 30.0
     phi_ceiling_shape_deg: float = 14.0
     friction_scale: float = 0.35
     psi_0_deg: float = 2.0
@@ -168,14 +168,14 @@ def bulk_values(parameters: Mapping[str, Any], conditions: Conditions, gains: Ga
     hertz = effects.get("hertz_mindlin")
 
     solid = (g.solid_fraction_0 - g.solid_loss_friction * g.sat(mu / 0.25) - g.solid_loss_wall * g.sat(mu_w / 0.2)
-             - g.solid_loss_rolling * _rational(mu_r, 0.1) - g.solid_loss_shape * _rational(elongation, 0.3)
+             - g.solid_loss_rolling * _rational(mu_r, 0.2) - g.solid_loss_shape * _rational(elongation, 0.3)
              - g.solid_loss_cohesion * _rational(k_c, 4.0e6))
     rho_b = rho_p * solid
     cohesion_pa = g.cohesion_max_pa * _rational(k_c, g.cohesion_half_j_m3)
-    ceiling = (g.phi_ceiling_deg + g.phi_ceiling_rolling_deg * _rational(mu_r, 0.08)
+    ceiling = (g.phi_ceiling_deg + g.phi_ceiling_rolling_deg * _rational(mu_r, 0.2)
                + g.phi_ceiling_shape_deg * _rational(elongation, 0.3))
     phi_cv = g.phi_floor_deg + (ceiling - g.phi_floor_deg) * g.sat(mu / g.friction_scale)
-    psi_ref = (g.psi_0_deg + g.psi_friction_deg * g.sat(mu / 0.4) + g.psi_rolling_deg * _rational(mu_r, 0.1)
+    psi_ref = (g.psi_0_deg + g.psi_friction_deg * g.sat(mu / 0.4) + g.psi_rolling_deg * _rational(mu_r, 0.2)
                + g.psi_shape_deg * _rational(elongation, 0.4))
     self_weight_pa = rho_b * G_M_S2 * SELF_WEIGHT_HEIGHT_M
 
@@ -212,7 +212,7 @@ def bulk_values(parameters: Mapping[str, Any], conditions: Conditions, gains: Ga
         out.append(("dst", "residual_shear_stress_pa", tau(s), {"normal_stress_pa": s}))
         out.append(("dst", "dilatancy_angle_deg", psi(s), {"normal_stress_pa": s}))
     if conditions.include_aor:
-        aor = (g.aor_floor_deg + g.aor_friction_deg * g.sat(mu / 0.4) + g.aor_rolling_deg * _rational(mu_r, 0.05)
+        aor = (g.aor_floor_deg + g.aor_friction_deg * g.sat(mu / 0.4) + g.aor_rolling_deg * _rational(mu_r, 0.15)
                + g.aor_shape_deg * _rational(elongation, 0.3) + g.aor_cohesion_deg * _rational(cohesion_pa, 3.0e3)
                + 1.5 * mu_w)
         out.append(("aor", "angle_of_repose_deg", aor, {}))

@@ -48,8 +48,13 @@ FACTORS = [
 # true parameters are drawn from the inner part of the box (a user's box brackets the answer)
 TRUE_RANGE = {"particle_density_kg_m3": (2450.0, 2750.0), "friction_pp": (0.3, 0.9),
               "friction_pw": (0.3, 0.7), "particle_stiffness_n_per_m": (1.4e6, 2.6e6)}
+# Directly measured parameters (priors): particle density by pycnometer; particle-wall and
+# particle-particle sliding friction by tilting tests (a plate; a bed of glued particles). Without
+# the sliding-friction prior, rolling resistance and a higher mu_pp trade along a ridge (strength is
+# governed by either, Estrada et al. 2008) and no data of this battery can fix the effect's strength.
 PYCNOMETER_RELATIVE_SD = 0.01
 TILT_TEST_SD = 0.05
+PARTICLE_TILT_TEST_SD = 0.08
 HERTZ_SPREAD_DECADES = 0.3
 
 
@@ -87,16 +92,19 @@ def _strength(name: str, u: float, rng: np.random.Generator, truth: dict) -> flo
     return off + u * (c.plausible_range[1] - off)
 
 
-def make_case(seed: int, kind: str) -> Case:
+def make_case(seed: int, kind: str, effects: dict[str, float] | None = None) -> Case:
+    """A case drawn from ``seed``; ``effects`` ({name: strength}) replaces the drawn hidden effects."""
     rng = np.random.default_rng([seed, 20261122])
     truth: dict[str, Any] = {name: float(rng.uniform(*TRUE_RANGE[name])) for name in TRUE_RANGE}
     names = sorted(candidates())
     count = {"null": 0, "single": 1, "two": 2}[kind]
     chosen = [names[i] for i in rng.choice(len(names), size=count, replace=False)] if count else []
-    effects = {}
+    drawn = {}
     for name in chosen:
-        effects[name] = _strength(name, float(rng.uniform(0.1, 1.0)), rng, truth)
-        truth = params_mod.apply(truth, {candidates()[name].factor: effects[name]})
+        drawn[name] = _strength(name, float(rng.uniform(0.1, 1.0)), rng, truth)
+    effects = dict(drawn if effects is None else effects)
+    for name, strength in effects.items():
+        truth = params_mod.apply(truth, {candidates()[name].factor: strength})
     gains = standin.Gains().perturbed(rng)
     cond = standin_conditions(OPTIONS)
     targets = []
@@ -109,7 +117,10 @@ def make_case(seed: int, kind: str) -> Case:
     priors = [{"parameter": "particle_density_kg_m3", "uncertainty": PYCNOMETER_RELATIVE_SD * rho,
                "value": rho * (1.0 + PYCNOMETER_RELATIVE_SD * float(rng.standard_normal())), "source": "pycnometer"},
               {"parameter": "friction_pw", "uncertainty": TILT_TEST_SD,
-               "value": truth["friction_pw"] + TILT_TEST_SD * float(rng.standard_normal()), "source": "tilt test"}]
+               "value": truth["friction_pw"] + TILT_TEST_SD * float(rng.standard_normal()), "source": "tilt test"},
+              {"parameter": "friction_pp", "uncertainty": PARTICLE_TILT_TEST_SD,
+               "value": truth["friction_pp"] + PARTICLE_TILT_TEST_SD * float(rng.standard_normal()),
+               "source": "particle tilt test"}]
     case = Case(seed, kind, effects, truth, gains, targets, priors)
     case.detectability = detectability(case)
     return case
@@ -130,16 +141,17 @@ def detectability(case: Case) -> dict[str, float]:
         cols.append((values(up) - base) / h * (f["high"] - f["low"]) / 2.0 / sd)
     J = np.column_stack(cols)
     # priors make rho_p and mu_w pseudo-observations: their columns absorb only within the prior sd
-    prior_rows = np.zeros((2, J.shape[1]))
+    prior_rows = np.zeros((3, J.shape[1]))
     prior_rows[0, 0] = (FACTORS[0]["high"] - FACTORS[0]["low"]) / 2 / (PYCNOMETER_RELATIVE_SD * case.truth[FACTORS[0]["name"]])
     prior_rows[1, 2] = (FACTORS[2]["high"] - FACTORS[2]["low"]) / 2 / TILT_TEST_SD
+    prior_rows[2, 1] = (FACTORS[1]["high"] - FACTORS[1]["low"]) / 2 / PARTICLE_TILT_TEST_SD
     M = residual_maker(np.vstack([J, prior_rows]))
     out = {}
     for name in case.effects:
         c = candidates()[name]
         without = params_mod.without_effect(case.truth, name) if c.factor.startswith("effects.") else \
             params_mod.apply(case.truth, {c.factor: c.off_value})
-        delta = np.concatenate([(base - values(without)) / sd, np.zeros(2)])
+        delta = np.concatenate([(base - values(without)) / sd, np.zeros(3)])
         out[name] = float(np.sum((M @ delta) ** 2))
     return out
 

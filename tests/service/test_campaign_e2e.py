@@ -125,8 +125,8 @@ def test_next_iteration_with_an_effect_keeps_the_first(s2):
     assert iterations[0]["parameters"]["effects"] == {} and iterations[1]["parameters"]["effects"] == effects
     assert client.get(f"{API}/campaigns/{cid}/report", params={"number": 1}).json()["targets"] == first["targets"]
     second = {r["quantity"]: r for r in client.get(f"{API}/campaigns/{cid}/report").json()["targets"]}
-    # with rolling friction 0.3 the stand-in's ceiling rises by 20 x 0.3/0.38 = 15.8 deg and the dilatancy by
-    # 5 x 0.3/0.4 = 3.75 deg (x 0.8 in phi): about 55 deg at mu_pp = 1, so 60.6 deg is now within 3 u (9.1 deg)
+    # with rolling friction 0.3 the stand-in's ceiling rises by 30 x 0.3/0.5 = 18 deg and the dilatancy by
+    # 5 x 0.3/0.5 = 3 deg (x 0.8 in phi): about 55 deg at mu_pp = 1, so 60.6 deg is now within 3 u (9.1 deg)
     assert second["friction_angle_deg"]["reachable"] is True
     with app.state.session_factory() as session:
         jobs = session.query(Job).filter(Job.campaign_id == cid).all()
