@@ -56,6 +56,11 @@ PYCNOMETER_RELATIVE_SD = 0.01
 TILT_TEST_SD = 0.05
 PARTICLE_TILT_TEST_SD = 0.08
 HERTZ_SPREAD_DECADES = 0.3
+# how far the measuring world's constants stray from the model's (each gain and exponent x 1 +- this,
+# and another saturation law): a model discrepancy the baseline parameters can absorb within the
+# measurement noise, as a good model's would, but never the same functions (no inverse crime)
+WORLD_PERTURBATION = 0.02
+WORLD_SATURATION_POWER = 8.0
 
 
 def measurement_sd(record: dict) -> float | None:
@@ -105,7 +110,7 @@ def make_case(seed: int, kind: str, effects: dict[str, float] | None = None) -> 
     effects = dict(drawn if effects is None else effects)
     for name, strength in effects.items():
         truth = params_mod.apply(truth, {candidates()[name].factor: strength})
-    gains = standin.Gains().perturbed(rng)
+    gains = standin.Gains().perturbed(rng, relative=WORLD_PERTURBATION, saturation_power=WORLD_SATURATION_POWER)
     cond = standin_conditions(OPTIONS)
     targets = []
     for v in target_records(standin.bulk_values(truth, cond, gains)):
