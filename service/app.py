@@ -20,7 +20,7 @@ from service.errors import install_error_handlers
 from service.security import check_bind, install_token_guard
 
 API_PREFIX = "/api/v1"
-ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules")
+ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules", "effects")
 
 
 def _seed(session_factory) -> None:
