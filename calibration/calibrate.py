@@ -186,7 +186,8 @@ def active_bounds(design: Design, theta: dict[str, float], box: dict | None = No
 
 def prior_rows(priors: Sequence[dict], theta: dict[str, float]) -> list[dict]:
     return [{"parameter": p["parameter"], "value": p["value"], "uncertainty": p["uncertainty"],
-             "source": p.get("source", ""), "standardised_residual": (theta[p["parameter"]] - p["value"]) / p["uncertainty"]}
+             "source": p.get("source", ""),
+             "standardised_residual": (theta[p["parameter"]] - p["value"]) / p["uncertainty"]}
             for p in priors]
 
 

@@ -78,7 +78,8 @@ class Iteration:
     def effects(self) -> list[str]:
         active = set((self.fixed.get("effects") or {}))
         active |= {f["name"].split(".")[1] for f in self.factors if f["name"].startswith("effects.")}
-        if any(f["name"] == "clump_aspect_ratio" for f in self.factors) or self.fixed.get("clump_aspect_ratio", 1.0) != 1.0:
+        shaped = self.fixed.get("clump_aspect_ratio", 1.0) != 1.0
+        if shaped or any(f["name"] == "clump_aspect_ratio" for f in self.factors):
             active.add("particle_shape")
         return sorted(active)
 
@@ -328,7 +329,8 @@ class CalibrationLoop:
             # range is extended by ``iterate`` anyway
             off = c.off_value or 0.0
             gamma = ranked.strength - off if ranked and ranked.strength is not None else c.step
-            top = off + min(max(2.0 * gamma, c.plausible_range[1] - off), PLAUSIBLE_SLACK * (c.plausible_range[1] - off))
+            span = c.plausible_range[1] - off
+            top = off + min(max(2.0 * gamma, span), PLAUSIBLE_SLACK * span)
             factors.append({"name": c.factor, "low": off, "high": top})
         return factors, fixed
 
@@ -342,7 +344,8 @@ class CalibrationLoop:
             return it
         off = c.off_value or 0.0
         cap = off + PLAUSIBLE_SLACK * (c.plausible_range[1] - off)
-        pinned = any(b["parameter"] == c.factor and b["side"] == "high" for b in it.localisation.conflicts["active_bounds"])
+        pinned = any(b["parameter"] == c.factor and b["side"] == "high"
+                     for b in it.localisation.conflicts["active_bounds"])
         top = factors[-1]["high"]
         if pinned and top < cap:
             wider = [dict(f) for f in factors[:-1]] + [{**factors[-1], "high": min(cap, off + 2.0 * (top - off))}]

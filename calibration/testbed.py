@@ -147,7 +147,8 @@ def detectability(case: Case) -> dict[str, float]:
     J = np.column_stack(cols)
     # priors make rho_p and mu_w pseudo-observations: their columns absorb only within the prior sd
     prior_rows = np.zeros((3, J.shape[1]))
-    prior_rows[0, 0] = (FACTORS[0]["high"] - FACTORS[0]["low"]) / 2 / (PYCNOMETER_RELATIVE_SD * case.truth[FACTORS[0]["name"]])
+    rho_sd = PYCNOMETER_RELATIVE_SD * case.truth[FACTORS[0]["name"]]
+    prior_rows[0, 0] = (FACTORS[0]["high"] - FACTORS[0]["low"]) / 2 / rho_sd
     prior_rows[1, 2] = (FACTORS[2]["high"] - FACTORS[2]["low"]) / 2 / TILT_TEST_SD
     prior_rows[2, 1] = (FACTORS[1]["high"] - FACTORS[1]["low"]) / 2 / PARTICLE_TILT_TEST_SD
     M = residual_maker(np.vstack([J, prior_rows]))
@@ -188,8 +189,12 @@ def outcome(case: Case, result: LoopResult, diag, runs: int) -> dict[str, Any]:
         est = final.theta.get(factor) if name in accepted else None
         c = candidates()[name]
         off = c.off_value or 0.0
-        strengths[name] = None if est is None else (
-            abs(math.log(est / true)) <= math.log(1.3) if c.is_switch else abs((est - off) - (true - off)) <= 0.3 * (true - off))
+        if est is None:
+            strengths[name] = None
+        elif c.is_switch:
+            strengths[name] = abs(math.log(est / true)) <= math.log(1.3)
+        else:
+            strengths[name] = abs(est - true) <= 0.3 * (true - off)
     rms = lambda it: float(math.sqrt(np.mean(it.residuals.r_targets ** 2)))  # noqa: E731
     return {"seed": case.seed, "kind": case.kind, "effects": case.effects, "detectability": case.detectability,
             "lof_fired": bool(first.localisation.fails), "lof_p": first.localisation.lack_of_fit.p_value,
@@ -279,12 +284,14 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
 
     rows = [
         Row("null", "lack-of-fit false alarm", "null_false_alarm", *frac(null, lambda o: o["lof_fired"]), 0.08, True),
-        Row("null", "an effect wrongly added", "null_wrong_effect", *frac(null, lambda o: bool(o["accepted"])), 0.10, True),
+        Row("null", "an effect wrongly added", "null_wrong_effect", *frac(null, lambda o: bool(o["accepted"])),
+            0.10, True),
         Row("single, lambda >= 30", "detected (lack of fit fires)", "single_detected",
             *frac(strong, lambda o: o["lof_fired"]), 0.95, False),
         Row("single, lambda >= 30", "true effect rank 1 or in the top alias group", "single_rank1",
             *frac(strong, rank1), 0.90, False),
-        Row("single, lambda >= 30", "median weighted RMS after / before", "single_error_ratio", *ratio(strong), 0.5, True),
+        Row("single, lambda >= 30", "median weighted RMS after / before", "single_error_ratio", *ratio(strong),
+            0.5, True),
         Row("single, lambda >= 30", "post-fit lack of fit passes", None, *frac(strong, lambda o: o["final_lof_passes"]),
             0.80, False),
         Row("single, lambda >= 30", "strength within 30 % of the truth", "single_strength_within30",
@@ -292,7 +299,8 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
         Row("single, 10 <= lambda < 30", "rank 1 (or top alias group)", "mid_rank1", *frac(mid, rank1), 0.70, False),
         Row("single, 10 <= lambda < 30", "top 2", None, *frac(mid, top2), 0.90, False),
         Row("single, lambda < 10", "no wrong claim at p < 0.01", None, *frac(weak, no_wrong_claim), 0.90, False),
-        Row("two, both lambda >= 30", "first pick one of the pair", "two_first_pick", *frac(two, first_pick), 0.85, False),
+        Row("two, both lambda >= 30", "first pick one of the pair", "two_first_pick", *frac(two, first_pick),
+            0.85, False),
         Row("two, both lambda >= 30", "both recovered within 3 iterations", None, *frac(two, both), 0.60, False),
         Row("two, both lambda >= 30", "median weighted RMS after / before", None, *ratio(two), 0.3, True),
     ]

@@ -23,7 +23,8 @@ def _parameters(effect) -> list[dict[str, Any]]:
     for name, prop in schema.get("properties", {}).items():
         out.append({"name": name, "required": name in required, "default": prop.get("default"),
                     "description": prop.get("description", ""),
-                    **{k: prop[k] for k in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum") if k in prop}})
+                    **{k: prop[k] for k in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum")
+                       if k in prop}})
     return out
 
 
@@ -33,7 +34,8 @@ def _candidate(c) -> dict[str, Any]:
             "off_value": c.off_value, "fingerprint": dict(c.fingerprint), "physics": c.physics}
 
 
-@router.get("/effects", summary="Every contact effect and diagnosis candidate: physics, parameters, ranges, fingerprint")
+@router.get("/effects",
+            summary="Every contact effect and diagnosis candidate: physics, parameters, ranges, fingerprint")
 def list_effects() -> dict[str, Any]:
     cands = candidates()
     effects = []

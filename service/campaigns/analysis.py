@@ -15,7 +15,7 @@ import numpy as np
 from calibration import calibrate as cal
 from calibration.fitting import TargetModel, fit_targets
 from calibration.localise import localise
-from calibration.records import Measured
+from calibration.records import Measured, measurement_variances
 from calibration.verdict import verdict
 from doe.confirm import confirm
 from doe.designs import Design
@@ -66,16 +66,18 @@ def analyse(config, design_dict: dict, runs, targets) -> dict[str, Any]:
     parameters = {name: result.parameters[name] for name in design.names}
     predictions, target_rows = {}, []
     by_name = {m.key.name: m for m in modelled}
+    variances = measurement_variances([m.target for m in models], config.default_relative_uncertainty)
     for row in result.targets:
         name = row["response"]
         predictions[name] = {"value": row["predicted"], "pi_low": row["pi_low"], "pi_high": row["pi_high"],
                              "ci_low": row["ci_low"], "ci_high": row["ci_high"]}
         meas = by_name[name].target
-        var = meas.mean_variance(config.default_relative_uncertainty)
+        var = variances[meas.key]
         target_rows.append({
             "measurement_id": meas.id, "response": name, "test": meas.key.test, "quantity": meas.key.quantity,
             "condition": meas.key.condition_dict, "measured": meas.mean, "uncertainty": math.sqrt(var.variance),
-            "uncertainty_assumed": var.source == "assumed", "predicted": row["predicted"], "pi_low": row["pi_low"],
+            "uncertainty_assumed": var.source == "assumed", "uncertainty_source": var.source,
+            "predicted": row["predicted"], "pi_low": row["pi_low"],
             "pi_high": row["pi_high"], "standardised_residual": row["standardised_residual"],
             "reachability": reach[name]["min_standardised_misfit"], "reachable": reach[name]["reachable"],
         })

@@ -61,7 +61,8 @@ def run_analytic(spec: JobSpec, progress=None, should_cancel=None) -> LabResult:
     records = standin.battery(parameters, spec.seed, conditions(spec))
     density = next(r["value"] for r in records if r["quantity"] == "bulk_density_kg_m3")
     records += [
-        {"test": "fill", "quantity": "packing_height_m", "value": preset.packing_height_m, "unit": "m", "condition": {}},
+        {"test": "fill", "quantity": "packing_height_m", "value": preset.packing_height_m, "unit": "m",
+         "condition": {}},
         {"test": "fill", "quantity": "bulk_mass_kg", "unit": "kg", "condition": {},
          "value": density * preset.container_area_m2 * preset.packing_height_m},
     ]
