@@ -229,9 +229,9 @@ class Row:
     criterion: str
     key: str | None
     value: float
+    n: int
     target: float
     at_most: bool
-    n: int
 
     @property
     def passes(self) -> bool:

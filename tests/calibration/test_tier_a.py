@@ -31,15 +31,13 @@ def outcomes():
         return pool.map(_one, work)
 
 
-REQUIRED = ("null_false_alarm", "null_wrong_effect", "single_detected", "single_rank1", "single_error_ratio",
-            "two_first_pick")
-
-
 def test_acceptance_on_the_fixed_seed_subset(outcomes):
     rows = acceptance(outcomes)
     print()
     print(table_text(rows))
     print(machine_line(rows))
-    by_key = {r.key: r for r in rows if r.key}
-    failing = [k for k in REQUIRED if by_key[k].n > 0 and not by_key[k].passes]
+    # every row the subset has cases for meets the design note's target (the lambda < 10 bin is empty
+    # in this subset: the draws rarely give so weak an effect, see docs/diagnosis.md)
+    failing = [f"{r.case}: {r.criterion} = {r.value:.3f}" for r in rows if r.n > 0 and not r.passes]
     assert not failing, f"rows below target on the subset: {failing}"
+    assert sum(r.n > 0 for r in rows) >= 11
