@@ -207,6 +207,10 @@ def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[
 def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels, r, M):
     rt = M @ r
     worst = [labels[i] for i in np.argsort(-np.abs(rt[:len(labels)]))[:3]]
+    if loc.lack_of_fit.dof <= 0:
+        return ("inconclusive", "as many free parameters as measured values: every misfit can be absorbed, so "
+                "none can be attributed; measure more (each shear load, E' at several stresses, dilatancy, "
+                "the angle of repose) or fix parameters measured directly", [])
     if not loc.fails:
         return ("no misfit", "the model agrees with the measurements within their noise; no effect is needed",
                 [])

@@ -117,3 +117,54 @@ def report(campaign_id: int, number: int | None = IterationQ, session: Session =
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     return {"campaign_id": campaign.id, "name": campaign.name, "material_id": campaign.material_id,
             "iteration": it.number, "evaluator": campaign.evaluator, "fidelity": campaign.fidelity, **value}
+
+
+@router.get("/{campaign_id}/diagnosis",
+            summary="Which effect is missing: ranking (effect, LM, p, explained share, strength), alias groups, "
+                    "fingerprints, what to measure next")
+def diagnosis(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    campaign, it, value = _product(session, campaign_id, number, "report", "report")
+    if "diagnosis" not in value:
+        reason = ("the model reproduces the measurements; nothing to diagnose" if value.get("verdict") == "calibrated"
+                  else f"the diagnosis batteries are not done (phase {it.phase})")
+        raise Conflict(f"campaign {campaign_id} iteration {it.number} has no diagnosis: {reason}",
+                       ["path", "campaign_id"])
+    return {"campaign_id": campaign.id, "iteration": it.number, **value["diagnosis"]}
+
+
+@router.get("/{campaign_id}/history",
+            summary="Per iteration: effects, optimum, weighted error overall and per test with the noise band, "
+                    "verdict, effect added next; per target the residual in each iteration")
+def history(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+    from service.campaigns.analysis import active_effects
+
+    campaign = get_campaign(session, campaign_id)
+    done = [it for it in sorted(campaign.iterations, key=lambda i: i.number) if it.report]
+    entries, previous, targets = [], set(), {}
+    for it in done:
+        report = it.report
+        effects = sorted(active_effects(it.parameters))
+        lof = report.get("lack_of_fit") or {}
+        diag = report.get("diagnosis")
+        entries.append({
+            "number": it.number, "effects": effects, "added_effect": sorted(set(effects) - previous) or None,
+            "optimum": report.get("optimum"), "parameter_std": (it.optimum or {}).get("parameter_std"),
+            "chi2": lof.get("statistic"), "chi2_per_dof": lof.get("chi2_per_dof"), "dof": lof.get("dof"),
+            "noise_band": lof.get("noise_band"), "lack_of_fit_p": lof.get("p_value"),
+            "per_test": {t["test"]: t["chi2"] for t in report.get("tests", [])},
+            "verdict": report.get("verdict"),
+            "top_effect": (diag or {}).get("ranking", [{}])[0].get("effect") if diag and diag.get("ranking") else None,
+        })
+        previous = set(effects)
+        for row in report.get("targets", []):
+            if row.get("status") != "modelled":
+                continue
+            label = row.get("response") or row["quantity"]
+            targets.setdefault(label, {"test": row["test"], "quantity": row["quantity"],
+                                       "condition": row["condition"], "residuals": {}})
+            targets[label]["residuals"][str(it.number)] = row.get("standardised_residual")
+    for a, b in zip(entries, entries[1:]):
+        a["effect_added_next"] = b["added_effect"]
+    if entries:
+        entries[-1]["effect_added_next"] = None
+    return {"campaign_id": campaign.id, "iterations": entries, "targets": targets}

@@ -132,6 +132,78 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
                        "simulator_sd": {m.key.name: conf.sim_sd.get(m.key) for m in modelled}})
 
 
+def active_effects(iteration_parameters: dict) -> set[str]:
+    """Candidate names already in the model: fixed effects, effect factors, a shape factor."""
+    active = set((iteration_parameters.get("effects") or {}))
+    for f in iteration_parameters.get("factors") or []:
+        if f["name"].startswith("effects."):
+            active.add(f["name"].split(".")[1])
+        if f["name"] == "clump_aspect_ratio":
+            active.add("particle_shape")
+    if (iteration_parameters.get("fixed") or {}).get("clump_aspect_ratio", 1.0) != 1.0:
+        active.add("particle_shape")
+    return active
+
+
+def candidate_points(config, optimum: dict, iteration_parameters: dict) -> list[tuple[str, dict[str, float]]]:
+    """(candidate, factor values) of the diagnosis batteries: the optimum with each candidate not yet
+    in the model switched on at its secant step (a switch-type effect at its matched strength)."""
+    from calibration import parameters as factor_paths
+    from engine.candidates import candidates
+    from engine.lab.spec import MicroParameters
+
+    active = active_effects(iteration_parameters)
+    out = []
+    for name, c in candidates().items():
+        if name in active:
+            continue
+        values = dict(optimum["parameters"])
+        if c.is_switch:
+            full = factor_paths.apply(config.fixed_parameters, values)
+            values[c.factor] = float(c.reference(MicroParameters.model_validate(full)))
+        else:
+            values[c.factor] = (c.off_value or 0.0) + c.step
+        out.append((name, values))
+    return out
+
+
+def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[dict],
+             confirmation_seed: int, candidate_records: list[tuple[str, list[dict]]]) -> dict[str, Any]:
+    """Rank the candidate effects (calibration.attribute) from their batteries at the optimum."""
+    from calibration.attribute import Signature, attribute
+    from calibration.fitting import run_values
+    from calibration.keys import find
+    from engine.candidates import candidates
+
+    design, models = fit(design_dict, runs, targets)
+    modelled = [m for m in models if m.fit is not None]
+    conf = cal.confirm(modelled, [confirmation_records], [confirmation_seed])
+    theta = dict(optimum["parameters"])
+    priors = [p.model_dump() for p in config.priors]
+    res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty)
+    loc = localise(res, active_bounds=cal.active_bounds(design, theta), priors=cal.prior_rows(priors, theta),
+                   reachability=optimum.get("reachability", []), seed=config.seed)
+    table = candidates()
+    signatures = []
+    for name, records in candidate_records:
+        c = table[name]
+        values = run_values(records)
+        step = 1.0 if c.is_switch else c.step
+        diff = []
+        for i, key in enumerate(res.keys):
+            sim_key = find(values.keys(), key)
+            on = values[sim_key] if sim_key is not None else res.model[i]
+            diff.append((on - res.model[i]) / res.sd[i] / step)
+        vector = np.concatenate([diff, np.zeros(len(res.prior_names))])
+        reference = None
+        if c.is_switch:
+            reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
+        signatures.append(Signature(c, vector, step, reference))
+    att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys])
+    return _json_safe({**att.to_dict(), "lack_of_fit": loc.lack_of_fit.to_dict(),
+                       "batteries": [name for name, _ in candidate_records]})
+
+
 def report_verdict(unreachable: list, assessment: dict) -> dict[str, Any]:
     loc = assessment.get("localisation")
     surrogate = assessment.get("surrogate_check") or {}

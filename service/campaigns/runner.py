@@ -7,7 +7,9 @@ between two steps) resumes where the database says: nothing lives in memory.
 Job submission uses an idempotency key per run, so a step repeated after a
 crash finds the job it already queued instead of queuing a twin.
 
-Phases of an iteration: design -> batteries -> analysis -> confirmation -> report -> done.
+Phases of an iteration: design -> batteries -> analysis -> confirmation -> report -> done, and when
+the report's verdict is not "calibrated": report -> diagnosis (one battery per candidate effect at the
+optimum, with the confirmation's seed) -> diagnosed -> done, the ranking stored in the report.
 Paused campaigns are skipped; their queued batteries keep running in the queue
 and are picked up on resume.
 """
@@ -91,6 +93,10 @@ class CampaignRunner:
             return self._batteries(session, campaign, config, it, kind="confirmation", next_phase="report")
         if it.phase == "report":
             return self._report(session, campaign, config, it)
+        if it.phase == "diagnosis":
+            return self._batteries(session, campaign, config, it, kind="diagnosis", next_phase="diagnosed")
+        if it.phase == "diagnosed":
+            return self._diagnosed(session, campaign, config, it)
         if it.phase == "done":  # running again after POST .../iterations: the next iteration begins
             self._new_iteration(session, campaign, config)
             return True
@@ -139,16 +145,25 @@ class CampaignRunner:
         return self._set_phase(session, it, "design", "batteries", design=view)
 
     # -- batteries ---------------------------------------------------------------------------
-    def _spec(self, config: CampaignCreate, run: CampaignRun) -> JobSpec:
-        parameters = MicroParameters.model_validate({**config.fixed_parameters, **run.natural})
+    def _spec(self, config: CampaignCreate, run: CampaignRun, targets=()) -> JobSpec:
+        """The run's job: fixed parameters with the run's factor values (dotted effect paths applied),
+        and options that make the battery compute every target's condition (DST loads, E' stresses)."""
+        from calibration import parameters as factor_paths
+        from calibration.conditions import battery_options
+        from calibration.keys import ResponseKey
+
+        parameters = MicroParameters.model_validate(factor_paths.apply(config.fixed_parameters, run.natural))
+        options = battery_options([ResponseKey.from_record(t) for t in targets], config.options)
+        options = {k: v for k, v in options.items() if k in TestOptions.model_fields}
         return JobSpec(test=config.test, fidelity=config.fidelity, seed=run.seed, parameters=parameters,
-                       options=TestOptions.model_validate(config.options))
+                       options=TestOptions.model_validate(options))
 
     def _submit(self, session, campaign, config, run) -> bool:
         from service.queue import submit_job
 
         try:
-            job = submit_job(session, self._spec(config, run), evaluator=config.evaluator,
+            spec = self._spec(config, run, self._targets(session, campaign, config))
+            job = submit_job(session, spec, evaluator=config.evaluator,
                              priority=config.priority, idempotency_key=f"campaign:{campaign.id}:run:{run.id}",
                              client_id=campaign.client_id, campaign_id=campaign.id)
         except TooMany:
@@ -228,15 +243,38 @@ class CampaignRunner:
         assessment = analysis.assess(config, it.design["doe"], design_runs, targets, it.optimum,
                                      list((confirmation.responses or {}).values()), confirmation.seed)
         report = build_report(config, it.models, it.optimum, confirmation, targets, assessment)
-        now = utcnow()
-        if not self._set_phase(session, it, "report", "done", report=report,
-                               confirmation={"job_id": confirmation.job_id, "seed": confirmation.seed,
-                                             "parameters": confirmation.natural,
-                                             "responses": confirmation.responses},
-                               finished_at=now):
+        stored = {"job_id": confirmation.job_id, "seed": confirmation.seed, "parameters": confirmation.natural,
+                  "responses": confirmation.responses}
+        points = analysis.candidate_points(config, it.optimum, it.parameters) if (
+            config.diagnose and report["verdict"] != "calibrated") else []
+        if points:
+            for k, (name, natural) in enumerate(points):
+                session.add(CampaignRun(iteration_id=it.id, kind="diagnosis", std_order=k + 1, run_order=k + 1,
+                                        is_centre=False, coded={}, natural=natural, seed=confirmation.seed,
+                                        status="pending"))
+            return self._set_phase(session, it, "report", "diagnosis", report=report, confirmation=stored)
+        if not self._set_phase(session, it, "report", "done", report=report, confirmation=stored,
+                               finished_at=utcnow()):
             return False
+        return self._complete(session, campaign)
+
+    def _diagnosed(self, session, campaign, config, it) -> bool:
+        targets = self._targets(session, campaign, config)
+        confirmation = next(r for r in it.runs if r.kind == "confirmation")
+        design_runs = [r for r in it.runs if r.kind == "design"]
+        runs = sorted((r for r in it.runs if r.kind == "diagnosis"), key=lambda r: r.std_order)
+        points = analysis.candidate_points(config, it.optimum, it.parameters)
+        diagnosis = analysis.diagnose(config, it.design["doe"], design_runs, targets, it.optimum,
+                                      list((confirmation.responses or {}).values()), confirmation.seed,
+                                      [(name, list((r.responses or {}).values())) for (name, _), r in zip(points, runs)])
+        report = {**(it.report or {}), "diagnosis": diagnosis}
+        if not self._set_phase(session, it, "diagnosed", "done", report=report, finished_at=utcnow()):
+            return False
+        return self._complete(session, campaign)
+
+    def _complete(self, session, campaign) -> bool:
         campaign.status = "completed"
-        campaign.finished_at = now
+        campaign.finished_at = utcnow()
         session.commit()
         return True
 

@@ -5,6 +5,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
+from calibration import parameters as factor_paths
 from doe.constraints import parse_constraint
 from doe.factors import DoeError
 from engine.lab.result import known_quantity, known_test
@@ -120,6 +121,10 @@ class CampaignCreate(BaseModel):
         default_factory=list, description="directly measured factors (e.g. particle density) with uncertainty"
     )
     allow_extrapolation: bool = False
+    diagnose: bool = Field(
+        True, description="after a report that is not 'calibrated', run one battery per candidate effect at the "
+        "optimum and rank the missing effects (docs/diagnosis.md)",
+    )
     seed: int = Field(0, ge=0, le=2**31 - 1_000_000)
     priority: int = 0
 
@@ -129,7 +134,11 @@ class CampaignCreate(BaseModel):
         names = [f.name for f in factors]
         for name in names:
             if name not in FACTOR_NAMES:
-                raise ValueError(f"factor {name!r} is not a micro parameter; one of {list(FACTOR_NAMES)}")
+                try:  # an effect's parameter, e.g. effects.rolling_epsd2.rolling_friction
+                    factor_paths.check_factor(name)
+                except ValueError as exc:
+                    raise ValueError(f"factor {name!r} is not a micro parameter ({', '.join(FACTOR_NAMES)}) "
+                                     f"nor an effect parameter: {exc}") from None
         if len(set(names)) != len(names):
             raise ValueError("factor names repeat")
         return factors
@@ -165,7 +174,7 @@ class CampaignCreate(BaseModel):
                 raise ValueError(f"prior on {prior.parameter!r}: only factors can have priors")
         for factor in self.factors:  # each corner must be a valid micro parameter set
             for level in (factor.low, factor.high):
-                MicroParameters.model_validate({**self.fixed_parameters, factor.name: level})
+                MicroParameters.model_validate(factor_paths.apply(self.fixed_parameters, {factor.name: level}))
         return self
 
 
@@ -184,3 +193,28 @@ class IterationIn(BaseModel):
     design: DesignIn | None = None
     targets: list[TargetIn] | None = None
     options: dict[str, Any] | None = None
+    add_effect: str | None = Field(
+        None, description="a diagnosis candidate (GET /api/v1/effects) whose strength becomes one more design "
+        "factor over its plausible range (or strength_range), keeping the previous factors",
+    )
+    strength_range: tuple[float, float] | None = Field(None, description="low, high of the added effect's strength")
+
+    @field_validator("add_effect")
+    @classmethod
+    def _known_effect(cls, name: str | None) -> str | None:
+        if name is not None:
+            from engine.candidates import get as get_candidate
+
+            get_candidate(name)  # ValueError naming the candidates
+        return name
+
+    @model_validator(mode="after")
+    def _range(self) -> "IterationIn":
+        if self.strength_range is not None:
+            if self.add_effect is None:
+                raise ValueError("strength_range needs add_effect")
+            if not self.strength_range[0] < self.strength_range[1]:
+                raise ValueError("strength_range: low must be below high")
+        if self.add_effect is not None and self.factors is not None:
+            raise ValueError("give either factors or add_effect, not both")
+        return self

@@ -73,8 +73,12 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
         raise Conflict(f"campaign {campaign_id} is {campaign.status}; a next iteration starts only after "
                        "the current one completed", ["path", "campaign_id"])
     config = dict(campaign.config)
-    for key, value in changes.model_dump(mode="json", exclude_none=True).items():
+    changed = changes.model_dump(mode="json", exclude_none=True)
+    add_effect, strength_range = changed.pop("add_effect", None), changed.pop("strength_range", None)
+    for key, value in changed.items():
         config[key] = value
+    if add_effect is not None:
+        config = with_effect_factor(config, add_effect, strength_range)
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
     build_design(validated.factors, validated.design, validated.seed)
     config = validated.model_dump(mode="json")
@@ -85,6 +89,36 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     if not won:
         raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])
     return get_campaign(session, campaign_id)
+
+
+def with_effect_factor(config: dict, name: str, strength_range=None) -> dict:
+    """The configuration with candidate ``name``'s strength as one more factor (its plausible range
+    from its 'off' value, a log range about the matched value for a switch-type effect, or the
+    user's range) and a half fraction of highest resolution for the larger design."""
+    from calibration.calibrate import generators_for
+    from engine.candidates import get as get_candidate
+    from engine.lab.spec import MicroParameters
+    from calibration import parameters as factor_paths
+
+    c = get_candidate(name)
+    if any(f["name"] == c.factor for f in config["factors"]):
+        raise Conflict(f"{name} is already a factor ({c.factor})", "add_effect")
+    if strength_range is not None:
+        low, high = strength_range
+    elif c.is_switch:
+        optimum = factor_paths.apply(config.get("fixed_parameters") or {},
+                                     {f["name"]: 0.5 * (f["low"] + f["high"]) for f in config["factors"]})
+        ref = float(c.reference(MicroParameters.model_validate(optimum)))
+        low, high = ref / 4.0, ref * 4.0
+    else:
+        low, high = (c.off_value or 0.0), c.plausible_range[1]
+    factors = list(config["factors"]) + [{"name": c.factor, "low": low, "high": high, "unit": c.unit,
+                                          "log": c.is_switch}]
+    generators = generators_for(len(factors))
+    design = dict(config.get("design") or {})
+    design.update({"type": "fractional", "generators": generators} if generators else {"type": "full",
+                                                                                       "generators": None})
+    return {**config, "factors": factors, "design": design}
 
 
 def iteration(session: Session, campaign: Campaign, number: int | None = None) -> CampaignIteration:

@@ -19,10 +19,15 @@ def test_analytic_campaign_from_creation_to_report(s2):
     runs = iteration["runs"]
     design_runs = [r for r in runs if r["kind"] == "design"]
     assert len(design_runs) == 11 and sum(r["is_centre"] for r in design_runs) == 3
-    assert len({r["seed"] for r in runs}) == len(runs)  # centre replicates (and confirmation) use distinct seeds
+    own = [r for r in runs if r["kind"] != "diagnosis"]
+    assert len({r["seed"] for r in own}) == len(own)  # centre replicates (and confirmation) use distinct seeds
+    # the diagnosis batteries reuse the confirmation's seed: common random numbers at the optimum
+    confirmation_seed = next(r["seed"] for r in runs if r["kind"] == "confirmation")
+    assert {r["seed"] for r in runs if r["kind"] == "diagnosis"} == {confirmation_seed}
     with app.state.session_factory() as session:
         jobs = session.query(Job).filter(Job.campaign_id == cid).all()
-    assert len(jobs) == 12 and {j.id for j in jobs} == {r["job_id"] for r in runs}
+    assert {j.id for j in jobs} == {r["job_id"] for r in runs}
+    assert len(jobs) == 12 + sum(r["kind"] == "diagnosis" for r in runs)
     assert all(j.evaluator == "analytic" and j.spec["test"] == "battery" for j in jobs)
     assert {j.seed for j in jobs} == {r["seed"] for r in runs}
     assert iteration["parameters"]["factors"][0]["name"] == "particle_density_kg_m3"
@@ -128,7 +133,8 @@ def test_next_iteration_with_an_effect_keeps_the_first(s2):
     # with rolling friction 0.3 the stand-in's ceiling rises by 30 x 0.3/0.5 = 18 deg and the dilatancy by
     # 5 x 0.3/0.5 = 3 deg (x 0.8 in phi): about 55 deg at mu_pp = 1, so 60.6 deg is now within 3 u (9.1 deg)
     assert second["friction_angle_deg"]["reachable"] is True
+    second_runs = [r for r in iterations[1]["runs"] if r["kind"] != "diagnosis"]
+    assert len(second_runs) == 12
     with app.state.session_factory() as session:
-        jobs = session.query(Job).filter(Job.campaign_id == cid).all()
-    assert len(jobs) == 24
-    assert all(j.spec["parameters"]["effects"] == effects for j in jobs if j.id > 12)
+        jobs = {j.id: j for j in session.query(Job).filter(Job.campaign_id == cid).all()}
+    assert all(jobs[r["job_id"]].spec["parameters"]["effects"] == effects for r in second_runs)
