@@ -195,7 +195,8 @@ def campaign_report(args) -> int:
         text += f"\n\n{r['verdict']}: {r['meaning']}"
     lof = r.get("lack_of_fit")
     if lof:
-        text += (f"\nlack of fit: chi2 {_fmt(lof['statistic'])} on {lof['dof']} dof (per dof {_fmt(lof['chi2_per_dof'])}, "
+        text += (f"\nlack of fit: chi2 {_fmt(lof['statistic'])} on {lof['dof']} dof "
+                 f"(per dof {_fmt(lof['chi2_per_dof'])}, "
                  f"noise band {_fmt(lof['noise_band'][0])}-{_fmt(lof['noise_band'][1])}), p {_fmt(lof['p_value'])}")
     for b in (r.get("conflicts") or {}).get("active_bounds", []):
         text += f"\nat a bound: {b['parameter']} at its {b['side']} end, pushing {b['pushes']}"

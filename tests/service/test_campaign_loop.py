@@ -17,7 +17,8 @@ def test_diagnosis_names_the_effect_and_adding_it_lets_the_error_fall(s2):
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
     report = client.get(f"{API}/campaigns/{cid}/report").json()
     assert report["verdict"] in ("targets out of reach", "model misses the measurements")
-    assert not (report["verdict"] != "calibrated" and (report.get("surrogate_check") or {}).get("verdict") == "calibrated")
+    # the surface check never speaks for the measurements
+    assert (report.get("surrogate_check") or {}).get("verdict") != "calibrated"
     diagnosis = client.get(f"{API}/campaigns/{cid}/diagnosis").json()
     ranking = diagnosis["ranking"]
     assert {r["effect"] for r in ranking} <= set(candidates()) and ranking
