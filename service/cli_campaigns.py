@@ -179,6 +179,41 @@ def campaign_action(args) -> int:
     return _emit(args, c, _status_text(c))
 
 
+def campaign_diagnosis(args) -> int:
+    params = {"number": args.iteration} if args.iteration else None
+    d = _call(args, "GET", f"/campaigns/{args.id}/diagnosis", params=params)
+    rows = [[r["effect"], r["title"], r["lm"], r["p_holm"], r["explained"],
+             r["strength"] if r["strength"] is not None else r.get("fraction_of_switch"),
+             "yes" if r["plausible"] else "no", r["alias_group"] or ""] for r in d["ranking"]]
+    text = (f"campaign {d['campaign_id']} iteration {d['iteration']}: {d['verdict']}\n{d['message']}\n\n"
+            + _table(["effect", "physics", "LM", "Holm p", "explained", "strength", "plausible", "alias group"],
+                     [[_fmt(c) if isinstance(c, float) else c for c in row] for row in rows]))
+    for g in d.get("alias_groups", []):
+        text += f"\nalias group {g['group']}: {', '.join(g['effects'])}: {g['message']}"
+    if d.get("measure_next"):
+        text += "\nmeasure next: " + "; ".join(d["measure_next"])
+    return _emit(args, d, text)
+
+
+def campaign_history(args) -> int:
+    h = _call(args, "GET", f"/campaigns/{args.id}/history")
+    rows = [[e["number"], ", ".join(e["effects"]) or "-", e["chi2_per_dof"],
+             "-".join(_fmt(x) for x in e["noise_band"] or []), e["verdict"],
+             ", ".join(e.get("effect_added_next") or []) or "-"] for e in h["iterations"]]
+    return _emit(args, h, _table(["iteration", "effects", "chi2/dof", "noise band", "verdict", "added next"],
+                                 [[_fmt(c) if isinstance(c, float) else c for c in row] for row in rows]))
+
+
+def campaign_next(args) -> int:
+    body = {}
+    if args.add_effect:
+        body["add_effect"] = args.add_effect
+    if args.strength_range:
+        body["strength_range"] = [float(x) for x in args.strength_range.split(":")]
+    c = _call(args, "POST", f"/campaigns/{args.id}/iterations", body=body)
+    return _emit(args, c, _status_text(c))
+
+
 def campaign_report(args) -> int:
     params = {"number": args.iteration} if args.iteration else None
     r = _call(args, "GET", f"/campaigns/{args.id}/report", params=params)
@@ -291,6 +326,15 @@ def register(subparsers) -> None:
     report = _leaf(csub, "report", campaign_report, "measured vs predicted vs confirmed per target")
     report.add_argument("id", type=int)
     report.add_argument("--iteration", type=int)
+    diag = _leaf(csub, "diagnosis", campaign_diagnosis, "which effect is missing: ranking, alias groups")
+    diag.add_argument("id", type=int)
+    diag.add_argument("--iteration", type=int)
+    _leaf(csub, "history", campaign_history, "weighted error per iteration and the effect added").add_argument(
+        "id", type=int)
+    nxt = _leaf(csub, "next", campaign_next, "start the next iteration, e.g. with an effect added as a factor")
+    nxt.add_argument("id", type=int)
+    nxt.add_argument("--add-effect", help="a candidate from GET /api/v1/effects, e.g. rolling_epsd2")
+    nxt.add_argument("--strength-range", help="LOW:HIGH of the added effect's strength (SI)")
 
     schedule = subparsers.add_parser("schedule", help="cron schedules that start campaigns")
     ssub = schedule.add_subparsers(dest="schedule_command", required=True)
