@@ -15,7 +15,7 @@ from engine.effects.base import Candidate
 CANDIDATE = Candidate(
     name="particle_shape", title="particle shape (elongation)", factor="clump_aspect_ratio",
     unit="1", plausible_range=(1.2, 2.0), step=0.3, off_value=1.0,
-    fingerprint={"bulk_density": "-", "modulus_level": "+", "friction_angle": "+", "dilatancy": "++",
+    fingerprint={"bulk_density": "-", "modulus_level": "+-", "friction_angle": "+", "dilatancy": "++",
                  "angle_of_repose": "+", "pull_force": "+"},
     physics="Elongated, interlocking grains dilate more and resist shear more than spheres: friction "
             "angle, dilatancy (lid rise), angle of repose and pull-out rise and the packing loosens. "
