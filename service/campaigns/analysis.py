@@ -167,9 +167,26 @@ def candidate_points(config, optimum: dict, iteration_parameters: dict) -> list[
     return out
 
 
+BASELINE = "baseline"
+
+
+def diagnosis_plan(config, optimum: dict, iteration_parameters: dict, confirmation_seed: int) -> list[tuple]:
+    """(name, factor values, seed) of every diagnosis battery, in a fixed order: a second baseline
+    battery at the optimum (so the optimum has two seeds), then each candidate at both seeds."""
+    seeds = [confirmation_seed, confirmation_seed + 1]
+    plan = [(BASELINE, dict(optimum["parameters"]), seeds[1])]
+    for name, values in candidate_points(config, optimum, iteration_parameters):
+        plan += [(name, values, seed) for seed in seeds]
+    return plan
+
+
 def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[dict],
-             confirmation_seed: int, candidate_records: list[tuple[str, list[dict]]]) -> dict[str, Any]:
-    """Rank the candidate effects (calibration.attribute) from their batteries at the optimum."""
+             confirmation_seed: int, planned: list[tuple[str, int, list[dict]]]) -> dict[str, Any]:
+    """Rank the candidate effects (calibration.attribute) from their batteries at the optimum.
+
+    ``planned``: (name, seed, records) of the diagnosis batteries (``diagnosis_plan`` order). The
+    optimum's two seeds give the baseline; each candidate's signature is its mean over the same two
+    seeds minus the baseline's (common random numbers)."""
     from calibration.attribute import Signature, attribute
     from calibration.fitting import run_values
     from calibration.keys import find
@@ -177,7 +194,9 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
 
     design, models = fit(design_dict, runs, targets)
     modelled = [m for m in models if m.fit is not None]
-    conf = cal.confirm(modelled, [confirmation_records], [confirmation_seed])
+    baseline = [(seed, records) for name, seed, records in planned if name == BASELINE]
+    conf = cal.confirm(modelled, [confirmation_records] + [r for _, r in baseline],
+                       [confirmation_seed] + [s for s, _ in baseline])
     theta = dict(optimum["parameters"])
     priors = [p.model_dump() for p in config.priors]
     res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty)
@@ -185,14 +204,15 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
                    reachability=optimum.get("reachability", []), seed=config.seed)
     table = candidates()
     signatures = []
-    for name, records in candidate_records:
+    names = [n for n in dict.fromkeys(name for name, _, _ in planned) if n != BASELINE]
+    for name in names:
         c = table[name]
-        values = run_values(records)
+        values = [run_values(records) for n, _, records in planned if n == name]
         step = 1.0 if c.is_switch else c.step
         diff = []
         for i, key in enumerate(res.keys):
-            sim_key = find(values.keys(), key)
-            on = values[sim_key] if sim_key is not None else res.model[i]
+            sim_key = find(values[0].keys(), key)
+            on = float(np.mean([v[sim_key] for v in values])) if sim_key is not None else res.model[i]
             diff.append((on - res.model[i]) / res.sd[i] / step)
         vector = np.concatenate([diff, np.zeros(len(res.prior_names))])
         reference = None
@@ -201,7 +221,7 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
         signatures.append(Signature(c, vector, step, reference))
     att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys])
     return _json_safe({**att.to_dict(), "lack_of_fit": loc.lack_of_fit.to_dict(),
-                       "batteries": [name for name, _ in candidate_records]})
+                       "seeds": sorted({confirmation_seed} | {s for _, s, _ in planned}), "batteries": len(planned)})
 
 
 def report_verdict(unreachable: list, assessment: dict) -> dict[str, Any]:

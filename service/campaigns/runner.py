@@ -245,13 +245,12 @@ class CampaignRunner:
         report = build_report(config, it.models, it.optimum, confirmation, targets, assessment)
         stored = {"job_id": confirmation.job_id, "seed": confirmation.seed, "parameters": confirmation.natural,
                   "responses": confirmation.responses}
-        points = analysis.candidate_points(config, it.optimum, it.parameters) if (
+        plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed) if (
             config.diagnose and report["verdict"] != "calibrated") else []
-        if points:
-            for k, (name, natural) in enumerate(points):
+        if plan:
+            for k, (name, natural, seed) in enumerate(plan):
                 session.add(CampaignRun(iteration_id=it.id, kind="diagnosis", std_order=k + 1, run_order=k + 1,
-                                        is_centre=False, coded={}, natural=natural, seed=confirmation.seed,
-                                        status="pending"))
+                                        is_centre=False, coded={}, natural=natural, seed=seed, status="pending"))
             return self._set_phase(session, it, "report", "diagnosis", report=report, confirmation=stored)
         if not self._set_phase(session, it, "report", "done", report=report, confirmation=stored,
                                finished_at=utcnow()):
@@ -263,10 +262,11 @@ class CampaignRunner:
         confirmation = next(r for r in it.runs if r.kind == "confirmation")
         design_runs = [r for r in it.runs if r.kind == "design"]
         runs = sorted((r for r in it.runs if r.kind == "diagnosis"), key=lambda r: r.std_order)
-        points = analysis.candidate_points(config, it.optimum, it.parameters)
+        plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed)
         diagnosis = analysis.diagnose(config, it.design["doe"], design_runs, targets, it.optimum,
                                       list((confirmation.responses or {}).values()), confirmation.seed,
-                                      [(name, list((r.responses or {}).values())) for (name, _), r in zip(points, runs)])
+                                      [(name, seed, list((r.responses or {}).values()))
+                                       for (name, _, seed), r in zip(plan, runs)])
         report = {**(it.report or {}), "diagnosis": diagnosis}
         if not self._set_phase(session, it, "diagnosed", "done", report=report, finished_at=utcnow()):
             return False

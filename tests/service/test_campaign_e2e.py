@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 
 from conftest_s2 import API, campaign_body, run_to_end, s2, thesis_material_id  # noqa: F401
+from engine.candidates import candidates
 from service.models.job import Job
 
 
@@ -21,9 +22,12 @@ def test_analytic_campaign_from_creation_to_report(s2):
     assert len(design_runs) == 11 and sum(r["is_centre"] for r in design_runs) == 3
     own = [r for r in runs if r["kind"] != "diagnosis"]
     assert len({r["seed"] for r in own}) == len(own)  # centre replicates (and confirmation) use distinct seeds
-    # the diagnosis batteries reuse the confirmation's seed: common random numbers at the optimum
+    # the diagnosis batteries run at the optimum with the confirmation's seed and one more (two seeds, common
+    # random numbers): a second baseline, then every candidate effect at both
     confirmation_seed = next(r["seed"] for r in runs if r["kind"] == "confirmation")
-    assert {r["seed"] for r in runs if r["kind"] == "diagnosis"} == {confirmation_seed}
+    diagnosis_runs = [r for r in runs if r["kind"] == "diagnosis"]
+    assert {r["seed"] for r in diagnosis_runs} == {confirmation_seed, confirmation_seed + 1}
+    assert len(diagnosis_runs) == 1 + 2 * len(candidates())
     with app.state.session_factory() as session:
         jobs = session.query(Job).filter(Job.campaign_id == cid).all()
     assert {j.id for j in jobs} == {r["job_id"] for r in runs}

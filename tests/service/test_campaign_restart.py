@@ -29,8 +29,8 @@ def test_restart_mid_campaign_completes_without_duplicate_jobs(tmp_path):
         assert final["status"] == "completed", final["error"]
         with app.state.session_factory() as session:
             jobs = session.scalars(select(Job).where(Job.campaign_id == cid)).all()
-        # 11 batteries + confirmation + one diagnosis battery per candidate effect, none queued twice
-        assert len(jobs) == 12 + len(candidates())
+        # 11 batteries + confirmation + a second baseline and each candidate effect at two seeds, none twice
+        assert len(jobs) == 12 + 1 + 2 * len(candidates())
         report = client.get(f"{API}/campaigns/{cid}/report").json()
         assert len(report["targets"]) == 3
 
