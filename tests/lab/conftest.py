@@ -81,3 +81,10 @@ def low_friction_dst() -> LabResult:
 def mid_friction_dst() -> LabResult:
     """mu_pp = 0.3, four loads: the middle point of the phi(mu_pp) trend."""
     return run_job(JobSpec(test="dst", seed=3, parameters={"friction_pp": 0.3}))
+
+
+@pytest.fixture(scope="session")
+def elongated_mid_friction_dst() -> LabResult:
+    """``mid_friction_dst`` with grains of aspect ratio 1.8 (two-sphere clumps of the sphere's volume):
+    the elongation trend compares the two, so everything else is the same spec."""
+    return run_job(JobSpec(test="dst", seed=3, parameters={"friction_pp": 0.3, "clump_aspect_ratio": 1.8}))

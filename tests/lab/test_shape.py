@@ -122,3 +122,13 @@ def test_candidate_is_declared_and_its_plausible_range_is_buildable():
     low, high = CANDIDATE.plausible_range
     for a in (low, high, CANDIDATE.off_value + CANDIDATE.step):
         assert aspect_ratio_of(elongated_clump(a, 0.02)) == pytest.approx(a)
+
+
+@pytest.mark.slow
+def test_elongated_grains_are_stronger_and_dilate_more(mid_friction_dst, elongated_mid_friction_dst):
+    # Azema & Radjai 2010 (Phys. Rev. E 81, 051304); Saint-Cyr et al. 2011: the shear strength and the
+    # dilatancy of a packing rise with the elongation of its grains (and spheres roll where clumps must
+    # slide or lift). Same spec and seed, mu_pp 0.3 (mid_friction_dst), aspect ratio 1.0 against 1.8.
+    spheres, clumps = mid_friction_dst, elongated_mid_friction_dst
+    assert clumps.value("dst", "friction_angle_deg") > spheres.value("dst", "friction_angle_deg")
+    assert clumps.value("dst", "dilatancy_angle_deg") > spheres.value("dst", "dilatancy_angle_deg")
