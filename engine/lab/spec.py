@@ -88,7 +88,6 @@ class TestOptions(BaseModel):
     anchor_packing_height_m: float | None = None
     anchor_pull_speed_m_s: float | None = None
 
-
     @field_validator("cct_window_stresses_pa")
     @classmethod
     def _window_stresses(cls, value: list[float] | None) -> list[float] | None:
