@@ -5,9 +5,10 @@ what designs vary (the design factors are field names of ``MicroParameters``).
 """
 from __future__ import annotations
 
+import math
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 TestName = Literal["fill", "cct", "dst", "aor", "anchor", "battery"]
 Fidelity = Literal["screening", "thesis"]
@@ -32,7 +33,8 @@ class MicroParameters(BaseModel):
     clump_aspect_ratio: float = Field(
         1.0, ge=1.0, le=3.0,
         description="screening fidelity only: grains are two-sphere clumps of this length/width "
-        "(1 = spheres), each of the solid volume of the sphere it replaces (engine/lab/shape.py)",
+        "(1 = spheres), each of the solid volume of the sphere it replaces (engine/lab/shape.py); the DEM "
+        "lab builds up to 2 (two touching spheres), the range to 3 is for stand-in evaluators",
     )
     effects: dict[str, dict[str, Any]] = Field(
         default_factory=dict,
@@ -48,6 +50,12 @@ class TestOptions(BaseModel):
     dst_normal_stresses_pa: list[float] | None = None
     cct_max_stress_pa: float | None = None
     cct_cycles: int | None = Field(None, ge=1)
+    cct_window_stresses_pa: list[float] | None = Field(
+        None,
+        description="CCT: report the tangent confined modulus E' = d(sigma)/d(strain) at exactly these normal "
+        "stresses (Pa; each > 0, strictly increasing, below the CCT maximum stress), keyed by the given floats, "
+        "instead of five equal windows from 0 to the peak (docs/lab.md)",
+    )
     speed_factor: float | None = Field(
         None, gt=0,
         description="test speed / lab speed for CCT and DST; unset: the fidelity's default (docs/lab.md)",
@@ -79,6 +87,21 @@ class TestOptions(BaseModel):
     include_anchor: bool = False
     anchor_packing_height_m: float | None = None
     anchor_pull_speed_m_s: float | None = None
+
+    @field_validator("cct_window_stresses_pa")
+    @classmethod
+    def _window_stresses(cls, value: list[float] | None) -> list[float] | None:
+        # the CCT maximum depends on the fidelity: RunContext.validate checks "below the maximum"
+        if value is None:
+            return value
+        if not value:
+            raise ValueError("give at least one stress, or leave the option unset for five equal windows")
+        for s in value:
+            if not (math.isfinite(s) and s > 0):
+                raise ValueError(f"every stress must be a finite number > 0 Pa, got {s!r}")
+        if any(b <= a for a, b in zip(value, value[1:])):
+            raise ValueError(f"stresses must be strictly increasing (sorted, no repeats), got {value}")
+        return value
 
 
 class JobSpec(BaseModel):
