@@ -330,7 +330,7 @@ class CalibrationLoop:
             off = c.off_value or 0.0
             gamma = ranked.strength - off if ranked and ranked.strength is not None else c.step
             span = c.plausible_range[1] - off
-            top = off + min(max(2.0 * gamma, span), PLAUSIBLE_SLACK * span)
+            top = min(off + min(max(2.0 * gamma, span), PLAUSIBLE_SLACK * span), params_mod.upper_limit(c.factor))
             factors.append({"name": c.factor, "low": off, "high": top})
         return factors, fixed
 
@@ -343,7 +343,7 @@ class CalibrationLoop:
         if c.is_switch:
             return it
         off = c.off_value or 0.0
-        cap = off + PLAUSIBLE_SLACK * (c.plausible_range[1] - off)
+        cap = min(off + PLAUSIBLE_SLACK * (c.plausible_range[1] - off), params_mod.upper_limit(c.factor))
         pinned = any(b["parameter"] == c.factor and b["side"] == "high"
                      for b in it.localisation.conflicts["active_bounds"])
         top = factors[-1]["high"]

@@ -33,6 +33,24 @@ def check_factor(name: str) -> str:
                      "'effects.<effect>.<parameter>'")
 
 
+def upper_limit(name: str) -> float:
+    """The largest value the engine accepts for a factor (its pydantic ``le``/``lt``), or inf."""
+    import math
+
+    from annotated_types import Le, Lt
+
+    parts = check_factor(name).split(".")
+    model = MicroParameters if len(parts) == 1 else REGISTRY[parts[1]].params_model
+    info = model.model_fields[parts[-1]]
+    limit = math.inf
+    for m in info.metadata:
+        if isinstance(m, Le):
+            limit = min(limit, float(m.le))
+        elif isinstance(m, Lt):
+            limit = min(limit, float(m.lt))
+    return limit
+
+
 def apply(base: Mapping[str, Any], values: Mapping[str, float]) -> dict[str, Any]:
     """A copy of the parameter dict ``base`` with each dotted factor set to its value."""
     out = copy.deepcopy(dict(base))

@@ -31,7 +31,7 @@ class MicroParameters(BaseModel):
         None, gt=0, description="screening fidelity only: mono-sized sphere radius (default 0.02 m)"
     )
     clump_aspect_ratio: float = Field(
-        1.0, ge=1.0, le=3.0,
+        1.0, ge=1.0, le=2.0,
         description="screening fidelity only: grains are two-sphere clumps of this length/width "
         "(1 = spheres), each of the solid volume of the sphere it replaces (engine/lab/shape.py); the DEM "
         "lab builds up to 2 (two touching spheres), the range to 3 is for stand-in evaluators",
