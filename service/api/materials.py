@@ -5,11 +5,12 @@ from fastapi import APIRouter, Depends, Response
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from service.api.params import MaterialId, MeasurementId
 from service.db import get_session
 from service.errors import Conflict, NotFound
-from service.materials.schemas import MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
-from service.materials.store import (add_measurement, create_material, find_by_name, get_material, list_materials,
-                                     material_dict)
+from service.materials.schemas import MaterialCopy, MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
+from service.materials.store import (add_measurement, copy_material, create_material, find_by_name, get_material,
+                                     list_materials, material_dict, measurement_dict, require_editable)
 from service.materials.units import accepted_units
 from engine.lab.result import QUANTITIES
 from service.models.campaign import Campaign
@@ -19,6 +20,7 @@ router = APIRouter(prefix="/materials", tags=["materials"])
 
 
 def _material_or_404(session: Session, material_id: int):
+    """The material, or a 404 naming the path parameter."""
     material = get_material(session, material_id)
     if material is None:
         raise NotFound(f"material {material_id} not found", ["path", "material_id"])
@@ -46,14 +48,26 @@ def create(body: MaterialIn, session: Session = Depends(get_session)):
     return material_dict(_material_or_404(session, material.id))
 
 
+@router.post("/{material_id}/copy", response_model=MaterialOut, status_code=201,
+             summary="Copy a material (e.g. the read-only bundled one) under a new name, to edit it")
+def copy(material_id: MaterialId, body: MaterialCopy, session: Session = Depends(get_session)):
+    material = _material_or_404(session, material_id)
+    if find_by_name(session, body.name) is not None:
+        raise Conflict(f"a material named {body.name!r} exists", "name")
+    created = copy_material(session, material, body.name)
+    session.commit()
+    return material_dict(_material_or_404(session, created.id))
+
+
 @router.get("/{material_id}", response_model=MaterialOut)
-def show(material_id: int, session: Session = Depends(get_session)):
+def show(material_id: MaterialId, session: Session = Depends(get_session)):
     return material_dict(_material_or_404(session, material_id))
 
 
-@router.delete("/{material_id}", status_code=204, summary="Delete a material no campaign uses")
-def delete(material_id: int, session: Session = Depends(get_session)):
+@router.delete("/{material_id}", status_code=204, summary="Delete a material no campaign uses (not the bundled one)")
+def delete(material_id: MaterialId, session: Session = Depends(get_session)):
     material = _material_or_404(session, material_id)
+    require_editable(material)
     if session.scalar(select(Campaign.id).where(Campaign.material_id == material_id).limit(1)) is not None:
         raise Conflict(f"material {material_id} is used by campaigns; it cannot be deleted", ["path", "material_id"])
     session.delete(material)
@@ -62,22 +76,24 @@ def delete(material_id: int, session: Session = Depends(get_session)):
 
 
 @router.get("/{material_id}/measurements", response_model=list[MeasurementOut])
-def list_measurements(material_id: int, session: Session = Depends(get_session)):
-    return [m.as_dict() for m in _material_or_404(session, material_id).measurements]
+def list_measurements(material_id: MaterialId, session: Session = Depends(get_session)):
+    return [measurement_dict(m) for m in _material_or_404(session, material_id).measurements]
 
 
 @router.post("/{material_id}/measurements", response_model=MeasurementOut, status_code=201,
              summary="Add a measurement (replicates in any accepted unit; stored SI)")
-def add(material_id: int, body: MeasurementIn, session: Session = Depends(get_session)):
+def add(material_id: MaterialId, body: MeasurementIn, session: Session = Depends(get_session)):
     material = _material_or_404(session, material_id)
+    require_editable(material)
     row = add_measurement(session, material, body)
     session.commit()
-    return row.as_dict()
+    return measurement_dict(row)
 
 
 @router.delete("/{material_id}/measurements/{measurement_id}", status_code=204)
-def delete_measurement(material_id: int, measurement_id: int, session: Session = Depends(get_session)):
-    _material_or_404(session, material_id)
+def delete_measurement(material_id: MaterialId, measurement_id: MeasurementId,
+                       session: Session = Depends(get_session)):
+    require_editable(_material_or_404(session, material_id))
     row = session.get(Measurement, measurement_id)
     if row is None or row.material_id != material_id:
         raise NotFound(f"measurement {measurement_id} not found in material {material_id}",

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from sqlalchemy.orm import Session, sessionmaker
 
 from engine.lab.result import LabResult
+from service.workers.errors import public_error
 from service.config import Settings
 from service.queue import LeaseLost, claim_next, complete_job, finish_job, heartbeat, release_job
 from service.workers.local import default_worker_id
@@ -155,8 +156,9 @@ class DaskDispatcher:
                 elif future.status == "error":
                     exc = future.exception()
                     tb = "".join(traceback.format_tb(future.traceback())) if future.traceback() else ""
-                    reason = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-                    finish_job(session, entry.job_id, self.worker_id, "failed", f"{reason}\n\n{tb}", elapsed)
+                    reason = public_error(exc)
+                    log.warning("job %s failed on dask: %s\n%s", entry.job_id, reason, tb)
+                    finish_job(session, entry.job_id, self.worker_id, "failed", reason, elapsed)
                 else:  # cancelled by Dask itself (e.g. scheduler restart): let another claim run it
                     release_job(session, entry.job_id, self.worker_id)
             self._forget(entry)

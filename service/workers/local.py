@@ -22,6 +22,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from engine.lab.spec import JobSpec
 from service.config import Settings
 from service.models.job import Job
+from service.workers.errors import public_error
 from service.queue import LeaseLost, claim_next, complete_job, finish_job, heartbeat, release_job
 
 log = logging.getLogger(__name__)
@@ -97,9 +98,10 @@ def execute_claimed(session_factory: sessionmaker[Session], job: Job, worker_id:
             if stopping.is_set() or isinstance(exc, (KeyboardInterrupt, SystemExit)):
                 release_job(session, job.id, worker_id)
                 return "released"
-            reason = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-            log.warning("job %s failed: %s", job.id, reason)
-            finish_job(session, job.id, worker_id, "failed", f"{reason}\n\n{traceback.format_exc()}", elapsed)
+            reason = public_error(exc)
+            # the traceback is for the operator (this log), not for whoever reads the job
+            log.warning("job %s failed: %s\n%s", job.id, reason, traceback.format_exc())
+            finish_job(session, job.id, worker_id, "failed", reason, elapsed)
             return "failed"
     beat.done.set()
     beat.join()
