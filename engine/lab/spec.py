@@ -20,7 +20,8 @@ _FINITE = ConfigDict(extra="forbid", allow_inf_nan=False)
 # cost model (service.limits) rather than an overflow decides what is too big.
 _MAX_LAB_LENGTH_M = 100.0
 _MAX_LAB_SPEED_M_S = 100.0
-_MAX_SPEED_FACTOR = 1e4
+_MIN_LAB_SPEED_M_S = 1e-6  # 1 um/s, a creep test; slower divides the lab's times into infinities
+_MIN_SPEED_FACTOR, _MAX_SPEED_FACTOR = 1e-3, 1e4
 _MAX_CCT_CYCLES = 1000
 _MAX_DST_STRESSES = 20
 
@@ -98,10 +99,10 @@ class TestOptions(BaseModel):
     cct_cycles: int | None = Field(None, ge=1, le=_MAX_CCT_CYCLES,
                                    description="load-unload cycles; each counts in the simulated-time limit")
     speed_factor: float | None = Field(
-        None, gt=0, le=_MAX_SPEED_FACTOR,
+        None, ge=_MIN_SPEED_FACTOR, le=_MAX_SPEED_FACTOR,
         description="test speed / lab speed for CCT and DST; unset: the fidelity's default (docs/lab.md)",
     )
-    max_inertial_number: float = Field(1e-2, gt=0)
+    max_inertial_number: float = Field(1e-2, gt=0, le=1.0, description="quasi-static below ~1e-3; 1 is flow")
     inertial_number_action: Literal["warn", "refuse"] = Field(
         "warn", description="above max_inertial_number: add a provenance warning, or raise (refuse the run)"
     )
@@ -111,7 +112,7 @@ class TestOptions(BaseModel):
         (0.08, 0.10), description="DST shear-strain window for residual stresses and dilatancy"
     )
     moving_average_span: int = Field(21, ge=1, le=100_001, description="DST smoothing span, points (odd)")
-    aor_lift_speed_m_s: float | None = Field(None, gt=0, le=_MAX_LAB_SPEED_M_S)
+    aor_lift_speed_m_s: float | None = Field(None, ge=_MIN_LAB_SPEED_M_S, le=_MAX_LAB_SPEED_M_S)
     aor_bucket_friction: float | None = Field(None, ge=0, le=MAX_FRICTION_COEFFICIENT,
                                               description="particle-bucket friction (plastic 0.67)")
     aor_floor_friction: float | None = Field(None, ge=0, le=MAX_FRICTION_COEFFICIENT,
@@ -134,7 +135,7 @@ class TestOptions(BaseModel):
     include_aor: bool = False
     include_anchor: bool = False
     anchor_packing_height_m: float | None = Field(None, gt=0, le=_MAX_LAB_LENGTH_M)
-    anchor_pull_speed_m_s: float | None = Field(None, gt=0, le=_MAX_LAB_SPEED_M_S)
+    anchor_pull_speed_m_s: float | None = Field(None, ge=_MIN_LAB_SPEED_M_S, le=_MAX_LAB_SPEED_M_S)
 
     @field_validator("dst_normal_stresses_pa")
     @classmethod

@@ -9,6 +9,7 @@ from sqlalchemy.orm import Session
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.campaigns.store import (campaign_summary, create_campaign, get_campaign, iteration, iteration_view,
                                      list_campaigns, next_iteration, transition)
+from service.api.openapi import errors
 from service.api.params import CampaignId, IterationNumber
 from service.db import get_session
 from service.errors import Conflict, NotFound
@@ -16,10 +17,14 @@ from service.security import client_id
 
 router = APIRouter(prefix="/campaigns", tags=["campaigns"])
 
+_STATE = errors(409, c409="the campaign's status does not allow this")
+_NOT_YET = errors(409, c409="the iteration has not produced this yet")
+
 Status = Literal["draft", "running", "paused", "completed", "failed"]
 
 
-@router.post("", status_code=201, summary="Create a campaign (draft) for a material")
+@router.post("", status_code=201, summary="Create a campaign (draft) for a material",
+             responses=errors(404, c404="the material does not exist"))
 def create(body: CampaignCreate, session: Session = Depends(get_session),
            client: str = Depends(client_id)) -> dict:
     return campaign_summary(create_campaign(session, body, client_id=client))
@@ -35,17 +40,17 @@ def status(campaign_id: CampaignId, session: Session = Depends(get_session)) -> 
     return campaign_summary(get_campaign(session, campaign_id))
 
 
-@router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)")
+@router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)", responses=_STATE)
 def start(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
     return campaign_summary(transition(session, campaign_id, "start"))
 
 
-@router.post("/{campaign_id}/pause", summary="running -> paused (409 otherwise); queued batteries keep running")
+@router.post("/{campaign_id}/pause", summary="running -> paused (409 otherwise); queued batteries keep running", responses=_STATE)
 def pause(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
     return campaign_summary(transition(session, campaign_id, "pause"))
 
 
-@router.post("/{campaign_id}/resume", summary="paused -> running (409 otherwise)")
+@router.post("/{campaign_id}/resume", summary="paused -> running (409 otherwise)", responses=_STATE)
 def resume(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
     return campaign_summary(transition(session, campaign_id, "resume"))
 
@@ -56,7 +61,8 @@ def iterations(campaign_id: CampaignId, session: Session = Depends(get_session))
 
 
 @router.post("/{campaign_id}/iterations", status_code=201,
-             summary="Start the next iteration of a completed campaign (e.g. with a contact effect added)")
+             summary="Start the next iteration of a completed campaign (e.g. with a contact effect added)",
+             responses=_STATE)
 def add_iteration(campaign_id: CampaignId, body: IterationIn, session: Session = Depends(get_session)) -> dict:
     return campaign_summary(next_iteration(session, campaign_id, body))
 
@@ -82,25 +88,25 @@ def one_iteration(campaign_id: CampaignId, number: IterationNumber, session: Ses
     return iteration_view(iteration(session, campaign, number))
 
 
-@router.get("/{campaign_id}/design", summary="The iteration's design: table, aliases, resolution")
+@router.get("/{campaign_id}/design", summary="The iteration's design: table, aliases, resolution", responses=_NOT_YET)
 def design(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     _, it, value = _product(session, campaign_id, number, "design", "design")
     return {"iteration": it.number, **{k: v for k, v in value.items() if k != "doe"}}
 
 
-@router.get("/{campaign_id}/models", summary="Fitted model per target response, with ANOVA")
+@router.get("/{campaign_id}/models", summary="Fitted model per target response, with ANOVA", responses=_NOT_YET)
 def models(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     _, it, value = _product(session, campaign_id, number, "models", "fitted models")
     return {"iteration": it.number, "models": value}
 
 
-@router.get("/{campaign_id}/optimum", summary="Optimised parameters, predictions with intervals, reachability")
+@router.get("/{campaign_id}/optimum", summary="Optimised parameters, predictions with intervals, reachability", responses=_NOT_YET)
 def optimum(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     _, it, value = _product(session, campaign_id, number, "optimum", "optimum")
     return {"iteration": it.number, **value}
 
 
-@router.get("/{campaign_id}/confirmation", summary="Confirmation battery at the optimum")
+@router.get("/{campaign_id}/confirmation", summary="Confirmation battery at the optimum", responses=_NOT_YET)
 def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     campaign = get_campaign(session, campaign_id)
     it = iteration(session, campaign, number)
@@ -113,7 +119,7 @@ def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, sessi
 
 
 @router.get("/{campaign_id}/report",
-            summary="Per target: measured, predicted (interval), confirmed, residual, reachability")
+            summary="Per target: measured, predicted (interval), confirmed, residual, reachability", responses=_NOT_YET)
 def report(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     return {"campaign_id": campaign.id, "name": campaign.name, "material_id": campaign.material_id,

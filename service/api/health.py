@@ -21,7 +21,8 @@ def _version() -> str:
         return "unknown"
 
 
-@router.get("/health", summary="Service health: database, schema, queue, workers")
+@router.get("/health", summary="Service health: database, schema, queue, workers",
+            responses={503: {"description": "storage unavailable or the executor cannot reach its cluster"}})
 def health(request: Request, session: Session = Depends(get_session)):
     body = {"status": "ok", "version": _version(), "executor": getattr(request.app.state, "executor", "none")}
     pool = getattr(request.app.state, "worker_pool", None)

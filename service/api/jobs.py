@@ -13,6 +13,7 @@ from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
 from engine.lab.spec import Fidelity, JobSpec, MicroParameters, TestName, TestOptions
 from service import queue
 from service.api.jsonsafe import json_safe
+from service.api.openapi import errors
 from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, Offset
 from service.db import get_session
 from service.errors import Conflict, NotFound
@@ -118,10 +119,10 @@ def _result(job: Job) -> dict[str, Any]:
 
 @router.post("", response_model=JobOut, status_code=status.HTTP_201_CREATED,
              summary="Queue a single test or a battery",
-             responses={200: {"description": "idempotent replay: the job already queued with this key"},
-                        409: {"description": "idempotency key reused with a different body"},
-                        422: {"description": "invalid spec or over a limit (field named)"},
-                        429: {"description": "too many unfinished jobs for this client"}})
+             responses={200: {"description": "idempotent replay: the job already queued with this key",
+                              "model": JobOut},
+                        **errors(409, 422, 429, c409="idempotency key reused with a different body",
+                                 c422="invalid spec or over a limit (field named, with the limit and estimate)")})
 def submit(body: JobSubmit, request: Request, response: Response, session: Session = Depends(get_session),
            client: str = Depends(client_id),
            idempotency_key: str | None = Header(None, alias="Idempotency-Key", max_length=200)) -> JobOut:
@@ -151,7 +152,8 @@ def get_job(job_id: JobId, session: Session = Depends(get_session)) -> JobOut:
     return job_out(queue.get_job(session, job_id))
 
 
-@router.get("/{job_id}/result", summary="The result record (properties, provenance, optionally curves)")
+@router.get("/{job_id}/result", summary="The result record (properties, provenance, optionally curves)",
+            responses=errors(409, c409="the job has not succeeded (no result)"))
 def get_result(job_id: JobId, include_curves: bool = True, session: Session = Depends(get_session)) -> dict:
     record = dict(_result(queue.get_job(session, job_id)))
     if not include_curves:
@@ -159,7 +161,8 @@ def get_result(job_id: JobId, include_curves: bool = True, session: Session = De
     return json_safe(record)
 
 
-@router.get("/{job_id}/curves", summary="Names of the result's curves, their columns and lengths (no data)")
+@router.get("/{job_id}/curves", summary="Names of the result's curves, their columns and lengths (no data)",
+            responses=errors(409, c409="the job has not succeeded (no result)"))
 def get_curves(job_id: JobId, session: Session = Depends(get_session)) -> dict:
     """An index, small whatever the run: the data is at ``/curves/{name}`` (or in ``/result``)."""
     curves = _result(queue.get_job(session, job_id)).get("curves", {})
@@ -167,7 +170,8 @@ def get_curves(job_id: JobId, session: Session = Depends(get_session)) -> dict:
             for name, columns in curves.items()}
 
 
-@router.get("/{job_id}/curves/{name}", summary="One curve: equal-length SI columns")
+@router.get("/{job_id}/curves/{name}", summary="One curve: equal-length SI columns",
+            responses=errors(409, c409="the job has not succeeded (no result)"))
 def get_curve(job_id: JobId, name: str = PathParam(..., max_length=200),
               session: Session = Depends(get_session)) -> dict:
     curves = _result(queue.get_job(session, job_id)).get("curves", {})
@@ -178,7 +182,7 @@ def get_curve(job_id: JobId, name: str = PathParam(..., max_length=200),
 
 @router.post("/{job_id}/cancel", response_model=JobOut, summary="Cancel a queued job, or ask a running one to stop",
              responses={202: {"description": "running: cancellation requested, the worker stops at its next check"},
-                        409: {"description": "already finished"}})
+                        **errors(409, c409="already finished")})
 def cancel(job_id: JobId, response: Response, session: Session = Depends(get_session)) -> JobOut:
     job = queue.cancel_job(session, job_id)
     if job.status == "running":
@@ -187,6 +191,6 @@ def cancel(job_id: JobId, response: Response, session: Session = Depends(get_ses
 
 
 @router.post("/{job_id}/retry", response_model=JobOut, summary="Queue a failed or cancelled job again",
-             responses={409: {"description": "the job is not failed or cancelled"}})
+             responses=errors(409, c409="the job is not failed or cancelled"))
 def retry(job_id: JobId, session: Session = Depends(get_session)) -> JobOut:
     return job_out(queue.retry_job(session, job_id))

@@ -5,6 +5,7 @@ from fastapi import APIRouter, Depends, Response
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from service.api.openapi import errors
 from service.api.params import MaterialId, MeasurementId
 from service.db import get_session
 from service.errors import Conflict, NotFound
@@ -39,7 +40,8 @@ def list_all(session: Session = Depends(get_session)):
 
 
 @router.post("", response_model=MaterialOut, status_code=201,
-             summary="Create a material (optionally with measurements)")
+             summary="Create a material (optionally with measurements)",
+             responses=errors(409, c409="a material with this name exists"))
 def create(body: MaterialIn, session: Session = Depends(get_session)):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
@@ -49,7 +51,8 @@ def create(body: MaterialIn, session: Session = Depends(get_session)):
 
 
 @router.post("/{material_id}/copy", response_model=MaterialOut, status_code=201,
-             summary="Copy a material (e.g. the read-only bundled one) under a new name, to edit it")
+             summary="Copy a material (e.g. the read-only bundled one) under a new name, to edit it",
+             responses=errors(409, c409="a material with this name exists"))
 def copy(material_id: MaterialId, body: MaterialCopy, session: Session = Depends(get_session)):
     material = _material_or_404(session, material_id)
     if find_by_name(session, body.name) is not None:
@@ -64,7 +67,8 @@ def show(material_id: MaterialId, session: Session = Depends(get_session)):
     return material_dict(_material_or_404(session, material_id))
 
 
-@router.delete("/{material_id}", status_code=204, summary="Delete a material no campaign uses (not the bundled one)")
+@router.delete("/{material_id}", status_code=204, summary="Delete a material no campaign uses (not the bundled one)",
+               responses=errors(409, c409="the material is bundled (read-only) or used by a campaign"))
 def delete(material_id: MaterialId, session: Session = Depends(get_session)):
     material = _material_or_404(session, material_id)
     require_editable(material)
@@ -81,7 +85,8 @@ def list_measurements(material_id: MaterialId, session: Session = Depends(get_se
 
 
 @router.post("/{material_id}/measurements", response_model=MeasurementOut, status_code=201,
-             summary="Add a measurement (replicates in any accepted unit; stored SI)")
+             summary="Add a measurement (replicates in any accepted unit; stored SI)",
+             responses=errors(409, c409="the material is bundled reference data (read-only)"))
 def add(material_id: MaterialId, body: MeasurementIn, session: Session = Depends(get_session)):
     material = _material_or_404(session, material_id)
     require_editable(material)
@@ -90,7 +95,8 @@ def add(material_id: MaterialId, body: MeasurementIn, session: Session = Depends
     return measurement_dict(row)
 
 
-@router.delete("/{material_id}/measurements/{measurement_id}", status_code=204)
+@router.delete("/{material_id}/measurements/{measurement_id}", status_code=204,
+               responses=errors(409, c409="the material is bundled reference data (read-only)"))
 def delete_measurement(material_id: MaterialId, measurement_id: MeasurementId,
                        session: Session = Depends(get_session)):
     require_editable(_material_or_404(session, material_id))

@@ -4,6 +4,7 @@ from __future__ import annotations
 from fastapi import APIRouter, Depends, Query, Response
 from sqlalchemy.orm import Session
 
+from service.api.openapi import errors
 from service.api.params import ScheduleId
 from service.db import get_session
 from service.errors import Invalid
@@ -24,7 +25,8 @@ def cron_preview(expr: str = Query(..., max_length=200, description="e.g. '0 2 *
     return {"expr": expr, "next": [t.isoformat() + "Z" for t in cron.upcoming(naive_utc(None), count)]}
 
 
-@router.post("", status_code=201, summary="Create a schedule")
+@router.post("", status_code=201, summary="Create a schedule",
+             responses=errors(404, c404="the template's material does not exist"))
 def create(body: ScheduleIn, session: Session = Depends(get_session)) -> dict:
     return schedule_view(create_schedule(session, body))
 
