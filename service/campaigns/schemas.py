@@ -203,3 +203,18 @@ class IterationIn(BaseModel):
     design: DesignIn | None = None
     targets: list[TargetIn] | None = Field(None, max_length=1000)
     options: dict[str, Any] | None = None
+
+    @field_validator("fixed_parameters")
+    @classmethod
+    def _fixed(cls, fixed: dict[str, Any] | None) -> dict[str, Any] | None:
+        """Checked here, before the campaign's state: a bad effect is a 422 whatever the campaign is doing."""
+        if fixed is not None:
+            MicroParameters.model_validate(fixed)
+        return fixed
+
+    @field_validator("options")
+    @classmethod
+    def _options(cls, options: dict[str, Any] | None) -> dict[str, Any] | None:
+        if options is not None:
+            TestOptions.model_validate(options)
+        return options
