@@ -174,3 +174,11 @@ def test_openapi_documents_error_codes_and_bounds(client):
     assert job_id["schema"]["maximum"] == 2**63 - 1
     micro = schema["components"]["schemas"]["MicroParameters"]["properties"]
     assert micro["particle_density_kg_m3"]["maximum"] == 22_590.0  # osmium
+
+
+def test_405_lists_every_documented_method(client):
+    """Starlette's 405 named only the first route's methods (``Allow: POST`` for /campaigns)."""
+    for method, path, allowed in [("OPTIONS", "/campaigns", "GET, POST"), ("PUT", "/materials/1", "DELETE, GET"),
+                                  ("PATCH", "/jobs", "GET, POST")]:
+        r = client.request(method, f"{API}{path}")
+        assert r.status_code == 405 and r.headers["allow"] == allowed
