@@ -37,6 +37,9 @@ class Settings(BaseModel):
     max_attempts: int = Field(3, ge=1, description="claims per job before a lost lease fails it")
     tick_interval_s: float = Field(2.0, gt=0, description="campaign runner / scheduler period")
     dask_scheduler: str | None = None
+    dask_connect_timeout_s: float = Field(
+        10.0, gt=0, description="how long the Dask client tries to (re)connect before the dispatcher drops it "
+                                "and starts over (it keeps trying, reporting unhealthy meanwhile)")
     max_particles: int = Field(200_000, ge=1)
     max_simulated_time_s: float = Field(3600.0, gt=0)
     max_queued_jobs_per_client: int = Field(10_000, ge=1)

@@ -294,3 +294,29 @@ def release_job(session: Session, job_id: int, worker_id: str) -> bool:
     })
     session.commit()
     return done
+
+
+def requeue_job(session: Session, job_id: int, worker_id: str, reason: str) -> bool:
+    """The executor lost this attempt (its Dask worker or scheduler is gone): queued again with the
+    attempt counted, or failed once ``max_attempts`` claims are used up. Only the owner can do it."""
+    job = get_job(session, job_id)
+    if job.status != "running" or job.lease_owner != worker_id:
+        session.commit()
+        return False
+    if job.attempts >= job.max_attempts:
+        values = {"status": "failed", "finished_at": utcnow(),
+                  "error": f"lost its executor {job.attempts} times (max_attempts={job.max_attempts}); {reason}"}
+    else:
+        values = {"status": "queued", "error": f"attempt {job.attempts}: {reason}", "progress_fraction": 0.0,
+                  "progress_phase": None}
+    done = _update(session, job_id, _owned(worker_id), {**values, "lease_owner": None, "lease_expires_at": None})
+    session.commit()
+    return done
+
+
+def count_attempt(session: Session, job_id: int, worker_id: str) -> int | None:
+    """One more attempt of a job the executor re-ran by itself (Dask re-runs a task whose worker died);
+    returns the attempts now counted, or None if the job is no longer this owner's."""
+    done = _update(session, job_id, _owned(worker_id), {"attempts": Job.attempts + 1})
+    session.commit()
+    return get_job(session, job_id).attempts if done else None

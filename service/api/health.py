@@ -28,6 +28,10 @@ def health(request: Request, session: Session = Depends(get_session)):
     pool = getattr(request.app.state, "worker_pool", None)
     body["local_workers_alive"] = pool.alive() if pool is not None else 0
     body["local_worker_pids"] = pool.pids() if pool is not None else []
+    dispatcher = getattr(request.app.state, "dispatcher", None)
+    if dispatcher is not None:
+        body["dask"] = {"scheduler": str(dispatcher.scheduler), "healthy": dispatcher.healthy,
+                        "problem": dispatcher.problem, "jobs_in_flight": len(dispatcher.inflight)}
     try:
         session.execute(text("SELECT 1"))
         body["database"] = "ok"
@@ -35,5 +39,8 @@ def health(request: Request, session: Session = Depends(get_session)):
         body["jobs"] = queue.queue_counts(session)
     except Exception as exc:  # report, do not raise: health must answer even when storage is down
         body.update(status="error", database=f"unavailable: {type(exc).__name__}")
+        return JSONResponse(body, status_code=503)
+    if dispatcher is not None and not dispatcher.healthy:  # jobs cannot run: not healthy, say why
+        body["status"] = "degraded"
         return JSONResponse(body, status_code=503)
     return body

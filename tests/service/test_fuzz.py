@@ -25,6 +25,7 @@ def schemathesis_cmd() -> list[str]:
     return [exe]
 
 
+@pytest.mark.slow  # ~2 min on two busy cores; CI runs it (it runs every test)
 def test_schemathesis_finds_no_server_errors_or_contract_violations(live_server, tmp_path):
     base, _, proc = live_server(workers=0, DEMCAL_SEED_MATERIALS="true")
     report = tmp_path / "junit.xml"
