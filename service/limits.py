@@ -126,12 +126,15 @@ def _particles_field(spec: JobSpec, stage: str) -> str:
     return "parameters.particle_radius_m" if spec.fidelity == "screening" else "fidelity"
 
 
-def _time_field(spec: JobSpec, cost: Cost) -> str:
-    """The option that shortens the stage that costs most."""
+def _time_field(spec: JobSpec, cost: Cost, preset: Fidelity) -> str:
+    """The option that shortens the stage that costs most: the user's own count of cycles or stresses
+    when it is above the fidelity's, else the speed."""
     stage = max(cost.stages_s, key=cost.stages_s.get)
-    if stage == "cct" and spec.options.cct_cycles is not None and spec.options.cct_cycles > 4:
+    opts = spec.options
+    if stage == "cct" and opts.cct_cycles is not None and opts.cct_cycles > preset.cct_cycles:
         return "options.cct_cycles"
-    if stage == "dst" and spec.options.dst_normal_stresses_pa is not None and len(spec.options.dst_normal_stresses_pa) > 4:
+    if stage == "dst" and opts.dst_normal_stresses_pa is not None and \
+            len(opts.dst_normal_stresses_pa) > len(preset.dst_normal_stresses_pa):
         return "options.dst_normal_stresses_pa"
     return {"aor": "options.aor_lift_speed_m_s", "anchor": "options.anchor_pull_speed_m_s"}.get(
         stage, "options.speed_factor")
@@ -171,7 +174,7 @@ def check_limits(spec: JobSpec, settings: Settings, field_prefix: str = "") -> C
             f"up to {cost.simulated_time_s:.0f} s of simulated time ({stages}) exceeds the limit of "
             f"{settings.max_simulated_time_s:.0f} s (raise options.speed_factor, run fewer cycles or stresses, "
             "or DEMCAL_MAX_SIMULATED_TIME_S)",
-            field_prefix + _time_field(spec, cost))
+            field_prefix + _time_field(spec, cost, _preset(spec, field_prefix)))
     return cost
 
 

@@ -182,3 +182,12 @@ def test_405_lists_every_documented_method(client):
                                   ("PATCH", "/jobs", "GET, POST")]:
         r = client.request(method, f"{API}{path}")
         assert r.status_code == 405 and r.headers["allow"] == allowed
+
+
+def test_quantities_publish_their_physical_bounds(client):
+    quantities = client.get(f"{API}/materials/quantities").json()
+    porosity = quantities["fill"]["porosity"]["bounds"]
+    assert (porosity["low"], porosity["high"]) == (0.0, 1.0)  # a volume fraction, both ends open
+    assert not porosity["low_inclusive"] and not porosity["high_inclusive"]
+    assert quantities["dst"]["friction_angle_deg"]["bounds"]["high"] == 90.0
+    assert quantities["anchor"]["peak_pull_force_n"]["bounds"]["high"] is None  # no ceiling but finiteness

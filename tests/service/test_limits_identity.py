@@ -165,3 +165,24 @@ def test_serve_with_empty_host_refuses(tmp_path):
 
     with pytest.raises(SystemExit, match="every interface"):
         main(["serve", "--host", "", "--db", str(tmp_path / "x.db")])
+
+
+def test_schedule_firing_over_todays_limits_is_skipped_with_the_reason(s2):
+    """Limits lowered after the schedule was made: the firing says why instead of starting a doomed campaign."""
+    from datetime import datetime
+
+    from service.models.schedule import Schedule
+    from service.schedules.scheduler import Scheduler
+
+    client, app, settings = s2
+    body = {"name": "nightly", "cron": "0 2 * * *", "template": campaign_body(thesis_material_id(client))}
+    schedule = client.post(f"{API}/schedules", json=body).json()
+    due = datetime(2026, 11, 21, 2, 0)
+    with app.state.session_factory() as session:
+        session.get(Schedule, schedule["id"]).next_run_at = due
+        session.commit()
+    lowered = settings.model_copy(update={"max_particles": 1})
+    assert Scheduler(app.state.session_factory, lowered).tick(due) == []
+    (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()
+    assert firing["campaign_id"] is None and "particles" in firing["skipped_reason"]
+    assert client.get(f"{API}/campaigns").json() == []
