@@ -69,7 +69,8 @@ def demcal_cmd(*args: str) -> list[str]:
     return [sys.executable, "-m", "service.cli", *args]
 
 
-def wait_healthy(base_url: str, proc: subprocess.Popen, timeout_s: float = 30.0) -> None:
+def wait_healthy(base_url: str, proc: subprocess.Popen, timeout_s: float = 90.0) -> None:
+    """Generous: a fresh database is migrated before the port opens, and CI machines are shared."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if proc.poll() is not None:
