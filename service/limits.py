@@ -201,7 +201,8 @@ def check_campaign_limits(config, settings: Settings, field_prefix: str = "") ->
 
     Particle counts and times depend on the micro parameters only through ``particle_radius_m`` (and on the
     options), each monotonically, so the design's runs include the worst case of any point in the factor
-    box, including the confirmation run at the optimum.
+    box, including the confirmation run at the optimum. Factors that are not scalar micro parameters
+    (e.g. an effect's strength) do not change the cost and are not applied here.
     """
     from engine.lab.spec import MicroParameters, TestOptions
     from service.campaigns.design import build_design
@@ -212,8 +213,11 @@ def check_campaign_limits(config, settings: Settings, field_prefix: str = "") ->
     built = build_design(config.factors, design, config.seed, field_prefix=f"{field_prefix}design.")
     options = TestOptions.model_validate(config.options)
     seen: set[tuple] = set()
+    scalar = set(MicroParameters.model_fields) - {"effects"}
     for record in built.records("std"):
-        natural = {f.name: record[f.name] for f in built.factors}
+        # only scalar micro parameters can change the cost (an effect's strength cannot): the others,
+        # such as dotted effect paths, are left to the campaign's own validation
+        natural = {f.name: record[f.name] for f in built.factors if f.name in scalar}
         key = tuple(sorted(natural.items()))
         if key in seen:
             continue

@@ -196,18 +196,11 @@ class IterationIn(BaseModel):
 
     model_config = _FINITE
 
-    fixed_parameters: dict[str, Any] | None = Field(
-        None, description="replaces the fixed micro parameters, e.g. with effects={'rolling_epsd2': {...}}"
-    )
-    factors: list[FactorIn] | None = Field(None, min_length=1, max_length=8)
-    design: DesignIn | None = None
-    targets: list[TargetIn] | None = Field(None, max_length=1000)
-    options: dict[str, Any] | None = None
-
+    # Validated here, before the campaign's state is looked at: a bad effect is a 422 whatever the
+    # campaign is doing.
     @field_validator("fixed_parameters")
     @classmethod
     def _fixed(cls, fixed: dict[str, Any] | None) -> dict[str, Any] | None:
-        """Checked here, before the campaign's state: a bad effect is a 422 whatever the campaign is doing."""
         if fixed is not None:
             MicroParameters.model_validate(fixed)
         return fixed
@@ -218,3 +211,11 @@ class IterationIn(BaseModel):
         if options is not None:
             TestOptions.model_validate(options)
         return options
+
+    fixed_parameters: dict[str, Any] | None = Field(
+        None, description="replaces the fixed micro parameters, e.g. with effects={'rolling_epsd2': {...}}"
+    )
+    factors: list[FactorIn] | None = Field(None, min_length=1, max_length=8)
+    design: DesignIn | None = None
+    targets: list[TargetIn] | None = Field(None, max_length=1000)
+    options: dict[str, Any] | None = None
