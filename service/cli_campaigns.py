@@ -127,6 +127,11 @@ def material_add(args) -> int:
     return _emit(args, m, f"measurement {m['id']}: {m['test']}/{m['quantity']} mean {_fmt(m['mean'])} {m['unit']}")
 
 
+def material_copy(args) -> int:
+    m = _call(args, "POST", f"/materials/{args.id}/copy", {"name": args.name})
+    return _emit(args, m, f"material {m['id']}: {m['name']} (copy of #{args.id}, {len(m['measurements'])} measurements)")
+
+
 # -- campaigns -------------------------------------------------------------------------------------
 
 def _factor(text: str) -> dict:
@@ -294,6 +299,9 @@ def register(subparsers) -> None:
     msub = material.add_subparsers(dest="material_command", required=True)
     _leaf(msub, "list", material_list, "list materials")
     _leaf(msub, "show", material_show, "show a material's measurements (SI)").add_argument("id", type=int)
+    cp = _leaf(msub, "copy", material_copy, "copy a material (e.g. the read-only bundled one) to edit it")
+    cp.add_argument("id", type=int)
+    cp.add_argument("--name", required=True, help="name of the copy")
     add = _leaf(msub, "add-measurement", material_add, "add replicate values of one measurement")
     add.add_argument("id", type=int)
     add.add_argument("--test", required=True)

@@ -11,9 +11,10 @@ from typing import Any
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
-from service.campaigns.design import build_design
 from service.campaigns.schemas import CampaignCreate, IterationIn
+from service.config import Settings, get_settings
 from service.errors import Conflict, NotFound
+from service.limits import check_campaign_limits
 from service.materials.store import get_material
 from service.models.base import utcnow
 from service.models.campaign import Campaign, CampaignIteration
@@ -21,11 +22,16 @@ from service.models.campaign import Campaign, CampaignIteration
 TRANSITIONS = {"start": ({"draft"}, "running"), "pause": ({"running"}, "paused"), "resume": ({"paused"}, "running")}
 
 
+def _settings(session: Session) -> Settings:
+    return session.info.get("settings") or get_settings()
+
+
 def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = "anonymous",
                     schedule_id: int | None = None) -> Campaign:
     if get_material(session, body.material_id) is None:
         raise NotFound(f"material {body.material_id} not found", "material_id")
-    build_design(body.factors, body.design, body.seed)  # a design doe/ refuses is a 422 now, not a failure later
+    # the design doe/ builds and the limits of every run: a 422 now, not a failure on start
+    check_campaign_limits(body, _settings(session))
     campaign = Campaign(name=body.name, material_id=body.material_id, status="draft", evaluator=body.evaluator,
                         fidelity=body.fidelity, config=body.model_dump(mode="json"), current_iteration=0,
                         schedule_id=schedule_id, client_id=client_id)
@@ -80,7 +86,7 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     if add_effect is not None:
         config = with_effect_factor(config, add_effect, strength_range)
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
-    build_design(validated.factors, validated.design, validated.seed)
+    check_campaign_limits(validated, _settings(session))
     config = validated.model_dump(mode="json")
     won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == "completed")
                           .values(config=config, status="running", finished_at=None, updated_at=utcnow())

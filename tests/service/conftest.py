@@ -19,6 +19,11 @@ from service.db import make_engine, make_session_factory
 from service.migrate import upgrade
 
 
+# The peer address TestClient reports: a loopback one, as for a local user (its default, "testclient", is
+# not an address, and the identity rules treat it as a remote peer).
+LOOPBACK_PEER = ("127.0.0.1", 50000)
+
+
 @pytest.fixture
 def db_url(tmp_path: Path) -> str:
     return f"sqlite:///{(tmp_path / 'demcal.db').as_posix()}"
@@ -41,7 +46,7 @@ def session_factory(settings: Settings):
 
 @pytest.fixture
 def client(settings: Settings):
-    with TestClient(create_app(settings)) as test_client:
+    with TestClient(create_app(settings), client=LOOPBACK_PEER) as test_client:
         yield test_client
 
 
@@ -64,7 +69,8 @@ def demcal_cmd(*args: str) -> list[str]:
     return [sys.executable, "-m", "service.cli", *args]
 
 
-def wait_healthy(base_url: str, proc: subprocess.Popen, timeout_s: float = 30.0) -> None:
+def wait_healthy(base_url: str, proc: subprocess.Popen, timeout_s: float = 90.0) -> None:
+    """Generous: a fresh database is migrated before the port opens, and CI machines are shared."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if proc.poll() is not None:

@@ -47,16 +47,21 @@ def test_material_commands(server, capsys):
     assert code == 0 and "thesis-coarse-aggregate" in out
     code, out, _ = run(capsys, "material", "show", "1", "--url", url, "--json")
     assert code == 0 and json.loads(out)["measurements"][0]["values"] == [1412.0, 1383.6, 1397.8]
-    code, out, _ = run(capsys, "material", "add-measurement", "1", "--url", url, "--test", "dst",
-                       "--quantity", "residual_shear_stress_pa", "--values", "17,18", "--unit", "kPa",
-                       "--condition", "normal_stress_pa=24", "--condition-unit", "normal_stress_pa=kPa")
-    assert code == 0 and "mean 17500 Pa" in out
-    code, _, err = run(capsys, "material", "add-measurement", "1", "--url", url, "--test", "dst",
+    add = ("--test", "dst", "--quantity", "residual_shear_stress_pa", "--values", "17,18", "--unit", "kPa",
+           "--condition", "normal_stress_pa=24", "--condition-unit", "normal_stress_pa=kPa")
+    code, _, err = run(capsys, "material", "add-measurement", "1", "--url", url, *add)
+    assert code == 2 and "HTTP 409" in err and "read-only" in err  # the bundled reference material
+    code, out, _ = run(capsys, "material", "copy", "1", "--url", url, "--name", "my aggregate", "--json")
+    copy = json.loads(out)
+    assert code == 0 and not copy["bundled"] and len(copy["measurements"]) == 13
+    code, out, _ = run(capsys, "material", "add-measurement", str(copy["id"]), "--url", url, *add)
+    assert code == 0 and "mean 17500 Pa" in out  # (17 + 18) / 2 kPa
+    code, _, err = run(capsys, "material", "add-measurement", str(copy["id"]), "--url", url, "--test", "dst",
                        "--quantity", "porosity", "--values", "1")
     assert code == 2 and "HTTP 422" in err and "quantity" in err
     code, _, err = run(capsys, "material", "show", "99", "--url", url)
     assert code == 2 and "HTTP 404" in err
-    code, _, err = run(capsys, "material", "add-measurement", "1", "--url", url, "--test", "dst",
+    code, _, err = run(capsys, "material", "add-measurement", str(copy["id"]), "--url", url, "--test", "dst",
                        "--quantity", "friction_angle_deg", "--values", "a,b")
     assert code == 2 and "--values" in err
 
