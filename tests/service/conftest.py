@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -19,9 +18,7 @@ from service.db import make_engine, make_session_factory
 from service.migrate import upgrade
 
 
-# The peer address TestClient reports: a loopback one, as for a local user (its default, "testclient", is
-# not an address, and the identity rules treat it as a remote peer).
-LOOPBACK_PEER = ("127.0.0.1", 50000)
+from service_net import LOOPBACK_PEER, free_port  # noqa: F401  (re-exported for older imports)
 
 
 @pytest.fixture
@@ -48,12 +45,6 @@ def session_factory(settings: Settings):
 def client(settings: Settings):
     with TestClient(create_app(settings), client=LOOPBACK_PEER) as test_client:
         yield test_client
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def service_env(db_url: str, **extra: str) -> dict[str, str]:

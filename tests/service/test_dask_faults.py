@@ -10,7 +10,7 @@ import sys
 import time
 
 import pytest
-from conftest import LOOPBACK_PEER, free_port
+from service_net import LOOPBACK_PEER, free_port
 from fastapi.testclient import TestClient
 
 from service.app import create_app
