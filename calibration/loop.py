@@ -43,6 +43,7 @@ class LoopConfig:
     max_refinements: int = 0
     refine_shrink: float = 0.35
     candidates: list[str] | None = None      # None: every registered candidate
+    fidelity: str | None = None              # the evaluator's lab fidelity (None: any, e.g. the stand-in)
     seed: int = 0
 
     def __post_init__(self):
@@ -272,7 +273,7 @@ class CalibrationLoop:
     def candidate_pool(self, it: Iteration) -> list[Candidate]:
         pool = all_candidates()
         names = self.config.candidates or list(pool)
-        return [pool[n] for n in names if n not in it.effects]
+        return [pool[n] for n in names if n not in it.effects and pool[n].applies_to(self.config.fidelity)]
 
     def diagnose(self, it: Iteration) -> Diagnosis:
         base = it.parameters

@@ -62,6 +62,11 @@ class Candidate:
     reference: Callable[..., float] | None = None
     # further parameters the effect needs when switched on (e.g. Poisson's ratio), fixed values
     companions: dict[str, float] = field(default_factory=dict)
+    # fidelities whose lab can build the effect (None: all); the thesis fidelity has its own clump mix
+    fidelities: tuple[str, ...] | None = None
+
+    def applies_to(self, fidelity: str | None) -> bool:
+        return fidelity is None or self.fidelities is None or fidelity in self.fidelities
 
     def __post_init__(self):
         low, high = self.plausible_range

@@ -27,7 +27,7 @@ from engine.particles import templates as tpl
 # EDEM's angle-of-repose kit uses two-sphere clumps at aspect ratio 1.5; ballast models 1.2-2.0
 CANDIDATE = Candidate(
     name="particle_shape", title="particle shape (elongation)", factor="clump_aspect_ratio",
-    unit="1", plausible_range=(1.2, 2.0), step=0.3, off_value=1.0,
+    unit="1", plausible_range=(1.2, 2.0), step=0.3, off_value=1.0, fidelities=("screening",),
     fingerprint={"bulk_density": "-", "modulus_level": "+-", "friction_angle": "+", "dilatancy": "++",
                  "angle_of_repose": "+", "pull_force": "+"},
     physics="Elongated, interlocking grains dilate more and resist shear more than spheres: friction "

@@ -155,7 +155,7 @@ def candidate_points(config, optimum: dict, iteration_parameters: dict) -> list[
     active = active_effects(iteration_parameters)
     out = []
     for name, c in candidates().items():
-        if name in active:
+        if name in active or not c.applies_to(config.fidelity):
             continue
         values = dict(optimum["parameters"])
         if c.is_switch:

@@ -13,7 +13,7 @@ from sqlalchemy.orm import Session
 
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.config import Settings, get_settings
-from service.errors import Conflict, NotFound
+from service.errors import Conflict, Invalid, NotFound
 from service.limits import check_campaign_limits
 from service.materials.store import get_material
 from service.models.base import utcnow
@@ -107,6 +107,9 @@ def with_effect_factor(config: dict, name: str, strength_range=None) -> dict:
     from calibration import parameters as factor_paths
 
     c = get_candidate(name)
+    if not c.applies_to(config.get("fidelity")):
+        raise Invalid(f"{name} cannot be built at the {config.get('fidelity')} fidelity "
+                      f"(only {', '.join(c.fidelities or ())})", "add_effect")
     if any(f["name"] == c.factor for f in config["factors"]):
         raise Conflict(f"{name} is already a factor ({c.factor})", "add_effect")
     if strength_range is not None:

@@ -98,8 +98,8 @@ def test_window_near_the_peak_stays_centred():
     ([], "at least one"),
     ([-1.0], "> 0"),
     ([0.0], "> 0"),
-    ([float("nan")], "> 0"),
-    ([float("inf")], "> 0"),
+    ([float("nan")], "finite"),
+    ([float("inf")], "finite"),
     ([20e3, 10e3], "strictly increasing"),
     ([10e3, 10e3], "strictly increasing"),
 ])
