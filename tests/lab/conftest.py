@@ -81,17 +81,3 @@ def low_friction_dst() -> LabResult:
 def mid_friction_dst() -> LabResult:
     """mu_pp = 0.3, four loads: the middle point of the phi(mu_pp) trend."""
     return run_job(JobSpec(test="dst", seed=3, parameters={"friction_pp": 0.3}))
-
-
-@pytest.fixture(scope="session")
-def elongated_mid_friction_dst() -> LabResult:
-    """``mid_friction_dst`` with grains of aspect ratio 1.8 (two-sphere clumps of the sphere's volume), at
-    its lightest and heaviest loads only: each load's DST starts from the same precompressed checkpoint, so
-    these two are the same runs a four-load job would make, and the trend test compares them with the
-    same two loads of ``mid_friction_dst``. Two loads, because clumps cost ~5x a sphere per step (twice the
-    spheres, and the engine's rotational time-step limit uses the clump's reach and smallest inertia)."""
-    from engine.lab.presets import SCREENING
-
-    loads = [SCREENING.dst_normal_stresses_pa[0], SCREENING.dst_normal_stresses_pa[-1]]
-    return run_job(JobSpec(test="dst", seed=3, parameters={"friction_pp": 0.3, "clump_aspect_ratio": 1.8},
-                           options={"dst_normal_stresses_pa": loads}))

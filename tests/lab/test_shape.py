@@ -12,7 +12,6 @@ from engine.candidates import get as candidate
 from engine.lab.context import RunContext
 from engine.lab.presets import SCREENING, fidelity
 from engine.lab.procedures.fill import rain_packing, shape_mix
-from engine.lab.reducers import mohr_coulomb_fit
 from engine.lab.shape import CANDIDATE, aspect_ratio_of, elongated_clump, screening_shapes
 from engine.lab.spec import JobSpec
 from engine.particles.templates import sphere
@@ -123,28 +122,3 @@ def test_candidate_is_declared_and_its_plausible_range_is_buildable():
     low, high = CANDIDATE.plausible_range
     for a in (low, high, CANDIDATE.off_value + CANDIDATE.step):
         assert aspect_ratio_of(elongated_clump(a, 0.02)) == pytest.approx(a)
-
-
-@pytest.mark.slow
-def test_elongated_grains_are_stronger_and_dilate_more(mid_friction_dst, elongated_mid_friction_dst):
-    # Azema & Radjai 2010 (Phys. Rev. E 81, 051304); Saint-Cyr et al. 2011: the shear strength and the
-    # dilatancy of a packing rise with the elongation of its grains (and spheres roll where clumps must
-    # slide or lift). Same spec and seed, mu_pp 0.3 (mid_friction_dst), aspect ratio 1.0 against 1.8.
-    spheres, clumps = mid_friction_dst, elongated_mid_friction_dst
-    loads = clumps.curves["dst_envelope"]["normal_stress_target_pa"]
-    assert len(loads) == 2
-
-    def at_loads(result):
-        """Mohr-Coulomb friction angle and mean dilatancy angle over ``loads`` (deg)."""
-        env = result.curves["dst_envelope"]
-        rows = [env["normal_stress_target_pa"].index(s) for s in loads]
-        fit = mohr_coulomb_fit([env["residual_normal_stress_pa"][i] for i in rows],
-                               [env["residual_shear_stress_pa"][i] for i in rows])
-        psi = np.mean([result.value("dst", "dilatancy_angle_deg", normal_stress_pa=s) for s in loads])
-        return fit.friction_angle_deg, psi
-
-    phi_spheres, psi_spheres = at_loads(spheres)
-    phi_clumps, psi_clumps = at_loads(clumps)
-    assert phi_clumps == pytest.approx(clumps.value("dst", "friction_angle_deg"))
-    assert phi_clumps > phi_spheres
-    assert psi_clumps > psi_spheres
