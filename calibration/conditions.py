@@ -16,7 +16,9 @@ STRESS = "normal_stress_pa"
 def battery_options(keys: Iterable[ResponseKey], base: dict[str, Any] | None = None) -> dict[str, Any]:
     """TestOptions fields (a dict) that make the battery report every key's condition.
 
-    Options the user set explicitly in ``base`` win; the derived ones fill what is unset.
+    Options the user set explicitly in ``base`` win; the derived ones fill what is unset. The angle of
+    repose and the anchor pull-out are separate, costly set-ups: they run when ``base`` asks for them
+    (``include_aor``, ``include_anchor``), never because a material happens to list such a measurement.
     """
     keys = list(keys)
     out = dict(base or {})
@@ -26,10 +28,6 @@ def battery_options(keys: Iterable[ResponseKey], base: dict[str, Any] | None = N
         out["dst_normal_stresses_pa"] = dst
     if cct and out.get("cct_window_stresses_pa") is None:
         out["cct_window_stresses_pa"] = cct
-    if any(k.test == "aor" for k in keys):
-        out.setdefault("include_aor", True)
-    if any(k.test == "anchor" for k in keys):
-        out.setdefault("include_anchor", True)
     return out
 
 

@@ -8,8 +8,9 @@ Job submission uses an idempotency key per run, so a step repeated after a
 crash finds the job it already queued instead of queuing a twin.
 
 Phases of an iteration: design -> batteries -> analysis -> confirmation -> report -> done, and when
-the report's verdict is not "calibrated": report -> diagnosis (one battery per candidate effect at the
-optimum, with the confirmation's seed) -> diagnosed -> done, the ranking stored in the report.
+the report's verdict is not "calibrated": report -> diagnosis (a second baseline battery at the optimum,
+then each candidate effect at the optimum's two seeds) -> diagnosed -> done, the ranking stored in the
+report.
 Paused campaigns are skipped; their queued batteries keep running in the queue
 and are picked up on resume.
 """

@@ -37,3 +37,16 @@ def test_measured_noise_from_replicates_stated_or_assumed():
     assert Measured(key, (1400.0,), stated_uncertainty=7.0).mean_variance(0.05).variance == 49.0
     assumed = Measured(key, (1400.0,)).mean_variance(0.05)
     assert assumed.source == "assumed" and abs(assumed.variance - 70.0**2) < 1e-6
+
+
+def test_the_battery_computes_the_measured_conditions_exactly():
+    from calibration.conditions import battery_options
+
+    keys = [ResponseKey.of("dst", "residual_shear_stress_pa", {"normal_stress_pa": s}) for s in (24e3, 10.5e3)]
+    keys += [ResponseKey.of("cct", "confined_modulus_pa", {"normal_stress_pa": 15e3}),
+             ResponseKey.of("anchor", "peak_pull_force_n", {"packing_height_m": 0.32})]
+    options = battery_options(keys, {"speed_factor": 20.0})
+    assert options == {"speed_factor": 20.0, "dst_normal_stresses_pa": [10.5e3, 24e3],
+                       "cct_window_stresses_pa": [15e3]}
+    # a user's explicit choice wins
+    assert battery_options(keys, {"dst_normal_stresses_pa": [5e3, 9e3]})["dst_normal_stresses_pa"] == [5e3, 9e3]
