@@ -76,8 +76,8 @@ class Attribution:
         return self.ranking[0] if self.ranking else None
 
     def indicated(self) -> list[str]:
-        """The effects to try, best first: the top effect, then its alias group, then the rest
-        that clear the bar."""
+        """The effects to try, in ranking order: those significant after Holm, with a plausible
+        strength, explaining at least MIN_EXPLAINED of the remaining misfit."""
         return [r.name for r in self.ranking if r.p_holm < ALPHA and r.plausible and r.score.explained >= MIN_EXPLAINED]
 
     def to_dict(self) -> dict[str, Any]:
