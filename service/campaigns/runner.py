@@ -246,8 +246,10 @@ class CampaignRunner:
         report = build_report(config, it.models, it.optimum, confirmation, targets, assessment)
         stored = {"job_id": confirmation.job_id, "seed": confirmation.seed, "parameters": confirmation.natural,
                   "responses": confirmation.responses}
+        # a diagnosis needs misfit the parameters cannot absorb: more measured values than free parameters
+        diagnosable = ((report.get("lack_of_fit") or {}).get("dof") or 0) > 0
         plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed) if (
-            config.diagnose and report["verdict"] != "calibrated") else []
+            config.diagnose and diagnosable and report["verdict"] != "calibrated") else []
         if plan:
             for k, (name, natural, seed) in enumerate(plan):
                 session.add(CampaignRun(iteration_id=it.id, kind="diagnosis", std_order=k + 1, run_order=k + 1,
