@@ -128,8 +128,9 @@ def report(campaign_id: CampaignId, number: int | None = IterationQ, session: Se
 
 @router.get("/{campaign_id}/diagnosis",
             summary="Which effect is missing: ranking (effect, LM, p, explained share, strength), alias groups, "
-                    "fingerprints, what to measure next")
-def diagnosis(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+                    "fingerprints, what to measure next", responses=_NOT_YET)
+def diagnosis(campaign_id: CampaignId, number: int | None = IterationQ,
+              session: Session = Depends(get_session)) -> dict:
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     if "diagnosis" not in value:
         reason = ("the model reproduces the measurements; nothing to diagnose" if value.get("verdict") == "calibrated"
@@ -142,7 +143,7 @@ def diagnosis(campaign_id: int, number: int | None = IterationQ, session: Sessio
 @router.get("/{campaign_id}/history",
             summary="Per iteration: effects, optimum, weighted error overall and per test with the noise band, "
                     "verdict, effect added next; per target the residual in each iteration")
-def history(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+def history(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
     from service.campaigns.analysis import active_effects
 
     campaign = get_campaign(session, campaign_id)
