@@ -131,12 +131,15 @@ class _Problem:
         xm = a * self.coded_all(u)[idx] + b
         P = xm[None, :] ** E
         val = float(beta @ np.prod(P, axis=1))
+        # d/dx_j of each monomial: its exponent times x_j^(e-1), times the product of the other
+        # factors' powers (prefix x suffix products, so no division by a zero coordinate)
+        ones = np.ones((P.shape[0], 1))
+        prefix = np.cumprod(np.hstack([ones, P[:, :-1]]), axis=1)
+        suffix = np.cumprod(np.hstack([ones, P[:, :0:-1]]), axis=1)[:, ::-1]
+        dP = np.where(E > 0, E * xm[None, :] ** np.maximum(E - 1, 0), 0.0)
+        g = a * (beta @ (dP * prefix * suffix))
         g_all = np.zeros(len(self.names))
-        for j in range(E.shape[1]):
-            Pj = P.copy()
-            e = E[:, j]
-            Pj[:, j] = np.where(e > 0, e * xm[j] ** np.maximum(e - 1, 0), 0.0)
-            g_all[idx[j]] += a[j] * float(beta @ np.prod(Pj, axis=1))
+        np.add.at(g_all, idx, g)
         return val, g_all[self.free_idx]
 
     def predict(self, key, params: dict[str, float]) -> float:

@@ -16,11 +16,12 @@ from fastapi import FastAPI
 
 from service.config import Settings, get_settings
 from service.db import make_engine, make_session_factory
+from service.api.openapi import document_errors
 from service.errors import install_error_handlers
 from service.security import check_bind, install_token_guard
 
 API_PREFIX = "/api/v1"
-ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules")
+ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules", "effects")
 
 
 def _seed(session_factory) -> None:
@@ -100,6 +101,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.session_factory = make_session_factory(app.state.engine, settings)
     app.state.executor, app.state.worker_pool, app.state.dispatcher = "none", None, None
     install_error_handlers(app)
+    document_errors(app)
     install_token_guard(app, settings)
     for name in ROUTERS:
         app.include_router(importlib.import_module(f"service.api.{name}").router, prefix=API_PREFIX)

@@ -41,6 +41,13 @@ def cmd_serve(args: argparse.Namespace) -> int:
     settings = _settings(args, host=args.host, port=args.port, workers=args.workers,
                          dask_scheduler=args.dask_scheduler)
     check_bind(settings)  # before the heavy imports: refuse a non-loopback host without a token
+    from service.storage import StorageError, check_storage
+
+    try:
+        check_storage(settings.database_url)  # one line and exit 1, not a traceback, when it cannot be used
+    except StorageError as exc:
+        print(f"demcal serve: {exc}", file=sys.stderr)
+        return 1
     import uvicorn
 
     from service.app import create_app
@@ -52,9 +59,15 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def cmd_worker(args: argparse.Namespace) -> int:
+    from service.storage import StorageError, check_storage
     from service.workers.process import run_worker
 
     settings = _settings(args, dask_scheduler=args.dask_scheduler)
+    try:
+        check_storage(settings.database_url)
+    except StorageError as exc:
+        print(f"demcal worker: {exc}", file=sys.stderr)
+        return 1
     _logging()
     return run_worker(settings)
 
@@ -63,10 +76,12 @@ def cmd_db_upgrade(args: argparse.Namespace) -> int:
     from service.migrate import upgrade
 
     settings = _settings(args)
+    from service.storage import describe
+
     try:
         revision = upgrade(settings.database_url, args.revision)
     except Exception as exc:  # unreachable server, unknown revision: say so, no traceback
-        print(f"demcal db upgrade: {type(exc).__name__}: {exc}", file=sys.stderr)
+        print(f"demcal db upgrade: {describe(exc)}", file=sys.stderr)
         return 1
     print(f"database {settings.database_url} is at revision {revision}")
     return 0

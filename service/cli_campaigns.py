@@ -127,6 +127,11 @@ def material_add(args) -> int:
     return _emit(args, m, f"measurement {m['id']}: {m['test']}/{m['quantity']} mean {_fmt(m['mean'])} {m['unit']}")
 
 
+def material_copy(args) -> int:
+    m = _call(args, "POST", f"/materials/{args.id}/copy", {"name": args.name})
+    return _emit(args, m, f"material {m['id']}: {m['name']} (copy of #{args.id}, {len(m['measurements'])} measurements)")
+
+
 # -- campaigns -------------------------------------------------------------------------------------
 
 def _factor(text: str) -> dict:
@@ -179,6 +184,41 @@ def campaign_action(args) -> int:
     return _emit(args, c, _status_text(c))
 
 
+def campaign_diagnosis(args) -> int:
+    params = {"number": args.iteration} if args.iteration else None
+    d = _call(args, "GET", f"/campaigns/{args.id}/diagnosis", params=params)
+    rows = [[r["effect"], r["title"], r["lm"], r["p_holm"], r["explained"],
+             r["strength"] if r["strength"] is not None else r.get("fraction_of_switch"),
+             "yes" if r["plausible"] else "no", r["alias_group"] or ""] for r in d["ranking"]]
+    text = (f"campaign {d['campaign_id']} iteration {d['iteration']}: {d['verdict']}\n{d['message']}\n\n"
+            + _table(["effect", "physics", "LM", "Holm p", "explained", "strength", "plausible", "alias group"],
+                     [[_fmt(c) if isinstance(c, float) else c for c in row] for row in rows]))
+    for g in d.get("alias_groups", []):
+        text += f"\nalias group {g['group']}: {', '.join(g['effects'])}: {g['message']}"
+    if d.get("measure_next"):
+        text += "\nmeasure next: " + "; ".join(d["measure_next"])
+    return _emit(args, d, text)
+
+
+def campaign_history(args) -> int:
+    h = _call(args, "GET", f"/campaigns/{args.id}/history")
+    rows = [[e["number"], ", ".join(e["effects"]) or "-", e["chi2_per_dof"],
+             "-".join(_fmt(x) for x in e["noise_band"] or []), e["verdict"],
+             ", ".join(e.get("effect_added_next") or []) or "-"] for e in h["iterations"]]
+    return _emit(args, h, _table(["iteration", "effects", "chi2/dof", "noise band", "verdict", "added next"],
+                                 [[_fmt(c) if isinstance(c, float) else c for c in row] for row in rows]))
+
+
+def campaign_next(args) -> int:
+    body = {}
+    if args.add_effect:
+        body["add_effect"] = args.add_effect
+    if args.strength_range:
+        body["strength_range"] = [float(x) for x in args.strength_range.split(":")]
+    c = _call(args, "POST", f"/campaigns/{args.id}/iterations", body=body)
+    return _emit(args, c, _status_text(c))
+
+
 def campaign_report(args) -> int:
     params = {"number": args.iteration} if args.iteration else None
     r = _call(args, "GET", f"/campaigns/{args.id}/report", params=params)
@@ -191,8 +231,20 @@ def campaign_report(args) -> int:
                       "min|z| in box", "status"],
                      [[c if not isinstance(c, list) else "[" + ", ".join(_fmt(x) for x in c) + "]" for c in row]
                       for row in rows]))
-    if r.get("next_step"):
-        text += f"\n\nconfirmation: {r['next_step'].get('verdict')}: {r['next_step'].get('reason')}"
+    if r.get("meaning"):
+        text += f"\n\n{r['verdict']}: {r['meaning']}"
+    lof = r.get("lack_of_fit")
+    if lof:
+        text += (f"\nlack of fit: chi2 {_fmt(lof['statistic'])} on {lof['dof']} dof "
+                 f"(per dof {_fmt(lof['chi2_per_dof'])}, "
+                 f"noise band {_fmt(lof['noise_band'][0])}-{_fmt(lof['noise_band'][1])}), p {_fmt(lof['p_value'])}")
+    for b in (r.get("conflicts") or {}).get("active_bounds", []):
+        text += f"\nat a bound: {b['parameter']} at its {b['side']} end, pushing {b['pushes']}"
+    for p in (r.get("conflicts") or {}).get("priors_pulled", []):
+        text += f"\nprior conflict: {p['meaning']}"
+    if r.get("surrogate_check"):
+        text += (f"\nresponse surfaces at the optimum: {r['surrogate_check'].get('verdict')}: "
+                 f"{r['surrogate_check'].get('reason')}")
     return _emit(args, r, text)
 
 
@@ -247,6 +299,9 @@ def register(subparsers) -> None:
     msub = material.add_subparsers(dest="material_command", required=True)
     _leaf(msub, "list", material_list, "list materials")
     _leaf(msub, "show", material_show, "show a material's measurements (SI)").add_argument("id", type=int)
+    cp = _leaf(msub, "copy", material_copy, "copy a material (e.g. the read-only bundled one) to edit it")
+    cp.add_argument("id", type=int)
+    cp.add_argument("--name", required=True, help="name of the copy")
     add = _leaf(msub, "add-measurement", material_add, "add replicate values of one measurement")
     add.add_argument("id", type=int)
     add.add_argument("--test", required=True)
@@ -279,6 +334,15 @@ def register(subparsers) -> None:
     report = _leaf(csub, "report", campaign_report, "measured vs predicted vs confirmed per target")
     report.add_argument("id", type=int)
     report.add_argument("--iteration", type=int)
+    diag = _leaf(csub, "diagnosis", campaign_diagnosis, "which effect is missing: ranking, alias groups")
+    diag.add_argument("id", type=int)
+    diag.add_argument("--iteration", type=int)
+    _leaf(csub, "history", campaign_history, "weighted error per iteration and the effect added").add_argument(
+        "id", type=int)
+    nxt = _leaf(csub, "next", campaign_next, "start the next iteration, e.g. with an effect added as a factor")
+    nxt.add_argument("id", type=int)
+    nxt.add_argument("--add-effect", help="a candidate from GET /api/v1/effects, e.g. rolling_epsd2")
+    nxt.add_argument("--strength-range", help="LOW:HIGH of the added effect's strength (SI)")
 
     schedule = subparsers.add_parser("schedule", help="cron schedules that start campaigns")
     ssub = schedule.add_subparsers(dest="schedule_command", required=True)

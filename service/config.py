@@ -31,15 +31,22 @@ class Settings(BaseModel):
         None, ge=1, description="numba threads of each local worker's jobs; None = cores // workers (at least 1): "
         "jobs side by side on one thread each give the most batteries per hour (bench/battery_threads.py)")
     token: str | None = Field(None, description="bearer token for write endpoints (required off loopback)")
+    tokens: str | None = Field(
+        None, description="named bearer tokens 'alice:s3cret,bob:0ther'; the name is the client's identity "
+                          "for per-client limits (DEMCAL_TOKENS)")
     lease_s: float = Field(30.0, gt=0, description="a claimed job is lost unless heartbeated within this")
     heartbeat_s: float = Field(5.0, gt=0)
     poll_interval_s: float = Field(0.5, gt=0, description="idle worker wait between claim attempts")
     max_attempts: int = Field(3, ge=1, description="claims per job before a lost lease fails it")
     tick_interval_s: float = Field(2.0, gt=0, description="campaign runner / scheduler period")
     dask_scheduler: str | None = None
+    dask_connect_timeout_s: float = Field(
+        10.0, gt=0, description="how long the Dask client tries to (re)connect before the dispatcher drops it "
+                                "and starts over (it keeps trying, reporting unhealthy meanwhile)")
     max_particles: int = Field(200_000, ge=1)
     max_simulated_time_s: float = Field(3600.0, gt=0)
     max_queued_jobs_per_client: int = Field(10_000, ge=1)
+    max_design_runs: int = Field(512, ge=1, description="runs of one design (campaign or preview)")
     start_workers: bool = True
     start_background: bool = True
     seed_materials: bool = True

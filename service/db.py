@@ -22,6 +22,10 @@ def _is_memory(url) -> bool:
     return url.database in (None, "", ":memory:") or "mode=memory" in str(url)
 
 
+def _is_uri(url) -> bool:
+    return str(url.query.get("uri", "")).lower() == "true" or (url.database or "").startswith("file:")
+
+
 def make_engine(url: str) -> Engine:
     parsed = make_url(url)
     if parsed.get_backend_name() != "sqlite":
@@ -29,7 +33,7 @@ def make_engine(url: str) -> Engine:
     kwargs: dict = {"connect_args": {"check_same_thread": False, "timeout": SQLITE_BUSY_TIMEOUT_MS / 1000}}
     if _is_memory(parsed):
         kwargs["poolclass"] = StaticPool  # one shared connection, or each would see its own database
-    else:
+    elif not _is_uri(parsed):  # a file: URI (e.g. ?mode=ro) names an existing file; create nothing
         Path(parsed.database).expanduser().parent.mkdir(parents=True, exist_ok=True)
     engine = create_engine(url, **kwargs)
 

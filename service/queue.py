@@ -13,7 +13,7 @@ from __future__ import annotations
 from datetime import timedelta
 from typing import Any
 
-from sqlalchemy import func, select, update
+from sqlalchemy import func, insert, literal, select, text, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -23,7 +23,7 @@ from service.config import Settings, get_settings
 from service.errors import Conflict, Invalid, NotFound, TooMany
 from service.models.base import utcnow
 from service.models.job import Job
-from service.security import check_limits
+from service.limits import check_limits
 
 EVALUATORS = ("dem", "analytic")
 CLAIM_CANDIDATES = 8  # queued ids tried per claim before giving up on this round
@@ -71,19 +71,14 @@ def submit_job_ex(
         if existing is not None:
             return _replay(existing, spec_json, evaluator), False
     check_limits(spec, cfg)
-    unfinished = session.scalar(
-        select(func.count(Job.id)).where(Job.client_id == client_id, Job.status.in_(("queued", "running"))))
-    if unfinished >= cfg.max_queued_jobs_per_client:
-        raise TooMany(f"client {client_id!r} already has {unfinished} unfinished jobs "
-                      f"(limit {cfg.max_queued_jobs_per_client})", ["header", "X-Client-Id"])
-    job = Job(
+    values = dict(
         status="queued", evaluator=evaluator, test=spec.test, fidelity=spec.fidelity, spec=spec_json,
         seed=spec.seed, priority=priority, attempts=0, max_attempts=max_attempts or cfg.max_attempts,
         cancel_requested=False, progress_fraction=0.0, idempotency_key=idempotency_key,
         client_id=client_id, campaign_id=campaign_id, created_at=utcnow(),
     )
-    session.add(job)
     try:
+        job_id = _insert_within_limit(session, values, cfg.max_queued_jobs_per_client)
         session.commit()
     except IntegrityError:
         # A concurrent submission with the same key won the unique index.
@@ -92,7 +87,37 @@ def submit_job_ex(
         if existing is None:
             raise
         return _replay(existing, spec_json, evaluator), False
-    return job, True
+    if job_id is None:
+        session.rollback()
+        unfinished = _unfinished(session, client_id)
+        raise TooMany(f"client {client_id!r} already has {unfinished} unfinished jobs "
+                      f"(limit {cfg.max_queued_jobs_per_client})", ["header", "X-Client-Id"])
+    return get_job(session, job_id), True
+
+
+def _unfinished(session: Session, client_id: str) -> int:
+    return int(session.scalar(select(func.count(Job.id)).where(
+        Job.client_id == client_id, Job.status.in_(("queued", "running")))) or 0)
+
+
+def _insert_within_limit(session: Session, values: dict[str, Any], limit: int) -> int | None:
+    """Insert the job only if its client has fewer than ``limit`` unfinished jobs; the new id, or None.
+
+    Atomic: the count and the insert are one statement (``INSERT ... SELECT ... WHERE count < limit``),
+    which SQLite runs under its single write lock, so a burst of submissions admits exactly ``limit``
+    (a count, then an insert, admitted 4 and 7 of a limit of 3). PostgreSQL runs concurrent statements
+    on snapshots, so there the client's transaction-scoped advisory lock serialises them first.
+    """
+    if session.get_bind().dialect.name == "postgresql":
+        session.execute(text("SELECT pg_advisory_xact_lock(hashtext(:c))"), {"c": values["client_id"]})
+    table = Job.__table__
+    columns = list(values)
+    unfinished = (select(func.count()).select_from(table)
+                  .where(table.c.client_id == values["client_id"], table.c.status.in_(("queued", "running")))
+                  .scalar_subquery())
+    source = select(*[literal(values[c], type_=table.c[c].type) for c in columns]).where(unfinished < limit)
+    result = session.execute(insert(table).from_select(columns, source).returning(table.c.id))
+    return result.scalar()
 
 
 def submit_job(session: Session, spec: JobSpec, **kwargs) -> Job:
@@ -269,3 +294,29 @@ def release_job(session: Session, job_id: int, worker_id: str) -> bool:
     })
     session.commit()
     return done
+
+
+def requeue_job(session: Session, job_id: int, worker_id: str, reason: str) -> bool:
+    """The executor lost this attempt (its Dask worker or scheduler is gone): queued again with the
+    attempt counted, or failed once ``max_attempts`` claims are used up. Only the owner can do it."""
+    job = get_job(session, job_id)
+    if job.status != "running" or job.lease_owner != worker_id:
+        session.commit()
+        return False
+    if job.attempts >= job.max_attempts:
+        values = {"status": "failed", "finished_at": utcnow(),
+                  "error": f"lost its executor {job.attempts} times (max_attempts={job.max_attempts}); {reason}"}
+    else:
+        values = {"status": "queued", "error": f"attempt {job.attempts}: {reason}", "progress_fraction": 0.0,
+                  "progress_phase": None}
+    done = _update(session, job_id, _owned(worker_id), {**values, "lease_owner": None, "lease_expires_at": None})
+    session.commit()
+    return done
+
+
+def count_attempt(session: Session, job_id: int, worker_id: str) -> int | None:
+    """One more attempt of a job the executor re-ran by itself (Dask re-runs a task whose worker died);
+    returns the attempts now counted, or None if the job is no longer this owner's."""
+    done = _update(session, job_id, _owned(worker_id), {"attempts": Job.attempts + 1})
+    session.commit()
+    return get_job(session, job_id).attempts if done else None

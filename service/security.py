@@ -1,125 +1,101 @@
-"""Bind address policy, bearer token for writes, and per-job resource limits.
+"""Bind address policy, bearer tokens for writes, and who a request is (its client identity).
 
-Off loopback, anyone on the network could queue hour-long DEM runs, so every
-write (POST/PUT/PATCH/DELETE) then needs ``Authorization: Bearer <token>``. The
-limits stop runaway jobs before they are queued: particle count and simulated
-time are *estimated* from the spec with the lab's fidelity presets (container,
-particle sizes, lab speeds), before anything is queued.
+Off loopback, anyone on the network could queue hour-long DEM runs, so every write
+(POST/PUT/PATCH/DELETE) then needs ``Authorization: Bearer <token>``. Tokens can be named
+(``DEMCAL_TOKENS=alice:s3cret,bob:0ther``): the name is the client identity per-client limits
+count against, so it cannot be forged by a header. Only on loopback (tests, a single user's
+machine) may ``X-Client-Id`` choose the identity.
+
+Resource limits (particles, simulated time, design size) are in ``service.limits``.
 """
 from __future__ import annotations
 
 import hmac
 import ipaddress
-import math
-import re
 
-from fastapi import FastAPI, Request
+from fastapi import FastAPI, Header, Request
 from fastapi.responses import JSONResponse
 
-from engine.lab.context import RunContext
-from engine.lab.presets import fidelity
-from engine.lab.spec import JobSpec
 from service.config import Settings
-from service.errors import Invalid, Unauthorized
+from service.errors import Unauthorized
 
 WRITE_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
-
-# The thesis's DST holds each normal stress ~20 s to stabilise before shearing (Sec. 4.4).
-_DST_STABILISATION_S = 20.0
+DEFAULT_TOKEN_NAME = "token"
 
 
-def is_loopback(host: str) -> bool:
-    if host in ("localhost", ""):
+def is_loopback(host: str | None) -> bool:
+    """Only names that can mean nothing but this machine. "" (and 0.0.0.0, ::) mean every interface."""
+    if host is None or host.strip() == "":
+        return False
+    if host == "localhost":
         return True
     try:
-        return ipaddress.ip_address(host).is_loopback
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
     except ValueError:
         return False
 
 
+def token_names(settings: Settings) -> dict[str, str]:
+    """token -> client name, from DEMCAL_TOKEN (named "token") and DEMCAL_TOKENS ("name:token,...")."""
+    table: dict[str, str] = {}
+    if settings.token:
+        table[settings.token] = DEFAULT_TOKEN_NAME
+    for item in (settings.tokens or "").split(","):
+        name, sep, token = item.strip().partition(":")
+        if not item.strip():
+            continue
+        if not sep or not name.strip() or not token.strip():
+            raise SystemExit(f"DEMCAL_TOKENS: {item.strip()!r} is not name:token")
+        table[token.strip()] = name.strip()
+    return table
+
+
 def check_bind(settings: Settings) -> None:
     """Refuse to serve off loopback without a token (raised before the socket opens)."""
-    if not is_loopback(settings.host) and not settings.token:
+    if not is_loopback(settings.host) and not token_names(settings):
+        where = repr(settings.host) if settings.host.strip() else '"" (every interface)'
         raise SystemExit(
-            f"refusing to bind {settings.host}: set DEMCAL_TOKEN (write endpoints need a bearer token off loopback)"
-        )
+            f"refusing to bind {where}: set DEMCAL_TOKEN or DEMCAL_TOKENS (write endpoints need a bearer token "
+            "off loopback)")
+
+
+def _match(table: dict[str, str], supplied: str) -> str | None:
+    found = None
+    for token, name in table.items():  # compare with every token: the time does not say which matched
+        if hmac.compare_digest(supplied.encode(), token.encode()):
+            found = name
+    return found
 
 
 def install_token_guard(app: FastAPI, settings: Settings) -> None:
-    """Writes need the token whenever one is configured (always, off loopback)."""
-    if not settings.token:
+    """Writes need a token whenever one is configured (always, off loopback); the token's name is
+    stored as ``request.state.client_name``."""
+    table = token_names(settings)
+    if not table:
         return
-    expected = settings.token.encode()
 
     @app.middleware("http")
     async def _require_token(request: Request, call_next):
-        if request.method in WRITE_METHODS:
-            header = request.headers.get("authorization", "")
-            scheme, _, supplied = header.partition(" ")
-            if scheme.lower() != "bearer" or not hmac.compare_digest(supplied.strip().encode(), expected):
-                err = Unauthorized("missing or wrong bearer token", ["header", "Authorization"])
-                return JSONResponse({"detail": err.detail()}, status_code=401,
-                                    headers={"WWW-Authenticate": "Bearer"})
+        header = request.headers.get("authorization", "")
+        scheme, _, supplied = header.partition(" ")
+        name = _match(table, supplied.strip()) if scheme.lower() == "bearer" else None
+        request.state.client_name = name
+        if request.method in WRITE_METHODS and name is None:
+            err = Unauthorized("missing or wrong bearer token", ["header", "Authorization"])
+            return JSONResponse({"detail": err.detail()}, status_code=401, headers={"WWW-Authenticate": "Bearer"})
         return await call_next(request)
 
 
-def _preset(spec: JobSpec):
-    try:
-        return fidelity(spec.fidelity, spec.parameters.particle_radius_m)
-    except ValueError as exc:
-        raise Invalid(str(exc), "parameters.particle_radius_m") from None
-
-
-def estimated_particles(spec: JobSpec) -> int:
-    """Particles filling the fidelity's container: solids volume / mean particle volume."""
-    preset = _preset(spec)
-    mean_volume_m3 = sum(
-        shape.volume_fraction * 4.0 / 3.0 * math.pi * (0.5 * (shape.radius_min_m + shape.radius_max_m)) ** 3
-        for shape in preset.shapes
-    )
-    solids_m3 = preset.container_area_m2 * preset.packing_height_m * preset.expected_solid_fraction
-    return int(math.ceil(solids_m3 * preset.fill_margin / mean_volume_m3))
-
-
-def estimated_simulated_time_s(spec: JobSpec) -> float:
-    """The DST's slow shearing dominates: per normal stress, stabilise then shear at lab speed x factor."""
-    preset = _preset(spec)
-    speed_factor = spec.options.speed_factor or preset.default_speed_factor
-    distance_m = spec.options.shear_distance_m or preset.shear_distance_m
-    per_stress_s = _DST_STABILISATION_S + distance_m / (preset.lab_shear_speed_m_s * speed_factor)
-    if spec.test not in ("dst", "battery"):
-        return per_stress_s
-    stresses = len(spec.options.dst_normal_stresses_pa or preset.dst_normal_stresses_pa)
-    return stresses * per_stress_s
-
-
-def validate_spec(spec: JobSpec) -> None:
-    """The lab's own pre-run checks (e.g. DST stresses above the CCT maximum), as a 422 at submission
-    rather than a failed job later; the lab's messages start with the field path."""
-    _preset(spec)  # an unknown fidelity / misplaced particle radius, with its own field
-    try:
-        RunContext.from_spec(spec).validate()
-    except ValueError as exc:
-        message = str(exc)
-        match = re.match(r"((?:options|parameters)\.[a-z_0-9]+)(:?)\s*", message)
-        if match is None:
-            raise Invalid(message, "options") from None
-        raise Invalid(message[match.end():] if match.group(2) else message, match.group(1)) from None
-
-
-def check_limits(spec: JobSpec, settings: Settings, field_prefix: str = "") -> None:
-    validate_spec(spec)
-    particles = estimated_particles(spec)
-    if particles > settings.max_particles:
-        raise Invalid(
-            f"about {particles} particles exceeds the limit of {settings.max_particles}"
-            " (raise particle_radius_m or DEMCAL_MAX_PARTICLES)",
-            f"{field_prefix}parameters.particle_radius_m" if spec.fidelity == "screening" else f"{field_prefix}fidelity",
-        )
-    sim_s = estimated_simulated_time_s(spec)
-    if sim_s > settings.max_simulated_time_s:
-        raise Invalid(
-            f"about {sim_s:.0f} s of simulated time exceeds the limit of {settings.max_simulated_time_s:.0f} s"
-            " (raise options.speed_factor or DEMCAL_MAX_SIMULATED_TIME_S)",
-            f"{field_prefix}options.speed_factor",
-        )
+def client_id(request: Request, x_client_id: str | None = Header(
+        None, min_length=1, max_length=100,
+        description="client identity for per-client limits; honoured from loopback peers only (off loopback "
+                    "the identity is the bearer token's name)")) -> str:
+    """Who per-client limits count against: the token's name; else, from a loopback peer, X-Client-Id;
+    else the peer address. A remote peer cannot choose an identity by header."""
+    name = getattr(request.state, "client_name", None)
+    if name:
+        return f"token:{name}"
+    peer = request.client.host if request.client else None
+    if x_client_id and (peer is None or is_loopback(peer)):
+        return x_client_id
+    return peer or "anonymous"

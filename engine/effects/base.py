@@ -19,12 +19,70 @@ effect is on for the pair) and the kernel skips the call where it is 0.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 from pydantic import BaseModel
 
 STAGES = ("stiffness", "normal_extra", "rolling")
+
+# Tests and quantities of a fingerprint row (the signs a missing effect leaves on the residuals,
+# measured - model, before the baseline parameters compensate). Keys are calibration's vocabulary.
+FINGERPRINT_COLUMNS = ("bulk_density", "modulus_level", "modulus_slope", "cohesion", "friction_angle",
+                       "dilatancy", "angle_of_repose", "pull_force")
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """What the missing-physics diagnosis (``calibration/``) needs to know of a physical effect.
+
+    Declared by the module that implements the effect, so the list of candidates cannot drift from
+    the list of effects. ``factor`` is the dotted path of the strength parameter in
+    ``MicroParameters`` (``effects.rolling_epsd2.rolling_friction``, ``clump_aspect_ratio``): the
+    diagnosis switches the effect on there, and a campaign varies it there as a design factor.
+
+    ``off_value`` is the strength at which the effect vanishes (0 friction, aspect ratio 1). An effect
+    that replaces a baseline law instead of adding to it (Hertz-Mindlin replaces the linear spring)
+    has no such value: ``off_value`` is None and ``reference`` gives the strength that matches the
+    baseline at the calibrated parameters, so switching it on changes the shape of the response, not
+    its level.
+    """
+
+    name: str
+    title: str
+    factor: str
+    unit: str
+    plausible_range: tuple[float, float]
+    step: float
+    off_value: float | None = 0.0
+    # fingerprint: FINGERPRINT_COLUMNS entry -> "+", "++", "-", "0", "+-" (sign of measured - model)
+    fingerprint: dict[str, str] = field(default_factory=dict)
+    physics: str = ""
+    # (MicroParameters) -> strength matched to the baseline law; switch-type effects only
+    reference: Callable[..., float] | None = None
+    # further parameters the effect needs when switched on (e.g. Poisson's ratio), fixed values
+    companions: dict[str, float] = field(default_factory=dict)
+    # fidelities whose lab can build the effect (None: all); the thesis fidelity has its own clump mix
+    fidelities: tuple[str, ...] | None = None
+
+    def applies_to(self, fidelity: str | None) -> bool:
+        return fidelity is None or self.fidelities is None or fidelity in self.fidelities
+
+    def __post_init__(self):
+        low, high = self.plausible_range
+        if not low < high:
+            raise ValueError(f"candidate {self.name}: plausible range must have low < high")
+        if not self.step > 0:
+            raise ValueError(f"candidate {self.name}: step must be positive")
+        unknown = set(self.fingerprint) - set(FINGERPRINT_COLUMNS)
+        if unknown:
+            raise ValueError(f"candidate {self.name}: unknown fingerprint columns {sorted(unknown)}")
+        if self.off_value is None and self.reference is None:
+            raise ValueError(f"candidate {self.name}: a switch-type effect needs a reference strength")
+
+    @property
+    def is_switch(self) -> bool:
+        return self.off_value is None
 
 
 @dataclass(frozen=True)
@@ -41,3 +99,5 @@ class Effect:
     doc: str = ""
     # critical time step this effect imposes: (params, density_kg_m3, r_min_m) -> dt_s (None: none)
     timestep_limit: Callable[..., float] | None = None
+    # the missing-physics diagnosis's view of this effect; None: not a diagnosis candidate
+    candidate: Candidate | None = None

@@ -10,7 +10,7 @@ import math
 from numba import njit
 from pydantic import BaseModel, ConfigDict, Field
 
-from .base import Effect
+from .base import Candidate, Effect
 
 
 class Params(BaseModel):
@@ -40,7 +40,19 @@ def apply(p, delta, r_i, r_j, dist):
     return -p[1] * contact_area(delta, r_i, r_j, dist)
 
 
+# Plausible range: a moist aggregate with fines has a bulk cohesion of 1-10 kPa. With a linear contact
+# of ~1e6 N/m on 20-40 mm grains, a contact at 30 kPa overlaps ~4e-5 m, so its contact area
+# pi R* delta is ~1.5e-6 m2 and a pull of c d^2 ~ 6 N per contact needs k_c ~ 4e6 J/m3: 1e6-1e7 J/m3.
+CANDIDATE = Candidate(
+    name="cohesion_sjkr", title="cohesion", factor="effects.cohesion_sjkr.cohesion_energy_density_j_m3",
+    unit="J/m3", plausible_range=(1.0e6, 1.0e7), step=3.0e6,
+    fingerprint={"bulk_density": "-", "cohesion": "++", "angle_of_repose": "++", "pull_force": "+"},
+    physics="Moisture and fines bind grains: the Mohr-Coulomb line gains an intercept c > 0 while its "
+            "slope stays, the angle of repose rises steeply. Calibration raises phi to compensate, so "
+            "the shear-stress residual falls with normal stress (+ at the lowest load, - at the highest).",
+)
+
 EFFECT = Effect(
     name="cohesion_sjkr", stage="normal_extra", params_model=Params, n_props=1, n_hist=0,
-    pair_props=pair_props, module=__name__, doc=__doc__,
+    pair_props=pair_props, module=__name__, doc=__doc__, candidate=CANDIDATE,
 )

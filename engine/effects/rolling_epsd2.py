@@ -11,7 +11,7 @@ from numba import njit
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..springs import onto_plane_keep_length
-from .base import Effect
+from .base import Candidate, Effect
 
 
 class Params(BaseModel):
@@ -49,7 +49,20 @@ def apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, dt):
     return m0, m1, m2
 
 
+# Crushed rock: mu_r 0.05-0.5 (Ai et al. 2011; Wensrich & Katterfeld 2012). Rolling resistance stands in
+# for the interlocking of angular grains (Estrada et al. 2011), so it aliases with particle shape.
+CANDIDATE = Candidate(
+    name="rolling_epsd2", title="rolling resistance", factor="effects.rolling_epsd2.rolling_friction",
+    unit="1", plausible_range=(0.05, 0.5), step=0.15,
+    fingerprint={"bulk_density": "-", "friction_angle": "+", "dilatancy": "+", "angle_of_repose": "+",
+                 "pull_force": "+"},
+    physics="Angular grains resist rolling: strength (phi), dilatancy, angle of repose and pull-out "
+            "force rise and the packing loosens. Round spheres without it saturate near phi 40-45 deg "
+            "however high the sliding friction (Estrada et al. 2008), so mu_pp calibrates to its upper "
+            "bound and the friction angle stays out of reach.",
+)
+
 EFFECT = Effect(
     name="rolling_epsd2", stage="rolling", params_model=Params, n_props=1, n_hist=3,
-    pair_props=pair_props, module=__name__, doc=__doc__,
+    pair_props=pair_props, module=__name__, doc=__doc__, candidate=CANDIDATE,
 )

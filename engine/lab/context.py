@@ -34,7 +34,8 @@ class RunContext:
 
     @classmethod
     def from_spec(cls, spec: JobSpec, progress=None, should_cancel=None) -> "RunContext":
-        return cls(spec, fidelity(spec.fidelity, spec.parameters.particle_radius_m), progress, should_cancel)
+        p = spec.parameters
+        return cls(spec, fidelity(spec.fidelity, p.particle_radius_m, p.clump_aspect_ratio), progress, should_cancel)
 
     # ----------------------------------------------------------------- options with preset defaults
     @property
@@ -64,8 +65,11 @@ class RunContext:
     def dst_normal_stresses_pa(self) -> list[float]:
         o = self.spec.options.dst_normal_stresses_pa
         stresses = list(o) if o else list(self.preset.dst_normal_stresses_pa)
-        if any(s <= 0 for s in stresses):
-            raise ValueError("options.dst_normal_stresses_pa: every normal stress must be positive")
+        if any(not (math.isfinite(s) and s > 0) for s in stresses):
+            raise ValueError("options.dst_normal_stresses_pa: every normal stress must be a finite number > 0 Pa")
+        if len(set(stresses)) != len(stresses):
+            # each load's results are keyed by its stress: two runs under one key could not be told apart
+            raise ValueError(f"options.dst_normal_stresses_pa: the stresses must be distinct, got {stresses}")
         return stresses
 
     @property
@@ -93,6 +97,11 @@ class RunContext:
             raise ValueError("options.moving_average_span must be odd")
         if self.cct_max_stress_pa <= 0:
             raise ValueError("options.cct_max_stress_pa must be positive")
+        windows = o.cct_window_stresses_pa
+        if windows and max(windows) >= self.cct_max_stress_pa:
+            raise ValueError(
+                f"options.cct_window_stresses_pa: every stress must be below the CCT maximum stress "
+                f"({self.cct_max_stress_pa:.6g} Pa; options.cct_max_stress_pa), got {max(windows):.6g} Pa")
         if self.spec.test in ("dst", "battery") and max(self.dst_normal_stresses_pa) > self.cct_max_stress_pa:
             raise ValueError("options.dst_normal_stresses_pa: the DST preparation compresses to the CCT maximum "
                              "first, so every DST stress must be at most options.cct_max_stress_pa")

@@ -15,17 +15,24 @@ in the quasi-static range (docs/lab.md).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 
 @dataclass(frozen=True)
 class ShapeFraction:
-    """One clump shape of a mix: template name, radius bounds (Gaussian between them), volume share."""
+    """One clump shape of a mix: template name, sphere radius bounds (Gaussian between them), volume share.
+
+    ``shape`` "custom" takes its body from ``template`` (an ``engine.particles.templates.ClumpTemplate``
+    whose largest sphere has radius ``radius_min_m`` = ``radius_max_m``), e.g. the elongated screening
+    grains of ``engine/lab/shape.py``.
+    """
 
     shape: str
     radius_min_m: float
     radius_max_m: float
     volume_fraction: float
+    template: Any = None
 
 
 @dataclass(frozen=True)
@@ -157,8 +164,14 @@ SCREENING = Fidelity(
 FIDELITIES = {"thesis": THESIS, "screening": SCREENING}
 
 
-def fidelity(name: str, particle_radius_m: float | None = None) -> Fidelity:
-    """The preset by name; a screening ``particle_radius_m`` replaces the 20 mm spheres."""
+def fidelity(name: str, particle_radius_m: float | None = None, clump_aspect_ratio: float = 1.0) -> Fidelity:
+    """The preset by name; at screening, ``particle_radius_m`` replaces the 20 mm spheres and
+    ``clump_aspect_ratio`` > 1 makes the shear-box (and anchor-bin) grains two-sphere clumps of that
+    length/width with the solid volume of the sphere they replace (``engine/lab/shape.py``).
+
+    The thesis fidelity has its own clump mix (Table 4.2): neither applies there. The screening angle of
+    repose keeps its pyramids (spheres would roll away, see the preset), so the shape does not reach it.
+    """
     try:
         preset = FIDELITIES[name]
     except KeyError:
@@ -166,9 +179,17 @@ def fidelity(name: str, particle_radius_m: float | None = None) -> Fidelity:
     if particle_radius_m is not None:
         if name != "screening":
             raise ValueError("particle_radius_m applies to the screening fidelity only")
-        from dataclasses import replace
-
         half = 0.5 * particle_radius_m
         preset = replace(preset, shapes=(ShapeFraction("sphere", particle_radius_m, particle_radius_m, 1.0),),
                          aor_shapes=(ShapeFraction("pyramid", half, half, 1.0),))
+    if clump_aspect_ratio != 1.0:
+        if name != "screening":
+            raise ValueError(
+                f"parameters.clump_aspect_ratio {clump_aspect_ratio:g}: the thesis fidelity has its own clump mix "
+                "(Table 4.2: pyramids, elongated clumps and spheres); clump_aspect_ratio applies to the screening "
+                "fidelity only (leave it at 1)")
+        from engine.lab.shape import screening_shapes
+
+        radius = preset.shapes[0].radius_min_m
+        preset = replace(preset, shapes=screening_shapes(clump_aspect_ratio, radius))
     return preset

@@ -5,9 +5,26 @@ what designs vary (the design factors are field names of ``MicroParameters``).
 """
 from __future__ import annotations
 
+import math
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from engine.lab.bounds import (DENSEST_SOLID_KG_M3, MAX_CONTACT_STIFFNESS_N_PER_M, MAX_FRICTION_COEFFICIENT,
+                               MAX_PARTICLE_RADIUS_M, MAX_SEED, MIN_PARTICLE_RADIUS_M, STIFFEST_SOLID_PA,
+                               check_finite_tree)
+
+# Every model here refuses NaN and infinities (``allow_inf_nan=False``): JSON cannot carry them back,
+# so a stored infinity would come back as null and a job "succeed" with a null result.
+_FINITE = ConfigDict(extra="forbid", allow_inf_nan=False)
+# Speeds, lengths and counts of a laboratory test: ceilings well above any lab set-up, so that the
+# cost model (service.limits) rather than an overflow decides what is too big.
+_MAX_LAB_LENGTH_M = 100.0
+_MAX_LAB_SPEED_M_S = 100.0
+_MIN_LAB_SPEED_M_S = 1e-6  # 1 um/s, a creep test; slower divides the lab's times into infinities
+_MIN_SPEED_FACTOR, _MAX_SPEED_FACTOR = 1e-3, 1e4
+_MAX_CCT_CYCLES = 1000
+_MAX_DST_STRESSES = 20
 
 TestName = Literal["fill", "cct", "dst", "aor", "anchor", "battery"]
 Fidelity = Literal["screening", "thesis"]
@@ -16,71 +33,166 @@ Fidelity = Literal["screening", "thesis"]
 class MicroParameters(BaseModel):
     """DEM micro parameters, SI. Defaults: the thesis's calibrated set (Table 4.9)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = _FINITE
 
-    particle_density_kg_m3: float = Field(2500.0, gt=0)
-    particle_stiffness_n_per_m: float = Field(1.72e6, gt=0, description="kp, PFC-style per-entity normal stiffness")
-    wall_stiffness_n_per_m: float = Field(1.0e7, gt=0, description="kw, PFC-style per-entity normal stiffness")
-    shear_to_normal_stiffness_ratio: float = Field(1.0, gt=0)
-    friction_pp: float = Field(0.86, ge=0, description="inter-particle Coulomb friction coefficient")
-    friction_pw: float = Field(0.62, ge=0, description="particle-wall Coulomb friction coefficient")
+    particle_density_kg_m3: float = Field(2500.0, gt=0, le=DENSEST_SOLID_KG_M3,
+                                          description="solid density; at most osmium's")
+    particle_stiffness_n_per_m: float = Field(1.72e6, gt=0, le=MAX_CONTACT_STIFFNESS_N_PER_M,
+                                              description="kp, PFC-style per-entity normal stiffness")
+    wall_stiffness_n_per_m: float = Field(1.0e7, gt=0, le=MAX_CONTACT_STIFFNESS_N_PER_M,
+                                          description="kw, PFC-style per-entity normal stiffness")
+    # ks/kn of elastic spheres is 2(1 - nu)/(2 - nu): 2/3 to 4/3 over Poisson's ratios -1..0.5; 10 leaves
+    # room for linear-model conventions while refusing typos.
+    shear_to_normal_stiffness_ratio: float = Field(1.0, gt=0, le=10.0)
+    friction_pp: float = Field(0.86, ge=0, le=MAX_FRICTION_COEFFICIENT,
+                               description="inter-particle Coulomb friction coefficient")
+    friction_pw: float = Field(0.62, ge=0, le=MAX_FRICTION_COEFFICIENT,
+                               description="particle-wall Coulomb friction coefficient")
     damping_ratio: float = Field(0.8, ge=0, lt=1, description="critical viscous damping ratio")
     local_damping: float = Field(0.0, ge=0, lt=1)
     particle_radius_m: float | None = Field(
-        None, gt=0, description="screening fidelity only: mono-sized sphere radius (default 0.02 m)"
+        None, ge=MIN_PARTICLE_RADIUS_M, le=MAX_PARTICLE_RADIUS_M,
+        description="screening fidelity only: mono-sized sphere radius (default 0.02 m)",
+    )
+    clump_aspect_ratio: float = Field(
+        1.0, ge=1.0, le=2.0,
+        description="screening fidelity only: grains are two-sphere clumps of this length/width "
+        "(1 = spheres), each of the solid volume of the sphere it replaces (engine/lab/shape.py); at most 2 "
+        "(two spheres that still touch)",
     )
     effects: dict[str, dict[str, Any]] = Field(
         default_factory=dict,
-        description="optional contact effects by registered name, e.g. {'rolling_epsd2': {'rolling_friction': 0.1}}",
+        description="optional contact effects by registered name (engine.effects.REGISTRY), each with its "
+                    "parameters, e.g. {'rolling_epsd2': {'rolling_friction': 0.1}}",
     )
+
+    @field_validator("effects")
+    @classmethod
+    def _known_effects(cls, effects: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
+        """Each name registered and its parameters valid for that effect, checked when the job is
+        submitted: a typo found by the DEM worker hours later is a failed job instead of a 422."""
+        from engine.effects import REGISTRY  # the registry imports the effect kernels' modules
+
+        checked: dict[str, dict[str, Any]] = {}
+        for name, params in effects.items():
+            if name not in REGISTRY:
+                raise ValueError(f"unknown contact effect {name!r}; known: {sorted(REGISTRY)}")
+            check_finite_tree(params, f"effects.{name}")
+            try:
+                model = REGISTRY[name].params_model.model_validate(params)
+            except ValueError as exc:  # pydantic's ValidationError: name the parameter in the message
+                errors = getattr(exc, "errors", None)
+                if errors is None:
+                    raise
+                first = errors(include_url=False)[0]
+                where = ".".join(str(p) for p in first.get("loc", ()))
+                raise ValueError(f"effects.{name}{'.' + where if where else ''}: {first.get('msg')}") from None
+            dumped = model.model_dump()
+            check_finite_tree(dumped, f"effects.{name}")
+            checked[name] = params
+        return checked
 
 
 class TestOptions(BaseModel):
     """Per-test controls; unset values take the fidelity's defaults."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = _FINITE
 
-    dst_normal_stresses_pa: list[float] | None = None
-    cct_max_stress_pa: float | None = None
-    cct_cycles: int | None = Field(None, ge=1)
+    dst_normal_stresses_pa: list[float] | None = Field(
+        None, min_length=2, max_length=_MAX_DST_STRESSES,
+        description="DST normal stresses, Pa: at least two distinct levels (a Mohr-Coulomb line needs two)",
+    )
+    cct_max_stress_pa: float | None = Field(None, gt=0, le=STIFFEST_SOLID_PA)
+    cct_cycles: int | None = Field(None, ge=1, le=_MAX_CCT_CYCLES,
+                                   description="load-unload cycles; each counts in the simulated-time limit")
+    cct_window_stresses_pa: list[float] | None = Field(
+        None,
+        description="CCT: report the tangent confined modulus E' = d(sigma)/d(strain) at exactly these normal "
+        "stresses (Pa; each > 0, strictly increasing, below the CCT maximum stress), keyed by the given floats, "
+        "instead of five equal windows from 0 to the peak (docs/lab.md)",
+    )
     speed_factor: float | None = Field(
-        None, gt=0,
+        None, ge=_MIN_SPEED_FACTOR, le=_MAX_SPEED_FACTOR,
         description="test speed / lab speed for CCT and DST; unset: the fidelity's default (docs/lab.md)",
     )
-    max_inertial_number: float = Field(1e-2, gt=0)
+    max_inertial_number: float = Field(1e-2, gt=0, le=1.0, description="quasi-static below ~1e-3; 1 is flow")
     inertial_number_action: Literal["warn", "refuse"] = Field(
         "warn", description="above max_inertial_number: add a provenance warning, or raise (refuse the run)"
     )
-    shear_distance_m: float | None = Field(None, gt=0, description="DST shear travel; unset: the fidelity's")
+    shear_distance_m: float | None = Field(None, gt=0, le=_MAX_LAB_LENGTH_M,
+                                           description="DST shear travel; unset: the fidelity's")
     residual_window_strain: tuple[float, float] = Field(
         (0.08, 0.10), description="DST shear-strain window for residual stresses and dilatancy"
     )
-    moving_average_span: int = Field(21, ge=1, description="DST smoothing span, points (odd)")
-    aor_lift_speed_m_s: float | None = Field(None, gt=0)
-    aor_bucket_friction: float | None = Field(None, ge=0, description="particle-bucket friction (plastic 0.67)")
-    aor_floor_friction: float | None = Field(None, ge=0, description="particle-floor friction (plywood 0.86)")
-    anchor_friction: float | None = Field(None, ge=0, description="particle-anchor friction (bare steel 0.54)")
-    anchor_bin_width_m: float | None = Field(None, gt=0, description="square bin side; unset: the fidelity's")
-    anchor_pull_distance_m: float | None = Field(None, gt=0, description="anchor travel recorded (default 0.1 m)")
+    moving_average_span: int = Field(21, ge=1, le=100_001, description="DST smoothing span, points (odd)")
+    aor_lift_speed_m_s: float | None = Field(None, ge=_MIN_LAB_SPEED_M_S, le=_MAX_LAB_SPEED_M_S)
+    aor_bucket_friction: float | None = Field(None, ge=0, le=MAX_FRICTION_COEFFICIENT,
+                                              description="particle-bucket friction (plastic 0.67)")
+    aor_floor_friction: float | None = Field(None, ge=0, le=MAX_FRICTION_COEFFICIENT,
+                                             description="particle-floor friction (plywood 0.86)")
+    anchor_friction: float | None = Field(None, ge=0, le=MAX_FRICTION_COEFFICIENT,
+                                          description="particle-anchor friction (bare steel 0.54)")
+    anchor_bin_width_m: float | None = Field(None, gt=0, le=_MAX_LAB_LENGTH_M,
+                                             description="square bin side; unset: the fidelity's")
+    anchor_pull_distance_m: float | None = Field(None, gt=0, le=_MAX_LAB_LENGTH_M,
+                                                 description="anchor travel recorded (default 0.1 m)")
     fill_drop_height_m: float | None = Field(
-        None, ge=0, description="fill: extra fall height of the rainfall column; unset: the fidelity's (thesis 1.9 m)"
+        None, ge=0, le=_MAX_LAB_LENGTH_M,
+        description="fill: extra fall height of the rainfall column; unset: the fidelity's (thesis 1.9 m)",
     )
     fill_friction_pp: float | None = Field(
-        None, ge=0, description="fill: inter-particle friction while the packing is rained, settled and "
+        None, ge=0, le=MAX_FRICTION_COEFFICIENT, description="fill: inter-particle friction while the packing is rained, settled and "
         "levelled (a denser packing at lower friction); parameters.friction_pp is set before the CCT/DST. "
         "Unset: parameters.friction_pp throughout. Shear-box fill only (not the AoR bucket or anchor bin)",
     )
     include_aor: bool = False
     include_anchor: bool = False
-    anchor_packing_height_m: float | None = None
-    anchor_pull_speed_m_s: float | None = None
+    anchor_packing_height_m: float | None = Field(None, gt=0, le=_MAX_LAB_LENGTH_M)
+    anchor_pull_speed_m_s: float | None = Field(None, ge=_MIN_LAB_SPEED_M_S, le=_MAX_LAB_SPEED_M_S)
+
+    @field_validator("dst_normal_stresses_pa")
+    @classmethod
+    def _stress_levels(cls, stresses: list[float] | None) -> list[float] | None:
+        """Positive stresses, at least two distinct: one level (or two equal) fits a Mohr-Coulomb line
+        exactly or not at all (R^2 1.0 or 1e-16), a friction angle that means nothing."""
+        if stresses is None:
+            return None
+        for stress in stresses:
+            if not 0 < stress <= STIFFEST_SOLID_PA:
+                raise ValueError(f"normal stress {stress:g} Pa is outside (0, {STIFFEST_SOLID_PA:g}]")
+        if len(set(stresses)) < 2:
+            raise ValueError("a direct shear test needs at least two distinct normal stresses")
+        return stresses
+
+    @field_validator("residual_window_strain")
+    @classmethod
+    def _window(cls, window: tuple[float, float]) -> tuple[float, float]:
+        low, high = window
+        if not 0 <= low < high <= 1:
+            raise ValueError("need 0 <= lower < upper <= 1 (shear strains)")
+        return window
+
+    @field_validator("cct_window_stresses_pa")
+    @classmethod
+    def _window_stresses(cls, value: list[float] | None) -> list[float] | None:
+        # the CCT maximum depends on the fidelity: RunContext.validate checks "below the maximum"
+        if value is None:
+            return value
+        if not value:
+            raise ValueError("give at least one stress, or leave the option unset for five equal windows")
+        for s in value:
+            if not (math.isfinite(s) and s > 0):
+                raise ValueError(f"every stress must be a finite number > 0 Pa, got {s!r}")
+        if any(b <= a for a, b in zip(value, value[1:])):
+            raise ValueError(f"stresses must be strictly increasing (sorted, no repeats), got {value}")
+        return value
 
 
 class JobSpec(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = _FINITE
 
     test: TestName = "battery"
     fidelity: Fidelity = "screening"
-    seed: int = Field(0, ge=0)
+    seed: int = Field(0, ge=0, le=MAX_SEED)
     parameters: MicroParameters = Field(default_factory=MicroParameters)
     options: TestOptions = Field(default_factory=TestOptions)

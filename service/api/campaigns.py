@@ -3,24 +3,31 @@ from __future__ import annotations
 
 from typing import Literal
 
-from fastapi import APIRouter, Depends, Header, Query
+from fastapi import APIRouter, Depends, Query
 from sqlalchemy.orm import Session
 
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.campaigns.store import (campaign_summary, create_campaign, get_campaign, iteration, iteration_view,
                                      list_campaigns, next_iteration, transition)
+from service.api.openapi import errors
+from service.api.params import CampaignId, IterationNumber
 from service.db import get_session
-from service.errors import Conflict
+from service.errors import Conflict, NotFound
+from service.security import client_id
 
 router = APIRouter(prefix="/campaigns", tags=["campaigns"])
+
+_STATE = errors(409, c409="the campaign's status does not allow this")
+_NOT_YET = errors(409, c409="the iteration has not produced this yet")
 
 Status = Literal["draft", "running", "paused", "completed", "failed"]
 
 
-@router.post("", status_code=201, summary="Create a campaign (draft) for a material")
+@router.post("", status_code=201, summary="Create a campaign (draft) for a material",
+             responses=errors(404, c404="the material does not exist"))
 def create(body: CampaignCreate, session: Session = Depends(get_session),
-           x_client_id: str | None = Header(None)) -> dict:
-    return campaign_summary(create_campaign(session, body, client_id=x_client_id or "anonymous"))
+           client: str = Depends(client_id)) -> dict:
+    return campaign_summary(create_campaign(session, body, client_id=client))
 
 
 @router.get("", summary="List campaigns, newest first")
@@ -29,37 +36,38 @@ def list_all(status: Status | None = Query(None), session: Session = Depends(get
 
 
 @router.get("/{campaign_id}", summary="Status: state, iteration, phase, run counts")
-def status(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+def status(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
     return campaign_summary(get_campaign(session, campaign_id))
 
 
-@router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)")
-def start(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+@router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)", responses=_STATE)
+def start(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
     return campaign_summary(transition(session, campaign_id, "start"))
 
 
-@router.post("/{campaign_id}/pause", summary="running -> paused (409 otherwise); queued batteries keep running")
-def pause(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+@router.post("/{campaign_id}/pause", summary="running -> paused (409 otherwise); queued batteries keep running", responses=_STATE)
+def pause(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
     return campaign_summary(transition(session, campaign_id, "pause"))
 
 
-@router.post("/{campaign_id}/resume", summary="paused -> running (409 otherwise)")
-def resume(campaign_id: int, session: Session = Depends(get_session)) -> dict:
+@router.post("/{campaign_id}/resume", summary="paused -> running (409 otherwise)", responses=_STATE)
+def resume(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
     return campaign_summary(transition(session, campaign_id, "resume"))
 
 
 @router.get("/{campaign_id}/iterations", summary="All iterations with their parameters, design, runs and report")
-def iterations(campaign_id: int, session: Session = Depends(get_session)) -> list[dict]:
+def iterations(campaign_id: CampaignId, session: Session = Depends(get_session)) -> list[dict]:
     return [iteration_view(it) for it in get_campaign(session, campaign_id).iterations]
 
 
 @router.post("/{campaign_id}/iterations", status_code=201,
-             summary="Start the next iteration of a completed campaign (e.g. with a contact effect added)")
-def add_iteration(campaign_id: int, body: IterationIn, session: Session = Depends(get_session)) -> dict:
+             summary="Start the next iteration of a completed campaign (e.g. with a contact effect added)",
+             responses=_STATE)
+def add_iteration(campaign_id: CampaignId, body: IterationIn, session: Session = Depends(get_session)) -> dict:
     return campaign_summary(next_iteration(session, campaign_id, body))
 
 
-def _product(session: Session, campaign_id: int, number: int | None, attr: str, label: str):
+def _product(session: Session, campaign_id: CampaignId, number: int | None, attr: str, label: str):
     campaign = get_campaign(session, campaign_id)
     it = iteration(session, campaign, number)
     value = getattr(it, attr)
@@ -69,38 +77,37 @@ def _product(session: Session, campaign_id: int, number: int | None, attr: str, 
     return campaign, it, value
 
 
-IterationQ = Query(None, ge=1, description="iteration number; default the current one")
+IterationQ = Query(None, ge=1, le=2**63 - 1, description="iteration number; default the current one")
 
 
 @router.get("/{campaign_id}/iterations/{number}", summary="One iteration")
-def one_iteration(campaign_id: int, number: int, session: Session = Depends(get_session)) -> dict:
+def one_iteration(campaign_id: CampaignId, number: IterationNumber, session: Session = Depends(get_session)) -> dict:
     campaign = get_campaign(session, campaign_id)
     if not any(it.number == number for it in campaign.iterations):
-        from service.errors import NotFound
         raise NotFound(f"campaign {campaign_id} has no iteration {number}", ["path", "number"])
     return iteration_view(iteration(session, campaign, number))
 
 
-@router.get("/{campaign_id}/design", summary="The iteration's design: table, aliases, resolution")
-def design(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+@router.get("/{campaign_id}/design", summary="The iteration's design: table, aliases, resolution", responses=_NOT_YET)
+def design(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     _, it, value = _product(session, campaign_id, number, "design", "design")
     return {"iteration": it.number, **{k: v for k, v in value.items() if k != "doe"}}
 
 
-@router.get("/{campaign_id}/models", summary="Fitted model per target response, with ANOVA")
-def models(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+@router.get("/{campaign_id}/models", summary="Fitted model per target response, with ANOVA", responses=_NOT_YET)
+def models(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     _, it, value = _product(session, campaign_id, number, "models", "fitted models")
     return {"iteration": it.number, "models": value}
 
 
-@router.get("/{campaign_id}/optimum", summary="Optimised parameters, predictions with intervals, reachability")
-def optimum(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+@router.get("/{campaign_id}/optimum", summary="Optimised parameters, predictions with intervals, reachability", responses=_NOT_YET)
+def optimum(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     _, it, value = _product(session, campaign_id, number, "optimum", "optimum")
     return {"iteration": it.number, **value}
 
 
-@router.get("/{campaign_id}/confirmation", summary="Confirmation battery at the optimum")
-def confirmation(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+@router.get("/{campaign_id}/confirmation", summary="Confirmation battery at the optimum", responses=_NOT_YET)
+def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     campaign = get_campaign(session, campaign_id)
     it = iteration(session, campaign, number)
     run = next((r for r in it.runs if r.kind == "confirmation"), None)
@@ -112,8 +119,60 @@ def confirmation(campaign_id: int, number: int | None = IterationQ, session: Ses
 
 
 @router.get("/{campaign_id}/report",
-            summary="Per target: measured, predicted (interval), confirmed, residual, reachability")
-def report(campaign_id: int, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+            summary="Per target: measured, predicted (interval), confirmed, residual, reachability", responses=_NOT_YET)
+def report(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     return {"campaign_id": campaign.id, "name": campaign.name, "material_id": campaign.material_id,
             "iteration": it.number, "evaluator": campaign.evaluator, "fidelity": campaign.fidelity, **value}
+
+
+@router.get("/{campaign_id}/diagnosis",
+            summary="Which effect is missing: ranking (effect, LM, p, explained share, strength), alias groups, "
+                    "fingerprints, what to measure next", responses=_NOT_YET)
+def diagnosis(campaign_id: CampaignId, number: int | None = IterationQ,
+              session: Session = Depends(get_session)) -> dict:
+    campaign, it, value = _product(session, campaign_id, number, "report", "report")
+    if "diagnosis" not in value:
+        reason = ("the model reproduces the measurements; nothing to diagnose" if value.get("verdict") == "calibrated"
+                  else f"the diagnosis batteries are not done (phase {it.phase})")
+        raise Conflict(f"campaign {campaign_id} iteration {it.number} has no diagnosis: {reason}",
+                       ["path", "campaign_id"])
+    return {"campaign_id": campaign.id, "iteration": it.number, **value["diagnosis"]}
+
+
+@router.get("/{campaign_id}/history",
+            summary="Per iteration: effects, optimum, weighted error overall and per test with the noise band, "
+                    "verdict, effect added next; per target the residual in each iteration")
+def history(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
+    from service.campaigns.analysis import active_effects
+
+    campaign = get_campaign(session, campaign_id)
+    done = [it for it in sorted(campaign.iterations, key=lambda i: i.number) if it.report]
+    entries, previous, targets = [], set(), {}
+    for it in done:
+        report = it.report
+        effects = sorted(active_effects(it.parameters))
+        lof = report.get("lack_of_fit") or {}
+        diag = report.get("diagnosis")
+        entries.append({
+            "number": it.number, "effects": effects, "added_effect": sorted(set(effects) - previous) or None,
+            "optimum": report.get("optimum"), "parameter_std": (it.optimum or {}).get("parameter_std"),
+            "chi2": lof.get("statistic"), "chi2_per_dof": lof.get("chi2_per_dof"), "dof": lof.get("dof"),
+            "noise_band": lof.get("noise_band"), "lack_of_fit_p": lof.get("p_value"),
+            "per_test": {t["test"]: t["chi2"] for t in report.get("tests", [])},
+            "verdict": report.get("verdict"),
+            "top_effect": (diag or {}).get("ranking", [{}])[0].get("effect") if diag and diag.get("ranking") else None,
+        })
+        previous = set(effects)
+        for row in report.get("targets", []):
+            if row.get("status") != "modelled":
+                continue
+            label = row.get("response") or row["quantity"]
+            targets.setdefault(label, {"test": row["test"], "quantity": row["quantity"],
+                                       "condition": row["condition"], "residuals": {}})
+            targets[label]["residuals"][str(it.number)] = row.get("standardised_residual")
+    for a, b in zip(entries, entries[1:]):
+        a["effect_added_next"] = b["added_effect"]
+    if entries:
+        entries[-1]["effect_added_next"] = None
+    return {"campaign_id": campaign.id, "iterations": entries, "targets": targets}

@@ -21,12 +21,17 @@ def _version() -> str:
         return "unknown"
 
 
-@router.get("/health", summary="Service health: database, schema, queue, workers")
+@router.get("/health", summary="Service health: database, schema, queue, workers",
+            responses={503: {"description": "storage unavailable or the executor cannot reach its cluster"}})
 def health(request: Request, session: Session = Depends(get_session)):
     body = {"status": "ok", "version": _version(), "executor": getattr(request.app.state, "executor", "none")}
     pool = getattr(request.app.state, "worker_pool", None)
     body["local_workers_alive"] = pool.alive() if pool is not None else 0
     body["local_worker_pids"] = pool.pids() if pool is not None else []
+    dispatcher = getattr(request.app.state, "dispatcher", None)
+    if dispatcher is not None:
+        body["dask"] = {"scheduler": str(dispatcher.scheduler), "healthy": dispatcher.healthy,
+                        "problem": dispatcher.problem, "jobs_in_flight": len(dispatcher.inflight)}
     try:
         session.execute(text("SELECT 1"))
         body["database"] = "ok"
@@ -34,5 +39,8 @@ def health(request: Request, session: Session = Depends(get_session)):
         body["jobs"] = queue.queue_counts(session)
     except Exception as exc:  # report, do not raise: health must answer even when storage is down
         body.update(status="error", database=f"unavailable: {type(exc).__name__}")
+        return JSONResponse(body, status_code=503)
+    if dispatcher is not None and not dispatcher.healthy:  # jobs cannot run: not healthy, say why
+        body["status"] = "degraded"
         return JSONResponse(body, status_code=503)
     return body

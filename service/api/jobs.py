@@ -1,19 +1,25 @@
 """DEM job endpoints: submit, list, status/progress, result and curves, cancel, retry."""
 from __future__ import annotations
 
-import math
-from datetime import datetime
+from datetime import datetime, timezone
 from typing import Any, Literal
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
-from pydantic import BaseModel, ConfigDict, Field
+from fastapi import Path as PathParam
+from pydantic import BaseModel, ConfigDict, Field, field_serializer
 from sqlalchemy.orm import Session
 
+from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
 from engine.lab.spec import Fidelity, JobSpec, MicroParameters, TestName, TestOptions
 from service import queue
+from service.api.jsonsafe import json_safe
+from service.api.openapi import errors
+from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, Offset
 from service.db import get_session
 from service.errors import Conflict, NotFound
 from service.models.job import JOB_STATUSES, Job
+from service.security import client_id
+from service.workers.errors import scrub
 
 router = APIRouter(prefix="/jobs", tags=["jobs"])
 
@@ -24,18 +30,18 @@ assert set(JobStatus.__args__) == set(JOB_STATUSES)
 class JobSubmit(BaseModel):
     """A single test or a battery: the job spec plus how to queue it."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     test: TestName = "battery"
     fidelity: Fidelity = "screening"
-    seed: int = Field(0, ge=0, description="random seed; same seed and thread count, same result")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="random seed; same seed and thread count, same result")
     parameters: MicroParameters = Field(default_factory=MicroParameters)
     options: TestOptions = Field(default_factory=TestOptions)
     evaluator: Literal["dem", "analytic"] = "dem"
-    priority: int = Field(0, ge=-1000, le=1000, description="higher runs first")
+    priority: int = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="higher runs first")
     idempotency_key: str | None = Field(None, min_length=1, max_length=200,
                                         description="resubmitting the same key returns the same job")
-    campaign_id: int | None = Field(None, ge=1)
+    campaign_id: int | None = Field(None, ge=1, le=SQLITE_INT_MAX)
     max_attempts: int | None = Field(None, ge=1, le=20, description="claims before a lost job fails")
 
     def spec(self) -> JobSpec:
@@ -75,6 +81,13 @@ class JobOut(BaseModel):
     result_available: bool
     spec: dict[str, Any]
 
+    @field_serializer("created_at", "started_at", "finished_at", "heartbeat_at", "lease_expires_at")
+    def _utc(self, value: datetime | None) -> str | None:
+        """Stored naive UTC; sent with its zone, like the campaigns' timestamps."""
+        if value is None:
+            return None
+        return (value if value.tzinfo else value.replace(tzinfo=timezone.utc)).isoformat().replace("+00:00", "Z")
+
 
 class JobList(BaseModel):
     items: list[JobOut]
@@ -88,31 +101,14 @@ def job_out(job: Job) -> JobOut:
         id=job.id, status=job.status, evaluator=job.evaluator, test=job.test, fidelity=job.fidelity,
         seed=job.seed, priority=job.priority, attempts=job.attempts, max_attempts=job.max_attempts,
         progress=Progress(fraction=job.progress_fraction, phase=job.progress_phase),
-        cancel_requested=job.cancel_requested, error=job.error, engine_version=job.engine_version,
+        cancel_requested=job.cancel_requested, error=None if job.error is None else scrub(job.error),
+        engine_version=job.engine_version,
         wall_time_s=job.wall_time_s, created_at=job.created_at, started_at=job.started_at,
         finished_at=job.finished_at, heartbeat_at=job.heartbeat_at, lease_owner=job.lease_owner,
         lease_expires_at=job.lease_expires_at, idempotency_key=job.idempotency_key, client_id=job.client_id,
         campaign_id=job.campaign_id, result_available=job.status == "succeeded" and job.result is not None,
-        spec=job.spec,
+        spec=json_safe(job.spec),
     )
-
-
-def client_id(request: Request, x_client_id: str | None = Header(None, max_length=100)) -> str:
-    """Who the per-client queue limit counts against: the X-Client-Id header, else the peer address."""
-    if x_client_id:
-        return x_client_id
-    return request.client.host if request.client else "anonymous"
-
-
-def _finite(value: Any) -> Any:
-    """JSON has no NaN/inf; a diverged curve point becomes null rather than a 500."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, list):
-        return [_finite(v) for v in value]
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    return value
 
 
 def _result(job: Job) -> dict[str, Any]:
@@ -123,10 +119,10 @@ def _result(job: Job) -> dict[str, Any]:
 
 @router.post("", response_model=JobOut, status_code=status.HTTP_201_CREATED,
              summary="Queue a single test or a battery",
-             responses={200: {"description": "idempotent replay: the job already queued with this key"},
-                        409: {"description": "idempotency key reused with a different body"},
-                        422: {"description": "invalid spec or over a limit (field named)"},
-                        429: {"description": "too many unfinished jobs for this client"}})
+             responses={200: {"description": "idempotent replay: the job already queued with this key",
+                              "model": JobOut},
+                        **errors(409, 422, 429, c409="idempotency key reused with a different body",
+                                 c422="invalid spec or over a limit (field named, with the limit and estimate)")})
 def submit(body: JobSubmit, request: Request, response: Response, session: Session = Depends(get_session),
            client: str = Depends(client_id),
            idempotency_key: str | None = Header(None, alias="Idempotency-Key", max_length=200)) -> JobOut:
@@ -143,44 +139,51 @@ def submit(body: JobSubmit, request: Request, response: Response, session: Sessi
 
 @router.get("", response_model=JobList, summary="List jobs, newest first, filtered")
 def list_jobs(session: Session = Depends(get_session), status_: JobStatus | None = Query(None, alias="status"),
-              test: TestName | None = None, campaign_id: int | None = Query(None, ge=1),
+              test: TestName | None = None, campaign_id: int | None = Query(None, ge=1, le=SQLITE_INT_MAX),
               evaluator: Literal["dem", "analytic"] | None = None,
-              limit: int = Query(100, ge=1, le=1000), offset: int = Query(0, ge=0)) -> JobList:
+              limit: int = Query(100, ge=1, le=1000), offset: Offset = 0) -> JobList:
     rows, total = queue.list_jobs(session, status=status_, test=test, campaign_id=campaign_id,
                                   evaluator=evaluator, limit=limit, offset=offset)
     return JobList(items=[job_out(j) for j in rows], total=total, limit=limit, offset=offset)
 
 
 @router.get("/{job_id}", response_model=JobOut, name="get_job", summary="Status and progress")
-def get_job(job_id: int, session: Session = Depends(get_session)) -> JobOut:
+def get_job(job_id: JobId, session: Session = Depends(get_session)) -> JobOut:
     return job_out(queue.get_job(session, job_id))
 
 
-@router.get("/{job_id}/result", summary="The result record (properties, provenance, optionally curves)")
-def get_result(job_id: int, include_curves: bool = True, session: Session = Depends(get_session)) -> dict:
+@router.get("/{job_id}/result", summary="The result record (properties, provenance, optionally curves)",
+            responses=errors(409, c409="the job has not succeeded (no result)"))
+def get_result(job_id: JobId, include_curves: bool = True, session: Session = Depends(get_session)) -> dict:
     record = dict(_result(queue.get_job(session, job_id)))
     if not include_curves:
         record.pop("curves", None)
-    return _finite(record)
+    return json_safe(record)
 
 
-@router.get("/{job_id}/curves", summary="Names and columns of the result's curves")
-def get_curves(job_id: int, session: Session = Depends(get_session)) -> dict:
-    return _finite(_result(queue.get_job(session, job_id)).get("curves", {}))
+@router.get("/{job_id}/curves", summary="Names of the result's curves, their columns and lengths (no data)",
+            responses=errors(409, c409="the job has not succeeded (no result)"))
+def get_curves(job_id: JobId, session: Session = Depends(get_session)) -> dict:
+    """An index, small whatever the run: the data is at ``/curves/{name}`` (or in ``/result``)."""
+    curves = _result(queue.get_job(session, job_id)).get("curves", {})
+    return {name: {"columns": sorted(columns), "points": max((len(v) for v in columns.values()), default=0)}
+            for name, columns in curves.items()}
 
 
-@router.get("/{job_id}/curves/{name}", summary="One curve: equal-length SI columns")
-def get_curve(job_id: int, name: str, session: Session = Depends(get_session)) -> dict:
+@router.get("/{job_id}/curves/{name}", summary="One curve: equal-length SI columns",
+            responses=errors(409, c409="the job has not succeeded (no result)"))
+def get_curve(job_id: JobId, name: str = PathParam(..., max_length=200),
+              session: Session = Depends(get_session)) -> dict:
     curves = _result(queue.get_job(session, job_id)).get("curves", {})
     if name not in curves:
         raise NotFound(f"job {job_id} has no curve {name!r}; it has {sorted(curves)}", ["path", "name"])
-    return _finite(curves[name])
+    return json_safe(curves[name])
 
 
 @router.post("/{job_id}/cancel", response_model=JobOut, summary="Cancel a queued job, or ask a running one to stop",
              responses={202: {"description": "running: cancellation requested, the worker stops at its next check"},
-                        409: {"description": "already finished"}})
-def cancel(job_id: int, response: Response, session: Session = Depends(get_session)) -> JobOut:
+                        **errors(409, c409="already finished")})
+def cancel(job_id: JobId, response: Response, session: Session = Depends(get_session)) -> JobOut:
     job = queue.cancel_job(session, job_id)
     if job.status == "running":
         response.status_code = status.HTTP_202_ACCEPTED
@@ -188,6 +191,6 @@ def cancel(job_id: int, response: Response, session: Session = Depends(get_sessi
 
 
 @router.post("/{job_id}/retry", response_model=JobOut, summary="Queue a failed or cancelled job again",
-             responses={409: {"description": "the job is not failed or cancelled"}})
-def retry(job_id: int, session: Session = Depends(get_session)) -> JobOut:
+             responses=errors(409, c409="the job is not failed or cancelled"))
+def retry(job_id: JobId, session: Session = Depends(get_session)) -> JobOut:
     return job_out(queue.retry_job(session, job_id))

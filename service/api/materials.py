@@ -5,13 +5,17 @@ from fastapi import APIRouter, Depends, Response
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from service.api.openapi import errors
+from service.api.params import MaterialId, MeasurementId
 from service.db import get_session
 from service.errors import Conflict, NotFound
-from service.materials.schemas import MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
-from service.materials.store import (add_measurement, create_material, find_by_name, get_material, list_materials,
-                                     material_dict)
+from service.materials.schemas import MaterialCopy, MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
+from service.materials.store import (add_measurement, copy_material, create_material, find_by_name, get_material,
+                                     list_materials, material_dict, measurement_dict, require_editable)
 from service.materials.units import accepted_units
+from engine.lab.bounds import quantity_bound
 from engine.lab.result import QUANTITIES
+from service.api.jsonsafe import json_safe
 from service.models.campaign import Campaign
 from service.models.material import Measurement
 
@@ -19,16 +23,26 @@ router = APIRouter(prefix="/materials", tags=["materials"])
 
 
 def _material_or_404(session: Session, material_id: int):
+    """The material, or a 404 naming the path parameter."""
     material = get_material(session, material_id)
     if material is None:
         raise NotFound(f"material {material_id} not found", ["path", "material_id"])
     return material
 
 
-@router.get("/quantities", summary="Canonical tests, quantities, SI units and accepted input units")
+@router.get("/quantities",
+            summary="Canonical tests, quantities, SI units, accepted input units and physical bounds (SI)")
 def quantities() -> dict:
-    return {test: {q: {"si_unit": u, "accepted_units": accepted_units(u)} for q, u in qs.items()}
+    return {test: {q: {"si_unit": u, "accepted_units": accepted_units(u), "bounds": _bounds(test, q)}
+                   for q, u in qs.items()}
             for test, qs in QUANTITIES.items()}
+
+
+def _bounds(test: str, quantity: str) -> dict:
+    """The interval a measured value must lie in (SI); an infinite end is null."""
+    b = quantity_bound(test, quantity)
+    return {"low": json_safe(b.low), "high": json_safe(b.high), "low_inclusive": not b.low_open,
+            "high_inclusive": not b.high_open, "why": b.why}
 
 
 @router.get("", response_model=list[MaterialOut], summary="List materials with their measurements")
@@ -37,7 +51,8 @@ def list_all(session: Session = Depends(get_session)):
 
 
 @router.post("", response_model=MaterialOut, status_code=201,
-             summary="Create a material (optionally with measurements)")
+             summary="Create a material (optionally with measurements)",
+             responses=errors(409, c409="a material with this name exists"))
 def create(body: MaterialIn, session: Session = Depends(get_session)):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
@@ -46,14 +61,28 @@ def create(body: MaterialIn, session: Session = Depends(get_session)):
     return material_dict(_material_or_404(session, material.id))
 
 
+@router.post("/{material_id}/copy", response_model=MaterialOut, status_code=201,
+             summary="Copy a material (e.g. the read-only bundled one) under a new name, to edit it",
+             responses=errors(409, c409="a material with this name exists"))
+def copy(material_id: MaterialId, body: MaterialCopy, session: Session = Depends(get_session)):
+    material = _material_or_404(session, material_id)
+    if find_by_name(session, body.name) is not None:
+        raise Conflict(f"a material named {body.name!r} exists", "name")
+    created = copy_material(session, material, body.name)
+    session.commit()
+    return material_dict(_material_or_404(session, created.id))
+
+
 @router.get("/{material_id}", response_model=MaterialOut)
-def show(material_id: int, session: Session = Depends(get_session)):
+def show(material_id: MaterialId, session: Session = Depends(get_session)):
     return material_dict(_material_or_404(session, material_id))
 
 
-@router.delete("/{material_id}", status_code=204, summary="Delete a material no campaign uses")
-def delete(material_id: int, session: Session = Depends(get_session)):
+@router.delete("/{material_id}", status_code=204, summary="Delete a material no campaign uses (not the bundled one)",
+               responses=errors(409, c409="the material is bundled (read-only) or used by a campaign"))
+def delete(material_id: MaterialId, session: Session = Depends(get_session)):
     material = _material_or_404(session, material_id)
+    require_editable(material)
     if session.scalar(select(Campaign.id).where(Campaign.material_id == material_id).limit(1)) is not None:
         raise Conflict(f"material {material_id} is used by campaigns; it cannot be deleted", ["path", "material_id"])
     session.delete(material)
@@ -62,22 +91,26 @@ def delete(material_id: int, session: Session = Depends(get_session)):
 
 
 @router.get("/{material_id}/measurements", response_model=list[MeasurementOut])
-def list_measurements(material_id: int, session: Session = Depends(get_session)):
-    return [m.as_dict() for m in _material_or_404(session, material_id).measurements]
+def list_measurements(material_id: MaterialId, session: Session = Depends(get_session)):
+    return [measurement_dict(m) for m in _material_or_404(session, material_id).measurements]
 
 
 @router.post("/{material_id}/measurements", response_model=MeasurementOut, status_code=201,
-             summary="Add a measurement (replicates in any accepted unit; stored SI)")
-def add(material_id: int, body: MeasurementIn, session: Session = Depends(get_session)):
+             summary="Add a measurement (replicates in any accepted unit; stored SI)",
+             responses=errors(409, c409="the material is bundled reference data (read-only)"))
+def add(material_id: MaterialId, body: MeasurementIn, session: Session = Depends(get_session)):
     material = _material_or_404(session, material_id)
+    require_editable(material)
     row = add_measurement(session, material, body)
     session.commit()
-    return row.as_dict()
+    return measurement_dict(row)
 
 
-@router.delete("/{material_id}/measurements/{measurement_id}", status_code=204)
-def delete_measurement(material_id: int, measurement_id: int, session: Session = Depends(get_session)):
-    _material_or_404(session, material_id)
+@router.delete("/{material_id}/measurements/{measurement_id}", status_code=204,
+               responses=errors(409, c409="the material is bundled reference data (read-only)"))
+def delete_measurement(material_id: MaterialId, measurement_id: MeasurementId,
+                       session: Session = Depends(get_session)):
+    require_editable(_material_or_404(session, material_id))
     row = session.get(Measurement, measurement_id)
     if row is None or row.material_id != material_id:
         raise NotFound(f"measurement {measurement_id} not found in material {material_id}",

@@ -4,6 +4,8 @@ from __future__ import annotations
 from fastapi import APIRouter, Depends, Query, Response
 from sqlalchemy.orm import Session
 
+from service.api.openapi import errors
+from service.api.params import ScheduleId
 from service.db import get_session
 from service.errors import Invalid
 from service.schedules.cron import CronError, parse_cron
@@ -15,7 +17,7 @@ router = APIRouter(prefix="/schedules", tags=["schedules"])
 
 
 @router.get("/cron-preview", summary="Check a cron expression and list its next firings (UTC)")
-def cron_preview(expr: str = Query(..., description="e.g. '0 2 * * *'"), count: int = Query(5, ge=1, le=50)) -> dict:
+def cron_preview(expr: str = Query(..., max_length=200, description="e.g. '0 2 * * *'"), count: int = Query(5, ge=1, le=50)) -> dict:
     try:
         cron = parse_cron(expr)
     except CronError as exc:
@@ -23,7 +25,8 @@ def cron_preview(expr: str = Query(..., description="e.g. '0 2 * * *'"), count: 
     return {"expr": expr, "next": [t.isoformat() + "Z" for t in cron.upcoming(naive_utc(None), count)]}
 
 
-@router.post("", status_code=201, summary="Create a schedule")
+@router.post("", status_code=201, summary="Create a schedule",
+             responses=errors(404, c404="the template's material does not exist"))
 def create(body: ScheduleIn, session: Session = Depends(get_session)) -> dict:
     return schedule_view(create_schedule(session, body))
 
@@ -34,21 +37,21 @@ def list_all(session: Session = Depends(get_session)) -> list[dict]:
 
 
 @router.get("/{schedule_id}")
-def show(schedule_id: int, session: Session = Depends(get_session)) -> dict:
+def show(schedule_id: ScheduleId, session: Session = Depends(get_session)) -> dict:
     return schedule_view(get_schedule(session, schedule_id))
 
 
 @router.patch("/{schedule_id}", summary="Change cron, enable/disable, policy")
-def patch(schedule_id: int, body: ScheduleUpdate, session: Session = Depends(get_session)) -> dict:
+def patch(schedule_id: ScheduleId, body: ScheduleUpdate, session: Session = Depends(get_session)) -> dict:
     return schedule_view(update_schedule(session, schedule_id, body))
 
 
 @router.delete("/{schedule_id}", status_code=204)
-def delete(schedule_id: int, session: Session = Depends(get_session)):
+def delete(schedule_id: ScheduleId, session: Session = Depends(get_session)):
     delete_schedule(session, schedule_id)
     return Response(status_code=204)
 
 
 @router.get("/{schedule_id}/firings", summary="Every due time handled: campaign started or why skipped")
-def firings(schedule_id: int, session: Session = Depends(get_session)) -> list[dict]:
+def firings(schedule_id: ScheduleId, session: Session = Depends(get_session)) -> list[dict]:
     return [firing_view(f) for f in get_schedule(session, schedule_id).firings]

@@ -1,8 +1,9 @@
-"""Fit each target's response over the design and optimise against the measurements (doe/).
+"""The campaign's analysis and report steps: calls into calibration/ on the stored runs.
 
-The campaign's targets are the material's measurements that the battery simulates,
-matched on (test, quantity, condition). A response doe/ cannot model (e.g. one the
-factors do not move at all) is reported as such instead of failing the campaign.
+The campaign's targets are the material's measurements that the battery simulates, matched on
+the one (test, quantity, condition) key of ``calibration.keys``. Fitting, the optimum, the
+confirmation check, the localisation and the verdict are calibration/'s; this module turns ORM
+rows into its plain records and its results into the JSON the campaign stores.
 """
 from __future__ import annotations
 
@@ -11,100 +12,72 @@ from typing import Any
 
 import numpy as np
 
+from calibration import calibrate as cal
+from calibration.fitting import TargetModel, fit_targets
+from calibration.localise import localise
+from calibration.records import Measured, measurement_variances
+from calibration.verdict import verdict
+from doe.confirm import confirm
 from doe.designs import Design
 from doe.factors import DoeError
-from doe.confirm import confirm
-from doe.constraints import Target
-from doe.fit import fit_response, pure_error
-from doe.optimise import calibrate
-
-from service.campaigns.responses import find_response
 
 
 class AnalysisError(Exception):
     pass
 
 
-def target_uncertainty(meas, default_relative: float) -> tuple[float, bool]:
-    """Standard uncertainty of a target and whether it was assumed (no replicates published)."""
-    u = meas.standard_uncertainty
-    if u is not None and u > 0:
-        return float(u), False
-    return abs(meas.mean) * default_relative, True
+def _measured(targets) -> list[Measured]:
+    return [Measured.from_record(t) for t in targets]
 
 
-def fit_targets(design: Design, runs, targets) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
-    """Returns (models JSON by response, fit objects by response, target by response)."""
+def _runs(design: Design, runs) -> list[list[dict]]:
     by_std = sorted(runs, key=lambda r: r.std_order)
     if [r.std_order for r in by_std] != list(range(1, design.n_runs + 1)):
         raise AnalysisError("design runs do not match the stored design")
-    models: dict[str, Any] = {}
-    fits: dict[str, Any] = {}
-    matched: dict[str, Any] = {}
-    first = by_std[0].responses or {}
-    for meas in targets:
-        name = find_response(first, meas.test, meas.quantity, meas.condition)
-        if name is None or name in matched:
-            continue
-        matched[name] = meas
-        entry: dict[str, Any] = {"test": meas.test, "quantity": meas.quantity, "condition": dict(meas.condition),
-                                 "unit": meas.unit, "measurement_id": meas.id}
-        y = np.array([float((r.responses or {}).get(name, {}).get("value", math.nan)) for r in by_std])
-        ss_pe, df_pe = pure_error(design.coded, y)
-        entry["pure_error_sd"] = math.sqrt(ss_pe / df_pe) if df_pe > 0 else None
-        entry["values"] = [None if not math.isfinite(v) else float(v) for v in y]
-        if np.nanmax(y) - np.nanmin(y) <= 1e-12 * max(1.0, float(np.nanmax(np.abs(y)))):
-            entry.update(ok=False, error="the response does not change over the design; the factors do not move it")
-        else:
-            try:
-                fit = fit_response(design, y, response=name)
-                fits[name] = fit
-                entry.update(ok=True, error=None, fit=fit.to_dict())
-            except DoeError as exc:
-                entry.update(ok=False, error=str(exc))
-        models[name] = entry
-    return models, fits, matched
+    return [list((r.responses or {}).values()) for r in by_std]
 
 
-def _condition_text(condition: dict[str, float]) -> str:
-    return ", ".join(f"{k}={v:g}" for k, v in sorted(condition.items()))
+def fit(design_dict: dict, runs, targets) -> tuple[Design, list[TargetModel]]:
+    design = Design.from_dict(design_dict)
+    return design, fit_targets(design, _runs(design, runs), _measured(targets))
+
+
+def _models_json(models: list[TargetModel]) -> dict[str, Any]:
+    return {m.key.name: m.to_dict() for m in models if m.key is not None}
 
 
 def analyse(config, design_dict: dict, runs, targets) -> dict[str, Any]:
-    """Fit every matched target, then calibrate (doe.optimise.calibrate) against them."""
-    design = Design.from_dict(design_dict)
-    models, fits, matched = fit_targets(design, runs, targets)
-    doe_targets, by_response = [], {}
-    for name, meas in matched.items():
-        if name not in fits:
-            continue
-        u, assumed = target_uncertainty(meas, config.default_relative_uncertainty)
-        doe_targets.append(Target(name, meas.mean, u, meas.test, _condition_text(meas.condition)))
-        by_response[name] = (meas, u, assumed)
-    if not doe_targets:
-        unmatched = [f"{m.test}/{m.quantity}" for m in targets if not any(m is v for v in matched.values())]
-        raise AnalysisError("no target could be modelled: "
-                            + "; ".join([f"{n}: {m['error']}" for n, m in models.items() if not m.get("ok")]
-                                        + ([f"not simulated: {', '.join(unmatched)}"] if unmatched else []))
-                            or "no measurement matches a simulated response")
+    """Fit every matched target, then calibrate (doe.optimise through calibration.calibrate)."""
+    design, models = fit(design_dict, runs, targets)
+    modelled = [m for m in models if m.fit is not None]
+    if not modelled:
+        problems = [f"{m.key.name}: {m.error}" for m in models if m.key is not None]
+        unmatched = [f"{m.target.key.test}/{m.target.key.quantity}" for m in models if m.key is None]
+        raise AnalysisError("no target could be modelled: " + "; ".join(
+            problems + ([f"not simulated: {', '.join(unmatched)}"] if unmatched else []))
+            if problems or unmatched else "no target could be modelled: no measurement matches a simulated response")
     try:
-        result = calibrate({t.response: fits[t.response] for t in doe_targets}, doe_targets,
-                           constraints=list(config.constraints), priors=[p.model_dump() for p in config.priors],
-                           allow_extrapolation=config.allow_extrapolation, seed=config.seed)
+        result = cal.optimum(models, default_relative=config.default_relative_uncertainty,
+                             priors=[p.model_dump() for p in config.priors], constraints=list(config.constraints),
+                             seed=config.seed, allow_extrapolation=config.allow_extrapolation)
     except DoeError as exc:
         raise AnalysisError(f"calibration failed: {exc}") from exc
     reach = {r["response"]: r for r in result.reachability}
     parameters = {name: result.parameters[name] for name in design.names}
     predictions, target_rows = {}, []
+    by_name = {m.key.name: m for m in modelled}
+    variances = measurement_variances([m.target for m in models], config.default_relative_uncertainty)
     for row in result.targets:
         name = row["response"]
         predictions[name] = {"value": row["predicted"], "pi_low": row["pi_low"], "pi_high": row["pi_high"],
                              "ci_low": row["ci_low"], "ci_high": row["ci_high"]}
-        meas, u, assumed = by_response[name]
+        meas = by_name[name].target
+        var = variances[meas.key]
         target_rows.append({
-            "measurement_id": meas.id, "response": name, "test": meas.test, "quantity": meas.quantity,
-            "condition": dict(meas.condition), "measured": meas.mean, "uncertainty": u,
-            "uncertainty_assumed": assumed, "predicted": row["predicted"], "pi_low": row["pi_low"],
+            "measurement_id": meas.id, "response": name, "test": meas.key.test, "quantity": meas.key.quantity,
+            "condition": meas.key.condition_dict, "measured": meas.mean, "uncertainty": math.sqrt(var.variance),
+            "uncertainty_assumed": var.source == "assumed", "uncertainty_source": var.source,
+            "predicted": row["predicted"], "pi_low": row["pi_low"],
             "pi_high": row["pi_high"], "standardised_residual": row["standardised_residual"],
             "reachability": reach[name]["min_standardised_misfit"], "reachable": reach[name]["reachable"],
         })
@@ -116,30 +89,146 @@ def analyse(config, design_dict: dict, runs, targets) -> dict[str, Any]:
         "predictions": predictions, "targets": target_rows,
         "active_bounds": result.active_bounds, "active_constraints": result.active_constraints,
         "constraints": result.constraints, "priors": result.priors,
-        "reachability": [{k: v for k, v in r.items()} for r in result.reachability],
+        "reachability": [dict(r) for r in result.reachability],
     }
-    return {"models": models, "optimum": _json_safe(optimum)}
+    return {"models": _json_safe(_models_json(models)), "optimum": _json_safe(optimum)}
 
 
-def confirmation_check(config, design_dict: dict, runs, targets, optimum: dict,
-                       observed: dict[str, float]) -> dict[str, Any]:
-    """doe.confirm verdict on the confirmation battery and, if it fails, the proposed next design."""
+def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[dict],
+           confirmation_seed: int) -> dict[str, Any]:
+    """The report step, on one fit: the surface check (doe.confirm), the localisation of the
+    confirmation battery against the measurements, and the one verdict."""
     from service.campaigns.design import design_view
 
-    design = Design.from_dict(design_dict)
-    _, fits, _ = fit_targets(design, runs, targets)
-    observed = {k: v for k, v in observed.items() if k in fits and k in optimum["predictions"]}
+    design, models = fit(design_dict, runs, targets)
+    modelled = [m for m in models if m.fit is not None]
+    conf = cal.confirm(modelled, [confirmation_records], [confirmation_seed])
+    observed = {m.key.name: conf.mean[m.key] for m in modelled
+                if m.key in conf.mean and m.key.name in optimum["predictions"]}
+    surrogate: dict[str, Any]
     if not observed:
-        return {"verdict": "not testable", "reason": "no modelled response in the confirmation run"}
-    result = confirm({k: fits[k] for k in observed}, optimum["parameters"], observed,
-                     seed=config.seed + 1)
-    out = {"verdict": result.verdict, "confirmed": result.confirmed, "reason": result.reason,
-           "next_design_kind": result.next_design_kind}
-    if result.next_design is not None:
-        view = design_view(result.next_design)
-        view.pop("doe")
-        out["next_design"] = view
-    return _json_safe(out)
+        surrogate = {"verdict": "not testable", "reason": "no modelled response in the confirmation run"}
+    else:
+        result = confirm({m.key.name: m.fit for m in modelled if m.key.name in observed}, optimum["parameters"],
+                         observed, seed=config.seed + 1)
+        surrogate = {"verdict": result.verdict, "confirmed": result.confirmed, "reason": result.reason,
+                     "next_design_kind": result.next_design_kind,
+                     "about": "the fitted response surfaces against the battery at the optimum; this checks the "
+                              "surrogate, not the model against the measurements"}
+        if result.next_design is not None:
+            view = design_view(result.next_design)
+            view.pop("doe")
+            surrogate["next_design"] = view
+    theta = dict(optimum["parameters"])
+    priors = [p.model_dump() for p in config.priors]
+    localisation = None
+    if observed:
+        residuals = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty)
+        localisation = localise(residuals, active_bounds=cal.active_bounds(design, theta),
+                                priors=cal.prior_rows(priors, theta), reachability=optimum.get("reachability", []),
+                                seed=config.seed)
+    return _json_safe({"surrogate_check": surrogate,
+                       "localisation": localisation.to_dict() if localisation is not None else None,
+                       "simulator_sd": {m.key.name: conf.sim_sd.get(m.key) for m in modelled}})
+
+
+def active_effects(iteration_parameters: dict) -> set[str]:
+    """Candidate names already in the model: fixed effects, effect factors, a shape factor."""
+    active = set((iteration_parameters.get("effects") or {}))
+    for f in iteration_parameters.get("factors") or []:
+        if f["name"].startswith("effects."):
+            active.add(f["name"].split(".")[1])
+        if f["name"] == "clump_aspect_ratio":
+            active.add("particle_shape")
+    if (iteration_parameters.get("fixed") or {}).get("clump_aspect_ratio", 1.0) != 1.0:
+        active.add("particle_shape")
+    return active
+
+
+def candidate_points(config, optimum: dict, iteration_parameters: dict) -> list[tuple[str, dict[str, float]]]:
+    """(candidate, factor values) of the diagnosis batteries: the optimum with each candidate not yet
+    in the model switched on at its secant step (a switch-type effect at its matched strength)."""
+    from calibration import parameters as factor_paths
+    from engine.candidates import candidates
+    from engine.lab.spec import MicroParameters
+
+    active = active_effects(iteration_parameters)
+    out = []
+    for name, c in candidates().items():
+        if name in active or not c.applies_to(config.fidelity):
+            continue
+        values = dict(optimum["parameters"])
+        if c.is_switch:
+            full = factor_paths.apply(config.fixed_parameters, values)
+            values[c.factor] = float(c.reference(MicroParameters.model_validate(full)))
+        else:
+            values[c.factor] = (c.off_value or 0.0) + c.step
+        out.append((name, values))
+    return out
+
+
+BASELINE = "baseline"
+
+
+def diagnosis_plan(config, optimum: dict, iteration_parameters: dict, confirmation_seed: int) -> list[tuple]:
+    """(name, factor values, seed) of every diagnosis battery, in a fixed order: a second baseline
+    battery at the optimum (so the optimum has two seeds), then each candidate at both seeds."""
+    seeds = [confirmation_seed, confirmation_seed + 1]
+    plan = [(BASELINE, dict(optimum["parameters"]), seeds[1])]
+    for name, values in candidate_points(config, optimum, iteration_parameters):
+        plan += [(name, values, seed) for seed in seeds]
+    return plan
+
+
+def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[dict],
+             confirmation_seed: int, planned: list[tuple[str, int, list[dict]]]) -> dict[str, Any]:
+    """Rank the candidate effects (calibration.attribute) from their batteries at the optimum.
+
+    ``planned``: (name, seed, records) of the diagnosis batteries (``diagnosis_plan`` order). The
+    optimum's two seeds give the baseline; each candidate's signature is its mean over the same two
+    seeds minus the baseline's (common random numbers)."""
+    from calibration.attribute import Signature, attribute
+    from calibration.fitting import run_values
+    from calibration.keys import find
+    from engine.candidates import candidates
+
+    design, models = fit(design_dict, runs, targets)
+    modelled = [m for m in models if m.fit is not None]
+    baseline = [(seed, records) for name, seed, records in planned if name == BASELINE]
+    conf = cal.confirm(modelled, [confirmation_records] + [r for _, r in baseline],
+                       [confirmation_seed] + [s for s, _ in baseline])
+    theta = dict(optimum["parameters"])
+    priors = [p.model_dump() for p in config.priors]
+    res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty)
+    loc = localise(res, active_bounds=cal.active_bounds(design, theta), priors=cal.prior_rows(priors, theta),
+                   reachability=optimum.get("reachability", []), seed=config.seed)
+    table = candidates()
+    signatures = []
+    names = [n for n in dict.fromkeys(name for name, _, _ in planned) if n != BASELINE]
+    for name in names:
+        c = table[name]
+        values = [run_values(records) for n, _, records in planned if n == name]
+        step = 1.0 if c.is_switch else c.step
+        diff = []
+        for i, key in enumerate(res.keys):
+            sim_key = find(values[0].keys(), key)
+            on = float(np.mean([v[sim_key] for v in values])) if sim_key is not None else res.model[i]
+            diff.append((on - res.model[i]) / res.sd[i] / step)
+        vector = np.concatenate([diff, np.zeros(len(res.prior_names))])
+        reference = None
+        if c.is_switch:
+            reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
+        signatures.append(Signature(c, vector, step, reference))
+    att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys])
+    return _json_safe({**att.to_dict(), "lack_of_fit": loc.lack_of_fit.to_dict(),
+                       "seeds": sorted({confirmation_seed} | {s for _, s, _ in planned}), "batteries": len(planned)})
+
+
+def report_verdict(unreachable: list, assessment: dict) -> dict[str, Any]:
+    loc = assessment.get("localisation")
+    surrogate = assessment.get("surrogate_check") or {}
+    return verdict(unreachable=unreachable, lack_of_fit_fails=None if loc is None else loc["fails"],
+                   surrogate_ok=surrogate.get("confirmed"))
 
 
 def _json_safe(value):

@@ -7,7 +7,10 @@ between two steps) resumes where the database says: nothing lives in memory.
 Job submission uses an idempotency key per run, so a step repeated after a
 crash finds the job it already queued instead of queuing a twin.
 
-Phases of an iteration: design -> batteries -> analysis -> confirmation -> report -> done.
+Phases of an iteration: design -> batteries -> analysis -> confirmation -> report -> done, and when
+the report's verdict is not "calibrated": report -> diagnosis (a second baseline battery at the optimum,
+then each candidate effect at the optimum's two seeds) -> diagnosed -> done, the ranking stored in the
+report.
 Paused campaigns are skipped; their queued batteries keep running in the queue
 and are picked up on resume.
 """
@@ -24,7 +27,7 @@ from engine.lab.spec import JobSpec, MicroParameters, TestOptions
 from service.campaigns import analysis
 from service.campaigns.design import build_design, design_view
 from service.campaigns.report import build_report
-from service.campaigns.responses import responses_of
+from calibration.keys import responses_of
 from service.campaigns.schemas import CampaignCreate
 from service.errors import ApiError, TooMany
 from service.models.base import utcnow
@@ -91,6 +94,10 @@ class CampaignRunner:
             return self._batteries(session, campaign, config, it, kind="confirmation", next_phase="report")
         if it.phase == "report":
             return self._report(session, campaign, config, it)
+        if it.phase == "diagnosis":
+            return self._batteries(session, campaign, config, it, kind="diagnosis", next_phase="diagnosed")
+        if it.phase == "diagnosed":
+            return self._diagnosed(session, campaign, config, it)
         if it.phase == "done":  # running again after POST .../iterations: the next iteration begins
             self._new_iteration(session, campaign, config)
             return True
@@ -139,16 +146,25 @@ class CampaignRunner:
         return self._set_phase(session, it, "design", "batteries", design=view)
 
     # -- batteries ---------------------------------------------------------------------------
-    def _spec(self, config: CampaignCreate, run: CampaignRun) -> JobSpec:
-        parameters = MicroParameters.model_validate({**config.fixed_parameters, **run.natural})
+    def _spec(self, config: CampaignCreate, run: CampaignRun, targets=()) -> JobSpec:
+        """The run's job: fixed parameters with the run's factor values (dotted effect paths applied),
+        and options that make the battery compute every target's condition (DST loads, E' stresses)."""
+        from calibration import parameters as factor_paths
+        from calibration.conditions import battery_options
+        from calibration.keys import ResponseKey
+
+        parameters = MicroParameters.model_validate(factor_paths.apply(config.fixed_parameters, run.natural))
+        options = battery_options([ResponseKey.from_record(t) for t in targets], config.options)
+        options = {k: v for k, v in options.items() if k in TestOptions.model_fields}
         return JobSpec(test=config.test, fidelity=config.fidelity, seed=run.seed, parameters=parameters,
-                       options=TestOptions.model_validate(config.options))
+                       options=TestOptions.model_validate(options))
 
     def _submit(self, session, campaign, config, run) -> bool:
         from service.queue import submit_job
 
         try:
-            job = submit_job(session, self._spec(config, run), evaluator=config.evaluator,
+            spec = self._spec(config, run, self._targets(session, campaign, config))
+            job = submit_job(session, spec, evaluator=config.evaluator,
                              priority=config.priority, idempotency_key=f"campaign:{campaign.id}:run:{run.id}",
                              client_id=campaign.client_id, campaign_id=campaign.id)
         except TooMany:
@@ -197,12 +213,12 @@ class CampaignRunner:
 
     # -- analysis and report -----------------------------------------------------------------
     def _targets(self, session, campaign, config):
+        from calibration.keys import select
         from service.materials.store import get_material
-        from service.campaigns.responses import select_targets
 
         material = get_material(session, campaign.material_id)
         wanted = [t.model_dump() for t in config.targets] if config.targets is not None else None
-        return select_targets(material.measurements if material else [], wanted)
+        return select(material.measurements if material else [], wanted)
 
     def _analysis(self, session, campaign, config, it) -> bool:
         runs = [r for r in it.runs if r.kind == "design"]
@@ -225,18 +241,43 @@ class CampaignRunner:
         targets = self._targets(session, campaign, config)
         confirmation = next(r for r in it.runs if r.kind == "confirmation")
         design_runs = [r for r in it.runs if r.kind == "design"]
-        observed = {name: resp["value"] for name, resp in (confirmation.responses or {}).items()}
-        next_step = analysis.confirmation_check(config, it.design["doe"], design_runs, targets, it.optimum, observed)
-        report = build_report(config, it.models, it.optimum, confirmation, targets, next_step)
-        now = utcnow()
-        if not self._set_phase(session, it, "report", "done", report=report,
-                               confirmation={"job_id": confirmation.job_id, "seed": confirmation.seed,
-                                             "parameters": confirmation.natural,
-                                             "responses": confirmation.responses},
-                               finished_at=now):
+        assessment = analysis.assess(config, it.design["doe"], design_runs, targets, it.optimum,
+                                     list((confirmation.responses or {}).values()), confirmation.seed)
+        report = build_report(config, it.models, it.optimum, confirmation, targets, assessment)
+        stored = {"job_id": confirmation.job_id, "seed": confirmation.seed, "parameters": confirmation.natural,
+                  "responses": confirmation.responses}
+        # a diagnosis needs misfit the parameters cannot absorb: more measured values than free parameters
+        diagnosable = ((report.get("lack_of_fit") or {}).get("dof") or 0) > 0
+        plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed) if (
+            config.diagnose and diagnosable and report["verdict"] != "calibrated") else []
+        if plan:
+            for k, (name, natural, seed) in enumerate(plan):
+                session.add(CampaignRun(iteration_id=it.id, kind="diagnosis", std_order=k + 1, run_order=k + 1,
+                                        is_centre=False, coded={}, natural=natural, seed=seed, status="pending"))
+            return self._set_phase(session, it, "report", "diagnosis", report=report, confirmation=stored)
+        if not self._set_phase(session, it, "report", "done", report=report, confirmation=stored,
+                               finished_at=utcnow()):
             return False
+        return self._complete(session, campaign)
+
+    def _diagnosed(self, session, campaign, config, it) -> bool:
+        targets = self._targets(session, campaign, config)
+        confirmation = next(r for r in it.runs if r.kind == "confirmation")
+        design_runs = [r for r in it.runs if r.kind == "design"]
+        runs = sorted((r for r in it.runs if r.kind == "diagnosis"), key=lambda r: r.std_order)
+        plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed)
+        diagnosis = analysis.diagnose(config, it.design["doe"], design_runs, targets, it.optimum,
+                                      list((confirmation.responses or {}).values()), confirmation.seed,
+                                      [(name, seed, list((r.responses or {}).values()))
+                                       for (name, _, seed), r in zip(plan, runs)])
+        report = {**(it.report or {}), "diagnosis": diagnosis}
+        if not self._set_phase(session, it, "diagnosed", "done", report=report, finished_at=utcnow()):
+            return False
+        return self._complete(session, campaign)
+
+    def _complete(self, session, campaign) -> bool:
         campaign.status = "completed"
-        campaign.finished_at = now
+        campaign.finished_at = utcnow()
         session.commit()
         return True
 

@@ -5,10 +5,19 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
+from calibration import parameters as factor_paths
 from doe.constraints import parse_constraint
 from doe.factors import DoeError
+from engine.lab.bounds import SQLITE_INT_MAX, CONDITION_BOUNDS
 from engine.lab.result import known_quantity, known_test
 from engine.lab.spec import MicroParameters, TestOptions
+from service.materials.units import UnitError, condition_si_unit
+
+# Every schema here refuses NaN and infinities: stored, they come back as null and the campaign fails later
+# with an empty reason.
+_FINITE = ConfigDict(extra="forbid", allow_inf_nan=False)
+# One priority scale for jobs and campaigns (service.api.params mirrors it for jobs).
+PRIORITY_MIN, PRIORITY_MAX = -1000, 1000
 
 # Design factors must be scalar MicroParameters fields (the lab varies those).
 FACTOR_NAMES = tuple(
@@ -17,12 +26,12 @@ FACTOR_NAMES = tuple(
 
 
 class FactorIn(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = _FINITE
 
-    name: str
+    name: str = Field(..., min_length=1, max_length=64)
     low: float
     high: float
-    unit: str = ""
+    unit: str = Field("", max_length=16)
     log: bool = False
 
     @model_validator(mode="after")
@@ -37,11 +46,11 @@ class FactorIn(BaseModel):
 class DesignIn(BaseModel):
     """Two-level design: full factorial or a fraction from explicit generators, plus centre runs."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = _FINITE
 
     type: Literal["full", "fractional"] = "full"
     generators: list[str] | None = Field(
-        None, description="fractional only, e.g. ['D=ABC'] for the thesis's 2^(4-1) design (Table A.8)"
+        None, max_length=14, description="fractional only, e.g. ['D=ABC'] for the thesis's 2^(4-1) design (Table A.8)"
     )
     centre_runs: int = Field(3, ge=0, le=50, description="centre replicates, each with its own seed")
     replicates: int = Field(1, ge=1, le=10)
@@ -60,15 +69,26 @@ class DesignPreviewIn(DesignIn):
     """A design preview is DEM-agnostic: any factor names."""
 
     factors: list[FactorIn] = Field(..., min_length=1, max_length=15)
-    seed: int = Field(0, ge=0)
+    seed: int = Field(0, ge=0, le=2**32 - 1)
 
 
 class TargetIn(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = _FINITE
 
-    test: str
-    quantity: str
-    condition: dict[str, float] = Field(default_factory=dict)
+    test: str = Field(..., max_length=32)
+    quantity: str = Field(..., max_length=64)
+    condition: dict[str, float] = Field(default_factory=dict, max_length=8)
+
+    @field_validator("condition")
+    @classmethod
+    def _condition(cls, condition: dict[str, float]) -> dict[str, float]:
+        """SI conditions (as stored with measurements), within the bounds of their unit."""
+        for name, value in condition.items():
+            try:
+                CONDITION_BOUNDS[condition_si_unit(name)].check(value, f"condition {name}")
+            except UnitError as exc:
+                raise ValueError(str(exc)) from None
+        return condition
 
     @field_validator("test")
     @classmethod
@@ -82,19 +102,19 @@ class TargetIn(BaseModel):
 
 
 class PriorIn(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = _FINITE
 
-    parameter: str
+    parameter: str = Field(..., max_length=64)
     value: float
     uncertainty: float = Field(..., gt=0)
     source: str = ""
 
 
 class CampaignCreate(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = _FINITE
 
     name: str = Field(..., min_length=1, max_length=200)
-    material_id: int = Field(..., ge=1)
+    material_id: int = Field(..., ge=1, le=SQLITE_INT_MAX)
     evaluator: Literal["analytic", "dem"] = "analytic"
     fidelity: Literal["screening", "thesis"] = "screening"
     test: Literal["battery", "fill", "cct", "dst", "aor", "anchor"] = Field(
@@ -103,7 +123,7 @@ class CampaignCreate(BaseModel):
     factors: list[FactorIn] = Field(..., min_length=1, max_length=8)
     design: DesignIn = Field(default_factory=DesignIn)
     targets: list[TargetIn] | None = Field(
-        None, description="measurements to calibrate against; default every measurement the battery simulates"
+        None, max_length=1000, description="measurements to calibrate against; default every measurement the battery simulates"
     )
     fixed_parameters: dict[str, Any] = Field(
         default_factory=dict, description="MicroParameters held fixed (and contact effects) for every run"
@@ -114,14 +134,18 @@ class CampaignCreate(BaseModel):
         description="standard uncertainty assumed, relative to the mean, for a target published without replicates",
     )
     constraints: list[str] = Field(
-        default_factory=list, description="linear constraints on factors, e.g. 'friction_pw <= friction_pp'"
+        default_factory=list, max_length=50, description="linear constraints on factors, e.g. 'friction_pw <= friction_pp'"
     )
     priors: list[PriorIn] = Field(
-        default_factory=list, description="directly measured factors (e.g. particle density) with uncertainty"
+        default_factory=list, max_length=8, description="directly measured factors (e.g. particle density) with uncertainty"
     )
     allow_extrapolation: bool = False
+    diagnose: bool = Field(
+        True, description="after a report that is not 'calibrated', run one battery per candidate effect at the "
+        "optimum and rank the missing effects (docs/diagnosis.md)",
+    )
     seed: int = Field(0, ge=0, le=2**31 - 1_000_000)
-    priority: int = 0
+    priority: int = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="of every job the campaign queues")
 
     @field_validator("factors")
     @classmethod
@@ -129,7 +153,11 @@ class CampaignCreate(BaseModel):
         names = [f.name for f in factors]
         for name in names:
             if name not in FACTOR_NAMES:
-                raise ValueError(f"factor {name!r} is not a micro parameter; one of {list(FACTOR_NAMES)}")
+                try:  # an effect's parameter, e.g. effects.rolling_epsd2.rolling_friction
+                    factor_paths.check_factor(name)
+                except ValueError as exc:
+                    raise ValueError(f"factor {name!r} is not a micro parameter ({', '.join(FACTOR_NAMES)}) "
+                                     f"nor an effect parameter: {exc}") from None
         if len(set(names)) != len(names):
             raise ValueError("factor names repeat")
         return factors
@@ -165,7 +193,7 @@ class CampaignCreate(BaseModel):
                 raise ValueError(f"prior on {prior.parameter!r}: only factors can have priors")
         for factor in self.factors:  # each corner must be a valid micro parameter set
             for level in (factor.low, factor.high):
-                MicroParameters.model_validate({**self.fixed_parameters, factor.name: level})
+                MicroParameters.model_validate(factor_paths.apply(self.fixed_parameters, {factor.name: level}))
         return self
 
 
@@ -175,12 +203,53 @@ class IterationIn(BaseModel):
     Whatever is not given is carried over from the previous iteration's configuration.
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = _FINITE
+
+    # Validated here, before the campaign's state is looked at: a bad effect is a 422 whatever the
+    # campaign is doing.
+    @field_validator("fixed_parameters")
+    @classmethod
+    def _fixed(cls, fixed: dict[str, Any] | None) -> dict[str, Any] | None:
+        if fixed is not None:
+            MicroParameters.model_validate(fixed)
+        return fixed
+
+    @field_validator("options")
+    @classmethod
+    def _options(cls, options: dict[str, Any] | None) -> dict[str, Any] | None:
+        if options is not None:
+            TestOptions.model_validate(options)
+        return options
 
     fixed_parameters: dict[str, Any] | None = Field(
         None, description="replaces the fixed micro parameters, e.g. with effects={'rolling_epsd2': {...}}"
     )
-    factors: list[FactorIn] | None = None
+    factors: list[FactorIn] | None = Field(None, min_length=1, max_length=8)
     design: DesignIn | None = None
-    targets: list[TargetIn] | None = None
+    targets: list[TargetIn] | None = Field(None, max_length=1000)
     options: dict[str, Any] | None = None
+    add_effect: str | None = Field(
+        None, description="a diagnosis candidate (GET /api/v1/effects) whose strength becomes one more design "
+        "factor over its plausible range (or strength_range), keeping the previous factors",
+    )
+    strength_range: tuple[float, float] | None = Field(None, description="low, high of the added effect's strength")
+
+    @field_validator("add_effect")
+    @classmethod
+    def _known_effect(cls, name: str | None) -> str | None:
+        if name is not None:
+            from engine.candidates import get as get_candidate
+
+            get_candidate(name)  # ValueError naming the candidates
+        return name
+
+    @model_validator(mode="after")
+    def _range(self) -> "IterationIn":
+        if self.strength_range is not None:
+            if self.add_effect is None:
+                raise ValueError("strength_range needs add_effect")
+            if not self.strength_range[0] < self.strength_range[1]:
+                raise ValueError("strength_range: low must be below high")
+        if self.add_effect is not None and self.factors is not None:
+            raise ValueError("give either factors or add_effect, not both")
+        return self

@@ -11,9 +11,10 @@ from typing import Any
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
-from service.campaigns.design import build_design
 from service.campaigns.schemas import CampaignCreate, IterationIn
-from service.errors import Conflict, NotFound
+from service.config import Settings, get_settings
+from service.errors import Conflict, Invalid, NotFound
+from service.limits import check_campaign_limits
 from service.materials.store import get_material
 from service.models.base import utcnow
 from service.models.campaign import Campaign, CampaignIteration
@@ -21,11 +22,16 @@ from service.models.campaign import Campaign, CampaignIteration
 TRANSITIONS = {"start": ({"draft"}, "running"), "pause": ({"running"}, "paused"), "resume": ({"paused"}, "running")}
 
 
+def _settings(session: Session) -> Settings:
+    return session.info.get("settings") or get_settings()
+
+
 def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = "anonymous",
                     schedule_id: int | None = None) -> Campaign:
     if get_material(session, body.material_id) is None:
         raise NotFound(f"material {body.material_id} not found", "material_id")
-    build_design(body.factors, body.design, body.seed)  # a design doe/ refuses is a 422 now, not a failure later
+    # the design doe/ builds and the limits of every run: a 422 now, not a failure on start
+    check_campaign_limits(body, _settings(session))
     campaign = Campaign(name=body.name, material_id=body.material_id, status="draft", evaluator=body.evaluator,
                         fidelity=body.fidelity, config=body.model_dump(mode="json"), current_iteration=0,
                         schedule_id=schedule_id, client_id=client_id)
@@ -73,10 +79,14 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
         raise Conflict(f"campaign {campaign_id} is {campaign.status}; a next iteration starts only after "
                        "the current one completed", ["path", "campaign_id"])
     config = dict(campaign.config)
-    for key, value in changes.model_dump(mode="json", exclude_none=True).items():
+    changed = changes.model_dump(mode="json", exclude_none=True)
+    add_effect, strength_range = changed.pop("add_effect", None), changed.pop("strength_range", None)
+    for key, value in changed.items():
         config[key] = value
+    if add_effect is not None:
+        config = with_effect_factor(config, add_effect, strength_range)
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
-    build_design(validated.factors, validated.design, validated.seed)
+    check_campaign_limits(validated, _settings(session))
     config = validated.model_dump(mode="json")
     won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == "completed")
                           .values(config=config, status="running", finished_at=None, updated_at=utcnow())
@@ -85,6 +95,39 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     if not won:
         raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])
     return get_campaign(session, campaign_id)
+
+
+def with_effect_factor(config: dict, name: str, strength_range=None) -> dict:
+    """The configuration with candidate ``name``'s strength as one more factor (its plausible range
+    from its 'off' value, a log range about the matched value for a switch-type effect, or the
+    user's range) and a half fraction of highest resolution for the larger design."""
+    from calibration.calibrate import generators_for
+    from engine.candidates import get as get_candidate
+    from engine.lab.spec import MicroParameters
+    from calibration import parameters as factor_paths
+
+    c = get_candidate(name)
+    if not c.applies_to(config.get("fidelity")):
+        raise Invalid(f"{name} cannot be built at the {config.get('fidelity')} fidelity "
+                      f"(only {', '.join(c.fidelities or ())})", "add_effect")
+    if any(f["name"] == c.factor for f in config["factors"]):
+        raise Conflict(f"{name} is already a factor ({c.factor})", "add_effect")
+    if strength_range is not None:
+        low, high = strength_range
+    elif c.is_switch:
+        optimum = factor_paths.apply(config.get("fixed_parameters") or {},
+                                     {f["name"]: 0.5 * (f["low"] + f["high"]) for f in config["factors"]})
+        ref = float(c.reference(MicroParameters.model_validate(optimum)))
+        low, high = ref / 4.0, ref * 4.0
+    else:
+        low, high = (c.off_value or 0.0), c.plausible_range[1]
+    factors = list(config["factors"]) + [{"name": c.factor, "low": low, "high": high, "unit": c.unit,
+                                          "log": c.is_switch}]
+    generators = generators_for(len(factors))
+    design = dict(config.get("design") or {})
+    design.update({"type": "fractional", "generators": generators} if generators else {"type": "full",
+                                                                                       "generators": None})
+    return {**config, "factors": factors, "design": design}
 
 
 def iteration(session: Session, campaign: Campaign, number: int | None = None) -> CampaignIteration:

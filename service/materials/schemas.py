@@ -6,27 +6,39 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
+from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree, quantity_bound
 from engine.lab.result import QUANTITIES, known_quantity, known_test
 from service.errors import Invalid
 from service.materials.units import UnitError, condition_si_unit, to_si
+
+# Replicates of one measurement: a laboratory series, not a data dump (each value is stored and returned
+# with every listing of the material).
+MAX_REPLICATES = 1000
+MAX_TEXT = 10_000
 
 
 class MeasurementIn(BaseModel):
     """A measurement as a user sends it: any accepted unit, converted to SI on validation."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    test: str = Field(..., description=f"one of {sorted(QUANTITIES)}")
-    quantity: str = Field(..., description="canonical quantity name of the test (engine.lab.result.QUANTITIES)")
-    unit: str | None = Field(None, description="unit of `values`; default the quantity's SI unit")
-    values: list[float] = Field(..., min_length=1, description="replicate values (at least one)")
-    condition: dict[str, float] = Field(default_factory=dict, description="test condition, e.g. normal_stress_pa")
+    test: str = Field(..., max_length=32, description=f"one of {sorted(QUANTITIES)}")
+    quantity: str = Field(..., max_length=64,
+                          description="canonical quantity name of the test (engine.lab.result.QUANTITIES); "
+                                      "its physical bounds: engine.lab.bounds.QUANTITY_BOUNDS")
+    unit: str | None = Field(None, max_length=16, description="unit of `values`; default the quantity's SI unit")
+    values: list[float] = Field(..., min_length=1, max_length=MAX_REPLICATES,
+                                description="replicate values (at least one), each within the quantity's bounds")
+    condition: dict[str, float] = Field(default_factory=dict, max_length=8,
+                                        description="test condition, e.g. normal_stress_pa")
     condition_units: dict[str, str] = Field(
-        default_factory=dict, description="unit per condition entry when not SI, e.g. {'normal_stress_pa': 'kPa'}"
+        default_factory=dict, max_length=8,
+        description="unit per condition entry when not SI, e.g. {'normal_stress_pa': 'kPa'}",
     )
-    reported_replicates: int | None = Field(None, ge=1, description="replicates behind a published average")
+    reported_replicates: int | None = Field(None, ge=1, le=MAX_REPLICATES,
+                                            description="replicates behind a published average")
     standard_uncertainty: float | None = Field(None, gt=0, description="stated standard uncertainty, in `unit`")
-    source: str = ""
+    source: str = Field("", max_length=MAX_TEXT)
 
     @field_validator("test")
     @classmethod
@@ -54,15 +66,26 @@ class MeasurementIn(BaseModel):
             uncertainty = None if self.standard_uncertainty is None else to_si(self.standard_uncertainty, unit, si_unit)
         except UnitError as exc:
             raise FieldError("unit", str(exc)) from exc
+        # Bounds apply in SI, after conversion: 1e300 GPa overflows to infinity here, not in a listing.
+        bound = quantity_bound(self.test, self.quantity)
+        for index, value in enumerate(values):
+            try:
+                bound.check(value, f"{self.test} {self.quantity} [{si_unit}]")
+            except ValueError as exc:
+                raise FieldError(f"values.{index}", str(exc)) from None
+        if uncertainty is not None and not math.isfinite(uncertainty):
+            raise FieldError("standard_uncertainty", "standard_uncertainty must be finite in SI units")
         condition: dict[str, float] = {}
         for name, value in self.condition.items():
             try:
                 si = condition_si_unit(name)
                 condition[name] = to_si(value, self.condition_units.get(name, si), si)
             except UnitError as exc:
-                raise FieldError("condition", str(exc)) from exc
-            if not math.isfinite(condition[name]):
-                raise FieldError("condition", f"condition {name!r} must be finite")
+                raise FieldError(f"condition.{name}", str(exc)) from exc
+            try:
+                CONDITION_BOUNDS[si].check(condition[name], f"condition {name} [{si}]")
+            except ValueError as exc:
+                raise FieldError(f"condition.{name}", str(exc)) from None
         for name in self.condition_units:
             if name not in self.condition:
                 raise FieldError("condition_units", f"{name!r} is not in condition")
@@ -81,26 +104,39 @@ class FieldError(Invalid):
 
 
 class MaterialIn(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     name: str = Field(..., min_length=1, max_length=200)
-    description: str = ""
-    source: str = ""
-    direct_estimates: dict[str, Any] = Field(default_factory=dict)
-    measurements: list[MeasurementIn] = Field(default_factory=list)
+    description: str = Field("", max_length=MAX_TEXT)
+    source: str = Field("", max_length=MAX_TEXT)
+    direct_estimates: dict[str, Any] = Field(
+        default_factory=dict, max_length=100,
+        description="parameters measured directly (JSON; numbers finite), e.g. "
+                    "{'particle_density_kg_m3': {'value': 2586.5, 'source': '...'}}",
+    )
+    measurements: list[MeasurementIn] = Field(default_factory=list, max_length=1000)
+
+    @field_validator("direct_estimates")
+    @classmethod
+    def _finite_estimates(cls, estimates: dict[str, Any]) -> dict[str, Any]:
+        """Free-form JSON, but without NaN or infinities: stored, they would come back as null."""
+        check_finite_tree(estimates)
+        return estimates
 
 
 class MeasurementOut(BaseModel):
+    """Numbers are null only in rows stored before validation existed (non-finite values)."""
+
     id: int
     material_id: int
     test: str
     quantity: str
-    condition: dict[str, float]
+    condition: dict[str, float | None]
     unit: str
-    values: list[float]
+    values: list[float | None]
     n: int
     reported_replicates: int | None
-    mean: float
+    mean: float | None
     standard_uncertainty: float | None
     input_unit: str
     source: str
@@ -116,3 +152,9 @@ class MaterialOut(BaseModel):
     direct_estimates: dict[str, Any]
     measurements: list[MeasurementOut]
     created_at: str
+
+
+class MaterialCopy(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(..., min_length=1, max_length=200, description="name of the editable copy")

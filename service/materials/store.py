@@ -8,7 +8,9 @@ from typing import Any
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session, selectinload
 
-from service.materials.schemas import MaterialIn, MeasurementIn
+from service.api.jsonsafe import json_safe
+from service.errors import Conflict
+from service.materials.schemas import FieldError, MaterialIn, MeasurementIn
 from service.models.material import Material, Measurement
 
 BUNDLED_DIR = Path(__file__).parent
@@ -16,13 +18,46 @@ BUNDLED_FILES = ("thesis_coarse_aggregate.json",)
 
 
 def material_dict(material: Material) -> dict[str, Any]:
-    return {
+    """The API view; rows written before validation existed may hold NaN/inf, shown as null
+    (``json_safe``) so one bad row never breaks a listing."""
+    return json_safe({
         "id": material.id, "name": material.name, "description": material.description,
         "source": material.source, "bundled": material.bundled,
         "direct_estimates": dict(material.direct_estimates or {}),
-        "measurements": [m.as_dict() for m in material.measurements],
+        "measurements": [measurement_dict(m) for m in material.measurements],
         "created_at": material.created_at.isoformat() + "Z",
-    }
+    })
+
+
+def measurement_dict(row: Measurement) -> dict[str, Any]:
+    try:
+        return json_safe(row.as_dict())
+    except (TypeError, ValueError, ZeroDivisionError, OverflowError):  # an unreadable legacy row
+        return json_safe({**{k: getattr(row, k, None) for k in ("id", "material_id", "test", "quantity", "unit",
+                                                                   "input_unit", "source")},
+                          "condition": {}, "values": [], "n": 0, "reported_replicates": None, "mean": None,
+                          "standard_uncertainty": None, "created_at": None})
+
+
+def require_editable(material: Material) -> None:
+    """The bundled reference material is read-only: it is the test data of the founding case, and a
+    calibration against it must mean the same thing on every installation. Copy it to edit."""
+    if material.bundled:
+        raise Conflict(f"material {material.id} ({material.name!r}) is bundled reference data and read-only; "
+                       f"copy it (POST /api/v1/materials/{material.id}/copy) to edit", ["path", "material_id"])
+
+
+def copy_material(session: Session, material: Material, name: str) -> Material:
+    """An editable copy (not bundled) with the same measurements, under a new name."""
+    copy = Material(name=name, description=material.description, source=material.source, bundled=False,
+                    direct_estimates=dict(material.direct_estimates or {}))
+    session.add(copy)
+    for row in material.measurements:
+        copy.measurements.append(Measurement(
+            test=row.test, quantity=row.quantity, condition=dict(row.condition), unit=row.unit,
+            values=list(row.values), reported_replicates=row.reported_replicates,
+            stated_uncertainty=row.stated_uncertainty, input_unit=row.input_unit, source=row.source))
+    return copy
 
 
 def get_material(session: Session, material_id: int) -> Material | None:
@@ -37,9 +72,26 @@ def find_by_name(session: Session, name: str) -> Material | None:
     return session.scalar(select(Material).where(Material.name == name))
 
 
+def measurement_key(test: str, quantity: str, condition: dict[str, float]) -> tuple:
+    """What a measurement is matched on against simulated values (engine.lab.result.BulkProperty.key)."""
+    return (test, quantity, tuple(sorted((k, float(v)) for k, v in condition.items())))
+
+
 def add_measurement(session: Session, material: Material, data: MeasurementIn) -> Measurement:
-    """Converts to SI (raises schemas.FieldError on bad units) and attaches to the material."""
-    row = Measurement(**data.to_si())
+    """Converts to SI (raises schemas.FieldError on bad units or bounds) and attaches to the material.
+
+    A second measurement of the same (test, quantity, condition) is refused: the calibration matches one
+    measurement per key, and silently keeping one of two is losing data. Add replicates to the values of
+    the existing one instead (delete and re-add it with all of them)."""
+    fields = data.to_si()
+    key = measurement_key(fields["test"], fields["quantity"], fields["condition"])
+    for existing in material.measurements:
+        if measurement_key(existing.test, existing.quantity, existing.condition) == key:
+            where = f"measurement {existing.id}" if existing.id is not None else "an earlier measurement"
+            raise FieldError("condition", f"{where} already holds {fields['test']} {fields['quantity']} at "
+                             f"condition {fields['condition'] or '{}'}; put all replicates in one measurement's "
+                             "values")
+    row = Measurement(**fields)
     material.measurements.append(row)
     return row
 
@@ -67,10 +119,10 @@ def load_bundled(filename: str) -> MaterialIn:
 
 
 def seed_bundled_materials(session: Session) -> list[int]:
-    """Insert the bundled materials that are missing (by name); idempotent, commits.
+    """Insert the bundled materials that are missing (by name), and any of their measurements that are
+    missing (deleted before the material became read-only); idempotent, commits.
 
-    Called at service start (and safe to call on every start): a material already
-    present is left as it is, so user edits to it survive restarts.
+    Called at service start: the reference data is there, complete, after every start.
     """
     ids = []
     for filename in BUNDLED_FILES:
@@ -78,7 +130,14 @@ def seed_bundled_materials(session: Session) -> list[int]:
         existing = find_by_name(session, data.name)
         if existing is None:
             existing = create_material(session, data, bundled=True)
-            session.flush()
+        else:
+            existing.bundled = True
+            have = {measurement_key(m.test, m.quantity, m.condition) for m in existing.measurements}
+            for meas in data.measurements:
+                fields = meas.to_si()
+                if measurement_key(fields["test"], fields["quantity"], fields["condition"]) not in have:
+                    existing.measurements.append(Measurement(**fields))
+        session.flush()
         ids.append(existing.id)
     session.commit()
     return ids

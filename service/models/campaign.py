@@ -83,7 +83,7 @@ class CampaignRun(Base):
     iteration_id: Mapped[int] = mapped_column(
         ForeignKey("campaign_iterations.id", ondelete="CASCADE"), index=True, nullable=False
     )
-    kind: Mapped[str] = mapped_column(String(16), nullable=False)  # 'design' | 'confirmation'
+    kind: Mapped[str] = mapped_column(String(16), nullable=False)  # 'design' | 'confirmation' | 'diagnosis'
     std_order: Mapped[int] = mapped_column(Integer, default=0, nullable=False)
     run_order: Mapped[int] = mapped_column(Integer, default=0, nullable=False)
     is_centre: Mapped[bool] = mapped_column(default=False, nullable=False)

@@ -18,6 +18,7 @@ from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from service.campaigns.schemas import CampaignCreate
+from service.limits import check_campaign_limits
 from service.errors import ApiError
 from service.materials.store import get_material, latest_measurement_id
 from service.models.base import utcnow
@@ -119,6 +120,9 @@ class Scheduler:
         body = dict(schedule.template)
         body["name"] = f"{body.get('name') or schedule.name} @ {due:%Y-%m-%d %H:%M}Z"[:200]
         config = CampaignCreate.model_validate(body)
+        # the limits in force now (they may have been lowered since the schedule was created): a firing
+        # over them is skipped with the reason, not a campaign that fails on its first run
+        check_campaign_limits(config, self.settings)
         campaign = create_campaign_nocommit(session, config, schedule.id)
         campaign.status = "running"
         campaign.started_at = now

@@ -9,7 +9,9 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from service.campaigns.schemas import CampaignCreate
+from service.config import get_settings
 from service.errors import Invalid, NotFound
+from service.limits import check_campaign_limits
 from service.materials.store import get_material
 from service.models.schedule import Schedule, ScheduleFiring
 from service.schedules.cron import CronError, parse_cron
@@ -20,7 +22,7 @@ class ScheduleIn(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     name: str = Field(..., min_length=1, max_length=200)
-    cron: str = Field(..., description="5 fields, UTC: minute hour day-of-month month day-of-week; or @daily ...")
+    cron: str = Field(..., max_length=200, description="5 fields, UTC: minute hour day-of-month month day-of-week; or @daily ...")
     template: CampaignCreate = Field(..., description="the campaign each firing creates and starts")
     only_if_new_measurements: bool = Field(False, description="fire only when the material has new measurements")
     enabled: bool = True
@@ -30,7 +32,7 @@ class ScheduleIn(BaseModel):
 class ScheduleUpdate(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
-    cron: str | None = None
+    cron: str | None = Field(None, max_length=200)
     enabled: bool | None = None
     only_if_new_measurements: bool | None = None
     missed_run_policy: Literal["coalesce", "skip"] | None = None
@@ -47,6 +49,8 @@ def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = N
     cron = _cron(body.cron)
     if get_material(session, body.template.material_id) is None:
         raise NotFound(f"material {body.template.material_id} not found", "template.material_id")
+    # every campaign a firing creates must be able to queue its runs: the same limits as a campaign
+    check_campaign_limits(body.template, session.info.get("settings") or get_settings(), "template.")
     schedule = Schedule(name=body.name, cron=body.cron, template=body.template.model_dump(mode="json"),
                         only_if_new_measurements=body.only_if_new_measurements, enabled=body.enabled,
                         missed_run_policy=body.missed_run_policy, next_run_at=cron.next_after(naive_utc(now)))

@@ -22,9 +22,11 @@ from sqlalchemy.orm import Session, sessionmaker
 from engine.lab.spec import JobSpec
 from service.config import Settings
 from service.models.job import Job
+from service.workers.errors import public_error
 from service.queue import LeaseLost, claim_next, complete_job, finish_job, heartbeat, release_job
 
 log = logging.getLogger(__name__)
+MAX_BACKOFF_S = 30.0  # longest wait between claim attempts while the database fails
 
 
 def default_worker_id(kind: str = "local") -> str:
@@ -97,9 +99,10 @@ def execute_claimed(session_factory: sessionmaker[Session], job: Job, worker_id:
             if stopping.is_set() or isinstance(exc, (KeyboardInterrupt, SystemExit)):
                 release_job(session, job.id, worker_id)
                 return "released"
-            reason = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-            log.warning("job %s failed: %s", job.id, reason)
-            finish_job(session, job.id, worker_id, "failed", f"{reason}\n\n{traceback.format_exc()}", elapsed)
+            reason = public_error(exc)
+            # the traceback is for the operator (this log), not for whoever reads the job
+            log.warning("job %s failed: %s\n%s", job.id, reason, traceback.format_exc())
+            finish_job(session, job.id, worker_id, "failed", reason, elapsed)
             return "failed"
     beat.done.set()
     beat.join()
@@ -128,13 +131,28 @@ class Worker:
         return execute_claimed(self.session_factory, job, self.worker_id, self.settings, self.evaluate, self.stop)
 
     def run(self, max_jobs: int | None = None) -> int:
-        done = 0
+        """Claim and run until stopped. When the database fails (unreachable, read-only, locked) the
+        worker backs off, doubling its wait up to ``MAX_BACKOFF_S``, and logs one line per new reason
+        or per minute, not a traceback every poll."""
+        done, failures, last_reason, last_logged = 0, 0, None, 0.0
         while not self.stop.is_set() and (max_jobs is None or done < max_jobs):
             try:
                 status = self.run_one()
-            except Exception:  # database briefly unavailable: back off, do not die
-                log.exception("worker %s: claim failed", self.worker_id)
-                status = None
+            except Exception as exc:  # noqa: BLE001 - storage trouble: back off, say why, do not die
+                from service.storage import describe
+
+                failures += 1
+                reason = describe(exc)
+                wait = min(MAX_BACKOFF_S, self.settings.poll_interval_s * 2 ** min(failures, 16))
+                if reason != last_reason or time.monotonic() - last_logged > 60:
+                    log.error("worker %s cannot use the database (%s); retrying in %.1f s",
+                              self.worker_id, reason, wait)
+                    last_reason, last_logged = reason, time.monotonic()
+                self.stop.wait(wait)
+                continue
+            if failures:
+                log.warning("worker %s: database usable again after %d failed attempts", self.worker_id, failures)
+                failures, last_reason = 0, None
             if status is None:
                 self.stop.wait(self.settings.poll_interval_s)
             else:

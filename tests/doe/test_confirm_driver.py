@@ -2,7 +2,9 @@
 import numpy as np
 import pytest
 
-from doe import (AnalyticEvaluator, DoeError, calibrate, confirm, fit_responses, make_design, run_design)
+from doe import AnalyticEvaluator, DoeError, calibrate, fit_responses, make_design, run_design
+# the function, by its module: once doe.confirm (the module) is imported, `doe.confirm` names the module
+from doe.confirm import confirm
 
 FACTORS = [("x1", 0.0, 1.0), ("x2", 10.0, 20.0)]
 

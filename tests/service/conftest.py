@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -17,6 +16,9 @@ from service.app import create_app
 from service.config import Settings
 from service.db import make_engine, make_session_factory
 from service.migrate import upgrade
+
+
+from service_net import LOOPBACK_PEER, free_port  # noqa: F401  (re-exported for older imports)
 
 
 @pytest.fixture
@@ -41,14 +43,8 @@ def session_factory(settings: Settings):
 
 @pytest.fixture
 def client(settings: Settings):
-    with TestClient(create_app(settings)) as test_client:
+    with TestClient(create_app(settings), client=LOOPBACK_PEER) as test_client:
         yield test_client
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def service_env(db_url: str, **extra: str) -> dict[str, str]:
@@ -64,7 +60,8 @@ def demcal_cmd(*args: str) -> list[str]:
     return [sys.executable, "-m", "service.cli", *args]
 
 
-def wait_healthy(base_url: str, proc: subprocess.Popen, timeout_s: float = 30.0) -> None:
+def wait_healthy(base_url: str, proc: subprocess.Popen, timeout_s: float = 90.0) -> None:
+    """Generous: a fresh database is migrated before the port opens, and CI machines are shared."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if proc.poll() is not None:

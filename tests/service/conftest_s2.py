@@ -45,6 +45,13 @@ def thesis_material_id(client) -> int:
     return next(m["id"] for m in client.get(f"{API}/materials").json() if m["name"] == THESIS_MATERIAL)
 
 
+def editable_thesis_copy(client, name: str = "thesis copy") -> int:
+    """The bundled material is read-only; tests that add or delete measurements edit a copy of it."""
+    response = client.post(f"{API}/materials/{thesis_material_id(client)}/copy", json={"name": name})
+    assert response.status_code == 201, response.text
+    return response.json()["id"]
+
+
 def drain(app, settings: Settings, max_jobs: int | None = None) -> int:
     """Run queued jobs in this process through S1's worker code; returns how many ran."""
     worker = Worker(app.state.session_factory, settings, worker_id="s2-test-worker")

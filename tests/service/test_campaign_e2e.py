@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 
 from conftest_s2 import API, campaign_body, run_to_end, s2, thesis_material_id  # noqa: F401
+from engine.candidates import candidates
 from service.models.job import Job
 
 
@@ -19,10 +20,19 @@ def test_analytic_campaign_from_creation_to_report(s2):
     runs = iteration["runs"]
     design_runs = [r for r in runs if r["kind"] == "design"]
     assert len(design_runs) == 11 and sum(r["is_centre"] for r in design_runs) == 3
-    assert len({r["seed"] for r in runs}) == len(runs)  # centre replicates (and confirmation) use distinct seeds
+    own = [r for r in runs if r["kind"] != "diagnosis"]
+    assert len({r["seed"] for r in own}) == len(own)  # centre replicates (and confirmation) use distinct seeds
+    # the diagnosis batteries run at the optimum with the confirmation's seed and one more (two seeds, common
+    # random numbers): a second baseline, then every candidate effect at both
+    confirmation_seed = next(r["seed"] for r in runs if r["kind"] == "confirmation")
+    diagnosis_runs = [r for r in runs if r["kind"] == "diagnosis"]
+    assert {r["seed"] for r in diagnosis_runs} == {confirmation_seed, confirmation_seed + 1}
+    # (particle shape is built at the screening fidelity only; this campaign is at the thesis's)
+    assert len(diagnosis_runs) == 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
     with app.state.session_factory() as session:
         jobs = session.query(Job).filter(Job.campaign_id == cid).all()
-    assert len(jobs) == 12 and {j.id for j in jobs} == {r["job_id"] for r in runs}
+    assert {j.id for j in jobs} == {r["job_id"] for r in runs}
+    assert len(jobs) == 12 + sum(r["kind"] == "diagnosis" for r in runs)
     assert all(j.evaluator == "analytic" and j.spec["test"] == "battery" for j in jobs)
     assert {j.seed for j in jobs} == {r["seed"] for r in runs}
     assert iteration["parameters"]["factors"][0]["name"] == "particle_density_kg_m3"
@@ -61,8 +71,10 @@ def test_analytic_campaign_from_creation_to_report(s2):
     # E' was published as an average only: its uncertainty is the stated 5 % assumption, flagged
     assert modulus["uncertainty_assumed"] and math.isclose(modulus["measured_uncertainty"], 0.05 * 8.69e6)
     assert density["uncertainty_assumed"] is False
-    # Round particles without rolling resistance cap the analytic friction angle at 12 + 30 = 42 deg, so
-    # 60.6 deg (an angular aggregate) is > 3 standard uncertainties (3.03 deg) beyond reach: the missing effect.
+    # Round particles without rolling resistance cap the stand-in's friction angle (calibration/standin.py) at
+    # the ceiling 28 deg + 0.8 x dilatancy (at most 2 + 6 deg) + box friction 2 x mu_pw (mu_pw 0.62): about
+    # 36 deg, safely below 42 deg, so 60.6 deg (an angular aggregate) is > 3 standard uncertainties (3.03 deg)
+    # beyond reach: the missing effect.
     assert phi["reachable"] is False and phi["reachability"] > (60.6 - 42.0) / 3.03 - 1e-9
     assert report["verdict"] == "targets out of reach"
     assert report["unreachable"] == ["dst__friction_angle_deg"]
@@ -123,10 +135,11 @@ def test_next_iteration_with_an_effect_keeps_the_first(s2):
     assert iterations[0]["parameters"]["effects"] == {} and iterations[1]["parameters"]["effects"] == effects
     assert client.get(f"{API}/campaigns/{cid}/report", params={"number": 1}).json()["targets"] == first["targets"]
     second = {r["quantity"]: r for r in client.get(f"{API}/campaigns/{cid}/report").json()["targets"]}
-    # with rolling friction 0.3 the stand-in's friction angle reaches 12 + 30 (1 - e^(-1/0.35)) + 25 x 0.3/0.38
-    # = 60.0 deg at mu_pp = 1: 60.6 deg is now within 3 u
+    # with rolling friction 0.3 the stand-in's ceiling rises by 30 x 0.3/0.5 = 18 deg and the dilatancy by
+    # 5 x 0.3/0.5 = 3 deg (x 0.8 in phi): about 55 deg at mu_pp = 1, so 60.6 deg is now within 3 u (9.1 deg)
     assert second["friction_angle_deg"]["reachable"] is True
+    second_runs = [r for r in iterations[1]["runs"] if r["kind"] != "diagnosis"]
+    assert len(second_runs) == 12
     with app.state.session_factory() as session:
-        jobs = session.query(Job).filter(Job.campaign_id == cid).all()
-    assert len(jobs) == 24
-    assert all(j.spec["parameters"]["effects"] == effects for j in jobs if j.id > 12)
+        jobs = {j.id: j for j in session.query(Job).filter(Job.campaign_id == cid).all()}
+    assert all(jobs[r["job_id"]].spec["parameters"]["effects"] == effects for r in second_runs)

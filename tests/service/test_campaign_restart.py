@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from sqlalchemy import select
 
+from engine.candidates import candidates
+
 from conftest_s2 import API, campaign_body, drain, run_to_end, running_app, s2_settings, thesis_material_id
 from service.campaigns.runner import CampaignRunner
 from service.models.campaign import CampaignRun
@@ -27,7 +29,8 @@ def test_restart_mid_campaign_completes_without_duplicate_jobs(tmp_path):
         assert final["status"] == "completed", final["error"]
         with app.state.session_factory() as session:
             jobs = session.scalars(select(Job).where(Job.campaign_id == cid)).all()
-        assert len(jobs) == 12  # 11 batteries + confirmation, none queued twice
+        # 11 batteries + confirmation + a second baseline and each candidate effect at two seeds, none twice
+        assert len(jobs) == 12 + 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
         report = client.get(f"{API}/campaigns/{cid}/report").json()
         assert len(report["targets"]) == 3
 

@@ -91,7 +91,8 @@ def test_idempotency_key_body_and_header(client):
 
 
 def test_queued_job_limit_per_client(settings):
-    with TestClient(create_app(settings.model_copy(update={"max_queued_jobs_per_client": 3}))) as client:
+    with TestClient(create_app(settings.model_copy(update={"max_queued_jobs_per_client": 3})),
+                    client=("127.0.0.1", 50000)) as client:
         for seed in range(3):
             assert submit(client, seed=seed).status_code == 201
         r = submit(client, seed=9)
@@ -146,8 +147,10 @@ def test_result_and_curves(client):
     assert ("dst", "friction_angle_deg") in quantities and ("fill", "bulk_density_kg_m3") in quantities
     lean = client.get(f"{API}/jobs/{job['id']}/result?include_curves=false").json()
     assert "curves" not in lean and lean["properties"] == record["properties"]
-    curves = client.get(f"{API}/jobs/{job['id']}/curves").json()
-    assert curves == record["curves"]
+    index = client.get(f"{API}/jobs/{job['id']}/curves").json()  # names, columns and lengths, no data
+    assert set(index) == set(record["curves"])
+    for name, columns in record["curves"].items():
+        assert index[name] == {"columns": sorted(columns), "points": len(next(iter(columns.values())))}
     curve = client.get(f"{API}/jobs/{job['id']}/curves/mohr_coulomb").json()
     assert len(curve["normal_stress_pa"]) == len(curve["residual_shear_stress_pa"])
     r = client.get(f"{API}/jobs/{job['id']}/curves/nope")
@@ -200,7 +203,7 @@ def test_refuses_public_bind_without_token(settings):
 
 def test_limits_follow_settings(settings):
     from engine.lab.spec import JobSpec
-    from service.security import estimated_particles, estimated_simulated_time_s
+    from service.limits import estimated_particles, estimated_simulated_time_s
 
     spec = JobSpec()
     particles, sim_s = estimated_particles(spec), estimated_simulated_time_s(spec)
@@ -218,7 +221,7 @@ def test_particle_estimate_matches_appendix_a():
     """Table A.7's screening set-up holds ~840 spheres of 20 mm below the levelling height."""
     from engine.lab.presets import SCREENING
     from engine.lab.spec import JobSpec
-    from service.security import estimated_particles
+    from service.limits import estimated_particles
 
     below_level = estimated_particles(JobSpec()) / SCREENING.fill_margin
     assert abs(below_level - 840) / 840 < 0.10

@@ -6,7 +6,7 @@ import statistics
 
 import pytest
 
-from conftest_s2 import API, THESIS_MATERIAL, error_loc, s2, thesis_material_id  # noqa: F401
+from conftest_s2 import API, THESIS_MATERIAL, editable_thesis_copy, error_loc, s2, thesis_material_id  # noqa: F401
 from service.materials import seed_bundled_materials
 
 
@@ -89,13 +89,14 @@ def test_create_material_converts_units_to_si(s2):
     ({"test": "dst", "quantity": "friction_angle_deg", "unit": "kPa", "values": [1.0]}, ["body", "unit"]),
     ({"test": "dst", "quantity": "friction_angle_deg", "values": []}, ["body", "values"]),
     ({"test": "dst", "quantity": "residual_shear_stress_pa", "values": [1.0], "condition": {"load": 3.0}},
-     ["body", "condition"]),
+     ["body", "condition", "load"]),
     ({"test": "dst", "quantity": "residual_shear_stress_pa", "values": [1.0],
-      "condition": {"normal_stress_pa": 3.0}, "condition_units": {"normal_stress_pa": "deg"}}, ["body", "condition"]),
+      "condition": {"normal_stress_pa": 3.0}, "condition_units": {"normal_stress_pa": "deg"}},
+     ["body", "condition", "normal_stress_pa"]),
 ])
 def test_bad_measurements_are_422_naming_the_field(s2, measurement, loc):
     client, _, _ = s2
-    material_id = thesis_material_id(client)
+    material_id = editable_thesis_copy(client)
     response = client.post(f"{API}/materials/{material_id}/measurements", json=measurement)
     assert response.status_code == 422
     assert error_loc(response)[:len(loc)] == loc
@@ -103,7 +104,7 @@ def test_bad_measurements_are_422_naming_the_field(s2, measurement, loc):
 
 def test_material_errors(s2):
     client, _, _ = s2
-    material_id = thesis_material_id(client)
+    material_id = editable_thesis_copy(client)
     assert client.get(f"{API}/materials/999").status_code == 404
     assert error_loc(client.get(f"{API}/materials/999")) == ["path", "material_id"]
     assert client.get(f"{API}/materials/999/measurements").status_code == 404

@@ -4,7 +4,8 @@ from __future__ import annotations
 from datetime import datetime, timedelta, timezone
 
 import pytest
-from conftest_s2 import API, campaign_body, error_loc, running_app, s2, s2_settings, thesis_material_id  # noqa: F401
+from conftest_s2 import (API, campaign_body, editable_thesis_copy, error_loc, running_app, s2,  # noqa: F401
+                         s2_settings, thesis_material_id)
 from service.models.campaign import Campaign
 from service.models.schedule import Schedule
 from service.schedules.cron import CronError, parse_cron
@@ -114,7 +115,7 @@ def test_skip_policy_drops_stale_due_times(s2):
 
 def test_only_when_new_measurements_arrived(s2):
     client, app, settings = s2
-    material_id = thesis_material_id(client)
+    material_id = editable_thesis_copy(client)
     schedule = _schedule(client, material_id, only_if_new_measurements=True)
     scheduler = Scheduler(app.state.session_factory, settings)
     day = datetime(2026, 11, 21, 2, 0)
@@ -124,8 +125,10 @@ def test_only_when_new_measurements_arrived(s2):
     assert scheduler.tick(day + timedelta(days=1)) == []
     firings = client.get(f"{API}/schedules/{schedule['id']}/firings").json()
     assert firings[-1]["skipped_reason"] == "no new measurements since the last run"
-    client.post(f"{API}/materials/{material_id}/measurements", json={
-        "test": "dst", "quantity": "friction_angle_deg", "values": [59.8, 61.0]})
+    added = client.post(f"{API}/materials/{material_id}/measurements", json={
+        "test": "dst", "quantity": "residual_shear_stress_pa", "values": [17.0, 18.0], "unit": "kPa",
+        "condition": {"normal_stress_pa": 24000.0}})
+    assert added.status_code == 201, added.text
     _set_next(app, schedule["id"], day + timedelta(days=2))
     assert len(scheduler.tick(day + timedelta(days=2))) == 1
 

@@ -35,7 +35,8 @@ def run_cct(ctx: RunContext, fill: FillOutcome) -> CctOutcome:
     touching = np.nonzero(stress > 0)[0]
     z_contact = z[touching[0]] if touching.size else z[0]
     strain = (z_contact - z) / height
-    reduction = reduce_cct(strain, stress, ctx.preset.container_area_m2, height)
+    reduction = reduce_cct(strain, stress, ctx.preset.container_area_m2, height,
+                           window_stresses_pa=ctx.spec.options.cct_window_stresses_pa)
     return CctOutcome(reduction, record, strain, precompressed)
 
 

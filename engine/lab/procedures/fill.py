@@ -28,6 +28,10 @@ COLUMN_SOLID_FRACTION = 0.22
 def shape_mix(preset: Fidelity, shapes=None) -> ShapeMix:
     comps = []
     for s in shapes or preset.shapes:
+        if s.template is not None:  # one given body (e.g. engine/lab/shape.py's elongated grain), not scaled
+            comps.append(ShapeComponent("custom", ConstantSize(float(max(s.template.sphere_radii_m))),
+                                        s.volume_fraction, custom=s.template))
+            continue
         size = ConstantSize(s.radius_min_m) if s.radius_min_m == s.radius_max_m else \
             TruncatedGaussian(s.radius_min_m, s.radius_max_m)
         comps.append(ShapeComponent(s.shape, size, s.volume_fraction))

@@ -65,7 +65,12 @@ function reportSection(report) {
     targetChart(rows),
     h("p", { className: "muted" }, "Grey: measured ± 1 u; blue: prediction and interval at the optimum; red: confirmation run; dashed: ±3 u."),
     h("h3", {}, "Optimum"), table(Object.keys(report.optimum || {}), [Object.values(report.optimum || {})]),
-    report.next_step ? h("p", {}, h("b", {}, "Confirmation: "), `${report.next_step.verdict}: ${report.next_step.reason}`) : "");
+    report.meaning ? h("p", {}, report.meaning) : "",
+    report.lack_of_fit ? h("p", {}, h("b", {}, "Lack of fit (model vs measurements): "),
+      `chi2/dof ${fmt(report.lack_of_fit.chi2_per_dof, 3)} on ${report.lack_of_fit.dof} dof (noise band ${fmt(report.lack_of_fit.noise_band[0], 2)}–${fmt(report.lack_of_fit.noise_band[1], 2)}), p = ${fmt(report.lack_of_fit.p_value, 3)}`) : "",
+    ...((report.conflicts?.active_bounds) || []).map((b) => h("p", { className: "bad" }, `${b.parameter} is pinned at its ${b.side} bound and pushes ${b.pushes}`)),
+    ...((report.conflicts?.priors_pulled) || []).map((p) => h("p", { className: "bad" }, p.meaning)),
+    report.surrogate_check ? h("p", {}, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${report.surrogate_check.reason}`) : "");
 }
 
 function modelsSection(models) {

@@ -61,12 +61,24 @@ export async function materialPage(view, id) {
     table(["Test", "Quantity", "Condition", "n", "Mean", "Std. uncertainty", "Unit", "Replicates", "Source", ""],
       material.measurements.map((m) => [m.test, m.quantity, condition(m.condition),
         m.reported_replicates ? `${m.n} (avg of ${m.reported_replicates})` : String(m.n), m.mean, m.standard_uncertainty, m.unit,
-        m.values.map((v) => Number(v.toPrecision(5))).join(", "), m.source,
-        h("button", { className: "secondary", onclick: async () => {
+        m.values.map((v) => (v === null ? "n/a" : Number(v.toPrecision(5)))).join(", "), m.source,
+        material.bundled ? "" : h("button", { className: "secondary", onclick: async () => {
+          if (!window.confirm(`Delete the ${m.test} ${m.quantity} measurement (${m.n} values)?`)) return;
           if (await attempt(() => api(`/materials/${id}/measurements/${m.id}`, { method: "DELETE" }), "deleted")) materialPage(view, id);
         } }, "Delete")])),
     Object.keys(material.direct_estimates || {}).length ? h("div", {}, h("h3", {}, "Direct estimates"),
       h("pre", {}, JSON.stringify(material.direct_estimates, null, 1))) : "",
-    form,
+    material.bundled ? readOnlyNote(view, material) : form,
     h("p", {}, h("a", { href: `#/campaigns?material=${id}` }, "Calibrate this material →")));
+}
+
+// The bundled reference material is read-only (the API answers 409): offer a copy to edit instead.
+function readOnlyNote(view, material) {
+  return h("p", { className: "muted" }, "Bundled reference data, read-only. ",
+    h("button", { className: "secondary", onclick: async () => {
+      const name = window.prompt("Name of the editable copy", `${material.name} (copy)`);
+      if (!name) return;
+      const copy = await attempt(() => api(`/materials/${material.id}/copy`, { method: "POST", body: { name } }), "copied");
+      if (copy) location.hash = `#/materials/${copy.id}`;
+    } }, "Copy to edit"));
 }

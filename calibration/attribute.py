@@ -1,0 +1,244 @@
+"""Which physical effect is missing: orthogonalised one-sided score tests, alias groups, fingerprints.
+
+For each candidate e (``engine.candidates``) the battery ran at the optimum with e switched on, with
+the seeds of the baseline runs there (common random numbers). Its whitened signature
+s_e = (f(theta*, e on) - f(theta*, off)) / sd / step says what e does; what the free baseline
+parameters can absorb is projected out (M, from the fitted models' sensitivities), and a one-sided
+score test asks how much of the remaining misfit e explains (``stats.score_test``).
+
+Effects whose projected signatures are nearly collinear (|cos| > ALIAS_COS) cannot be told apart by
+these measurements: they form an alias group, reported with the measurement where their
+signatures differ most, i.e. the one that would separate them.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from engine.effects.base import FINGERPRINT_COLUMNS, Candidate
+
+from . import stats
+from .localise import ALPHA, Localisation
+
+ALIAS_COS = 0.9
+# An effect must explain at least this share of the misfit left after the baseline parameters
+# have absorbed what they can, or it is not "the" missing effect, whatever its p-value.
+MIN_EXPLAINED = 0.3
+# A linear signature of a saturating effect underestimates strong effects: strengths up to this
+# multiple of the plausible range's top are still called plausible.
+PLAUSIBLE_SLACK = 2.0
+
+
+@dataclass
+class Signature:
+    candidate: Candidate
+    vector: np.ndarray            # whitened, per unit strength (rows: targets then priors)
+    step: float                   # strength change the battery applied
+    reference: float | None = None  # switch-type: the strength switched on
+
+
+@dataclass
+class Ranked:
+    name: str
+    title: str
+    score: stats.Score
+    p_holm: float
+    strength: float | None        # estimated strength in the parameter's unit (None: switch-type)
+    fraction: float | None        # switch-type: estimated share of the full switch
+    plausible: bool
+    alias_group: int | None = None
+    projected: np.ndarray | None = field(default=None, repr=False)
+
+    def to_dict(self, candidate: Candidate) -> dict[str, Any]:
+        return {"effect": self.name, "title": self.title, "factor": candidate.factor, "unit": candidate.unit,
+                "lm": self.score.lm, "p_value": self.score.p_value, "p_holm": self.p_holm,
+                "explained": self.score.explained, "gamma": self.score.gamma,
+                "strength": self.strength, "fraction_of_switch": self.fraction,
+                "plausible_range": list(candidate.plausible_range), "plausible": self.plausible,
+                "significant": bool(self.p_holm < ALPHA), "alias_group": self.alias_group}
+
+
+@dataclass
+class Attribution:
+    ranking: list[Ranked]
+    alias_groups: list[dict]
+    fingerprints: dict[str, Any]
+    verdict: str                  # "effect indicated" | "inconclusive" | "no physical match" | "no misfit"
+    message: str
+    measure_next: list[str]
+    candidates: dict[str, Candidate]
+
+    @property
+    def best(self) -> Ranked | None:
+        return self.ranking[0] if self.ranking else None
+
+    def indicated(self) -> list[str]:
+        """The effects to try, in ranking order: those significant after Holm, with a plausible
+        strength, explaining at least MIN_EXPLAINED of the remaining misfit."""
+        return [r.name for r in self.ranking if r.p_holm < ALPHA and r.plausible and r.score.explained >= MIN_EXPLAINED]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"verdict": self.verdict, "message": self.message,
+                "ranking": [r.to_dict(self.candidates[r.name]) for r in self.ranking],
+                "alias_groups": self.alias_groups, "fingerprints": self.fingerprints,
+                "measure_next": self.measure_next, "alpha": ALPHA, "min_explained": MIN_EXPLAINED,
+                "critical_lm": _critical_lm(len(self.ranking))}
+
+
+def _critical_lm(k: int) -> float:
+    """LM a single effect needs to clear Holm's first (strictest) step among k one-sided tests."""
+    from scipy import stats as sps
+
+    if k == 0:
+        return math.nan
+    return float(sps.chi2.isf(2.0 * ALPHA / k, 1))
+
+
+def _plausible(candidate: Candidate, strength: float | None, fraction: float | None) -> bool:
+    if fraction is not None:
+        return 0.25 <= fraction <= PLAUSIBLE_SLACK
+    low, high = candidate.plausible_range
+    off = candidate.off_value or 0.0
+    return strength is not None and off < strength <= off + PLAUSIBLE_SLACK * (high - off)
+
+
+def observed_fingerprint(loc: Localisation) -> dict[str, str]:
+    """Signs the measurements show, in the fingerprint's columns (blank where not measured)."""
+    def sign(values, limit=1.0):
+        if not values:
+            return ""
+        z = float(np.mean(values)) * math.sqrt(len(values))
+        return "+" if z > limit else "-" if z < -limit else "0"
+
+    rows = [r for r in loc.rows if r["test"] != "prior"]
+    pick = lambda test, quantity: [r["standardised_residual"] for r in rows  # noqa: E731
+                                   if r["test"] == test and r["quantity"] == quantity]
+    out = {"bulk_density": sign(pick("fill", "bulk_density_kg_m3")),
+           "modulus_level": sign(pick("cct", "confined_modulus_pa")),
+           "friction_angle": sign(pick("dst", "residual_shear_stress_pa")),
+           "dilatancy": sign(pick("dst", "dilatancy_angle_deg")),
+           "angle_of_repose": sign(pick("aor", "angle_of_repose_deg")),
+           "pull_force": sign(pick("anchor", "peak_pull_force_n"))}
+    t = loc.trends.get("modulus_log_slope")
+    out["modulus_slope"] = "" if t is None else ("+" if t["significant"] and t["slope"] > 0 else
+                                                 "-" if t["significant"] else "0")
+    t = loc.trends.get("shear_stress")
+    out["cohesion"] = "" if t is None else ("+" if t["significant_intercept"] and t["intercept"] > 0 else
+                                            "-" if t["significant_intercept"] else "0")
+    return {c: out.get(c, "") for c in FINGERPRINT_COLUMNS}
+
+
+def _alias_groups(ranked: list[Ranked], labels: list[str]) -> list[dict]:
+    n = len(ranked)
+    unit = []
+    for r in ranked:
+        v = r.projected
+        norm = float(np.linalg.norm(v)) if v is not None else 0.0
+        unit.append(v / norm if norm > 0 else None)
+    parent = list(range(n))
+
+    def root(i):
+        while parent[i] != i:
+            i = parent[i]
+        return i
+
+    cos = np.zeros((n, n))
+    for a in range(n):
+        for b in range(a + 1, n):
+            if unit[a] is None or unit[b] is None:
+                continue
+            cos[a, b] = cos[b, a] = float(unit[a] @ unit[b])
+            if abs(cos[a, b]) > ALIAS_COS:
+                parent[root(b)] = root(a)
+    groups: dict[int, list[int]] = {}
+    for i in range(n):
+        groups.setdefault(root(i), []).append(i)
+    out = []
+    for members in groups.values():
+        if len(members) < 2:
+            continue
+        gid = len(out) + 1
+        separators = []
+        for x in range(len(members)):
+            for y in range(x + 1, len(members)):
+                a, b = members[x], members[y]
+                diff = unit[a] - np.sign(cos[a, b]) * unit[b]
+                k = int(np.argmax(np.abs(diff[:len(labels)])))
+                separators.append({"effects": [ranked[a].name, ranked[b].name], "cos": cos[a, b],
+                                   "separating_measurement": labels[k]})
+        for i in members:
+            ranked[i].alias_group = gid
+        out.append({"group": gid, "effects": [ranked[i].name for i in members], "separators": separators,
+                    "message": "these effects change the measured quantities in nearly the same proportions; "
+                               "refitting each as a factor, or measuring "
+                               + " / ".join(sorted({s["separating_measurement"] for s in separators}))
+                               + " more precisely, tells them apart"})
+    return out
+
+
+def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[Signature],
+              labels: list[str]) -> Attribution:
+    """Rank the candidates; ``labels`` name the target rows (for the separating measurement)."""
+    candidates = {s.candidate.name: s.candidate for s in signatures}
+    ranked = []
+    for sig in signatures:
+        score = stats.score_test(r, sig.vector, M)
+        c = sig.candidate
+        if c.is_switch:
+            strength, fraction = (sig.reference if score.gamma > 0 else None), score.gamma
+        else:
+            strength, fraction = (c.off_value or 0.0) + score.gamma, None
+        ranked.append(Ranked(c.name, c.title, score, 1.0, strength, fraction,
+                             _plausible(c, strength, fraction), projected=M @ sig.vector))
+    for row, adj in zip(ranked, stats.holm([x.score.p_value for x in ranked])):
+        row.p_holm = float(adj)
+    ranked.sort(key=lambda x: (-(x.plausible and x.score.gamma > 0), -x.score.lm))
+    groups = _alias_groups(ranked, labels)
+    fingerprints = {"columns": list(FINGERPRINT_COLUMNS), "observed": observed_fingerprint(loc),
+                    "effects": {c.name: {col: c.fingerprint.get(col, "0") for col in FINGERPRINT_COLUMNS}
+                                for c in candidates.values()}}
+    verdict, message, measure_next = _verdict(loc, ranked, groups, labels, r, M)
+    return Attribution(ranked, groups, fingerprints, verdict, message, measure_next, candidates)
+
+
+def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels, r, M):
+    rt = M @ r
+    worst = [labels[i] for i in np.argsort(-np.abs(rt[:len(labels)]))[:3]]
+    if loc.lack_of_fit.dof <= 0:
+        return ("inconclusive", "as many free parameters as measured values: every misfit can be absorbed, so "
+                "none can be attributed; measure more (each shear load, E' at several stresses, dilatancy, "
+                "the angle of repose) or fix parameters measured directly", [])
+    if not loc.fails:
+        return ("no misfit", "the model agrees with the measurements within their noise; no effect is needed",
+                [])
+    good = [x for x in ranked if x.p_holm < ALPHA and x.plausible and x.score.explained >= MIN_EXPLAINED]
+    if good:
+        best = good[0]
+        group = next((g for g in groups if best.name in g["effects"]), None)
+        text = (f"{best.title} ({best.name}) explains {100 * best.score.explained:.0f} % of the misfit the "
+                f"baseline parameters cannot absorb (LM {best.score.lm:.1f}, Holm p {best.p_holm:.2g})")
+        if group is not None:
+            others = [e for e in group["effects"] if e != best.name]
+            text += f"; it is aliased with {', '.join(others)}"
+        nxt = sorted({s["separating_measurement"] for s in group["separators"]}) if group else []
+        return "effect indicated", text, nxt
+    strong = [x for x in ranked if x.p_holm < ALPHA and x.score.explained >= MIN_EXPLAINED]
+    best_share = max((x.score.explained for x in ranked), default=0.0)
+    if loc.lack_of_fit.p_value < 1e-3 and best_share < MIN_EXPLAINED:
+        return ("no physical match",
+                "the misfit matches no candidate effect's signature (best explains "
+                f"{100 * best_share:.0f} %); it sits in {', '.join(worst)}: check those measurements "
+                "(units, condition, a physically impossible value) or the test set-up before adding physics",
+                worst)
+    if strong and not any(x.plausible for x in strong):
+        return ("no physical match",
+                f"only implausible strengths would explain the misfit ({strong[0].name} at "
+                f"{strong[0].strength if strong[0].strength is not None else strong[0].fraction:.3g}); "
+                f"it sits in {', '.join(worst)}: check those measurements first", worst)
+    return ("inconclusive",
+            "the model misses the measurements, but no candidate effect explains enough of it to be named; "
+            f"the misfit sits in {', '.join(worst)}: more replicates there, or a measurement at another "
+            "stress, would sharpen the diagnosis", worst)

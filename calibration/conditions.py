@@ -1,0 +1,45 @@
+"""Which conditions a battery computes, decided by the measurements it is compared with.
+
+Why: a target is matched to a simulated value by an equal condition, so the DST must shear at
+exactly the user's normal stresses and the CCT report E' at exactly the user's stress levels;
+otherwise measured values are silently left out (or, worse, compared with another stress).
+"""
+from __future__ import annotations
+
+from typing import Any, Iterable
+
+from .keys import ResponseKey
+
+STRESS = "normal_stress_pa"
+
+
+def battery_options(keys: Iterable[ResponseKey], base: dict[str, Any] | None = None) -> dict[str, Any]:
+    """TestOptions fields (a dict) that make the battery report every key's condition.
+
+    Options the user set explicitly in ``base`` win; the derived ones fill what is unset. The angle of
+    repose and the anchor pull-out are separate, costly set-ups: they run when ``base`` asks for them
+    (``include_aor``, ``include_anchor``), never because a material happens to list such a measurement.
+    """
+    keys = list(keys)
+    out = dict(base or {})
+    dst = sorted({k.stress_pa() for k in keys if k.test == "dst" and k.stress_pa() is not None})
+    cct = sorted({k.stress_pa() for k in keys if k.test == "cct" and k.stress_pa() is not None})
+    if dst and out.get("dst_normal_stresses_pa") is None:
+        out["dst_normal_stresses_pa"] = dst
+    if cct and out.get("cct_window_stresses_pa") is None:
+        out["cct_window_stresses_pa"] = cct
+    return out
+
+
+def standin_conditions(options: dict[str, Any], cct_max_stress_pa: float = 65.6e3):
+    """The stand-in's Conditions for TestOptions fields (defaults: the thesis's loads)."""
+    from .standin import Conditions
+
+    defaults = Conditions()
+    return Conditions(
+        dst_normal_stresses_pa=tuple(options.get("dst_normal_stresses_pa") or defaults.dst_normal_stresses_pa),
+        cct_window_stresses_pa=tuple(options.get("cct_window_stresses_pa") or ()),
+        cct_max_stress_pa=float(options.get("cct_max_stress_pa") or cct_max_stress_pa),
+        include_aor=bool(options.get("include_aor", False)),
+        include_anchor=bool(options.get("include_anchor", False)),
+    )

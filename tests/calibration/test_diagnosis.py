@@ -1,0 +1,90 @@
+"""The heart of demcal on data with a hidden effect: where the model fails, which effect is
+missing, what it could be confused with, which measurement separates them, and the error falling
+once it is added. The "measurements" come from another world (perturbed constants and saturation
+law) than the model under test, with laboratory scatter (calibration.testbed)."""
+import dataclasses
+
+import pytest
+
+from calibration.conditions import standin_conditions
+from calibration.evaluators import StandinEvaluator
+from calibration.loop import CalibrationLoop, LoopConfig
+from calibration.records import Measured
+from calibration.testbed import FACTORS, OPTIONS, make_case
+
+
+def _loop(case, **config):
+    return CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)),
+                           LoopConfig(factors=[dict(f) for f in FACTORS], priors=case.priors, seed=case.seed, **config))
+
+
+@pytest.fixture(scope="module")
+def rolling():
+    case = make_case(7, "single", effects={"rolling_epsd2": 0.3})
+    loop = _loop(case)
+    return case, loop, loop.run()
+
+
+def test_where_the_model_fails(rolling):
+    case, loop, result = rolling
+    first = result.iterations[0]
+    loc = first.localisation
+    assert loc.fails and loc.lack_of_fit.p_value < 0.05
+    # missing rolling resistance is a strength deficit: the shear test carries a significant share
+    dst = next(t for t in loc.tests if t["test"] == "dst")
+    assert dst["fails"] and dst["share"] > 0.2
+    # ... and the friction saturates: mu_pp pinned at the top of its range pushing higher, or the
+    # pycnometer density pulled (spheres pack too densely), the design note's G1 symptoms
+    conflicts = loc.conflicts
+    assert any(b["parameter"] == "friction_pp" and b["pushes"] == "higher" for b in conflicts["active_bounds"]) \
+        or conflicts["priors_pulled"]
+    assert {"modulus_log_slope", "shear_stress", "dilatancy"} <= set(loc.trends)
+
+
+def test_which_effect_what_it_is_confused_with_and_what_separates_them(rolling):
+    case, loop, result = rolling
+    att = result.diagnoses[0].attribution
+    assert att.verdict == "effect indicated"
+    top = att.ranking[0]
+    assert top.name in ("rolling_epsd2", "particle_shape")
+    group = next(g for g in att.alias_groups if top.name in g["effects"])
+    assert set(group["effects"]) >= {"rolling_epsd2", "particle_shape"}
+    assert group["separators"][0]["separating_measurement"].startswith(("dst", "fill", "aor", "anchor", "cct"))
+    assert att.fingerprints["effects"]["rolling_epsd2"]["friction_angle"] == "+"
+    assert att.fingerprints["observed"]["friction_angle"] == "+"
+    hertz = next(r for r in att.ranking if r.name == "hertz_mindlin")
+    assert hertz.p_holm > 0.05          # no stress-dependence of E' was hidden: Hertz is not named
+
+
+def test_adding_the_effect_makes_the_error_fall(rolling):
+    case, loop, result = rolling
+    decision = result.decisions[0]
+    assert decision.accepted and decision.effect in ("rolling_epsd2", "particle_shape")
+    before, after = result.iterations[0].error(), result.final.error()
+    assert after["chi2"] < 0.5 * before["chi2"]
+    assert result.stop_reason == "lack of fit passes"
+    history = result.history()
+    assert [h["number"] for h in history][:2] == [1, 2] and history[1]["added_effect"] == decision.effect
+
+
+def test_no_misfit_no_effect():
+    case = make_case(3, "null")
+    result = _loop(case).run()
+    assert not result.iterations[0].localisation.fails
+    assert result.decisions == [] and result.stop_reason == "lack of fit passes"
+
+
+def test_a_physically_impossible_measurement_is_not_blamed_on_physics():
+    # a bulk density above the particle density (porosity < 0): every candidate loosens the packing, none
+    # can explain a density the pycnometer forbids, so the diagnosis points at the measurement
+    case = make_case(3, "null")
+    targets = [dataclasses.replace(t, values=tuple(1.5 * v for v in t.values))
+               if t.key.quantity == "bulk_density_kg_m3" else t for t in case.targets]
+    loop = CalibrationLoop(targets, StandinEvaluator(standin_conditions(OPTIONS)),
+                           LoopConfig(factors=[dict(f) for f in FACTORS], priors=case.priors, seed=case.seed))
+    first = loop.iterate([dict(f) for f in FACTORS], {}, 1)
+    assert first.localisation.fails
+    att = loop.diagnose(first).attribution
+    assert att.verdict == "no physical match"
+    assert any("bulk_density" in m for m in att.measure_next)
+    assert all(isinstance(t, Measured) for t in targets)

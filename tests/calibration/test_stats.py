@@ -1,0 +1,111 @@
+"""Each statistic of the diagnosis against a textbook or analytic case."""
+import math
+
+import numpy as np
+import pytest
+from scipy import stats as sps
+from statsmodels.stats.multitest import multipletests
+
+from calibration import stats
+from calibration.records import Noise, VarianceTerm
+
+
+def test_score_statistic_is_the_exact_ssr_drop_on_a_linear_problem():
+    # Frisch-Waugh-Lovell: on a linear model the score statistic of an added regressor equals the drop of
+    # the residual sum of squares when it is added and every parameter re-optimised.
+    rng = np.random.default_rng(1)
+    J = rng.standard_normal((15, 4))
+    s = rng.standard_normal(15)
+    r = J @ rng.standard_normal(4) + 0.7 * s + 0.3 * rng.standard_normal(15)
+    M = stats.residual_maker(J)
+    ssr_base = float(np.sum((M @ r) ** 2))
+    both = np.column_stack([J, s])
+    coef, *_ = np.linalg.lstsq(both, r, rcond=None)
+    ssr_with = float(np.sum((r - both @ coef) ** 2))
+    score = stats.score_test(r, s, M)
+    assert score.gamma == pytest.approx(coef[-1], rel=1e-10)       # and its gamma is the refitted coefficient
+    assert score.lm == pytest.approx(ssr_base - ssr_with, rel=1e-10)
+    assert score.explained == pytest.approx((ssr_base - ssr_with) / ssr_base, rel=1e-10)
+    assert score.p_value == pytest.approx(0.5 * sps.chi2.sf(score.lm, 1))
+
+
+def test_score_test_is_one_sided():
+    J = np.eye(6)[:, :2]
+    s = np.array([0, 0, 1.0, 1.0, 1.0, 1.0])
+    r = -2.0 * s        # the effect would have to act backwards
+    score = stats.score_test(r, s, stats.residual_maker(J))
+    assert score.gamma < 0 and score.lm == 0.0 and score.p_value == 1.0
+
+
+def test_residual_maker_removes_what_the_parameters_absorb():
+    J = np.array([[1.0, 0], [1, 1], [1, 2], [1, 3]])
+    M = stats.residual_maker(J)
+    assert np.allclose(M @ J, 0) and np.allclose(M, M.T) and np.allclose(M @ M, M)
+    assert np.trace(M) == pytest.approx(2.0)
+
+
+def test_holm_matches_the_textbook_step_down_and_statsmodels():
+    p = [0.01, 0.04, 0.03, 0.005]
+    # sorted 0.005 x 4 = 0.02, 0.01 x 3 = 0.03, 0.03 x 2 = 0.06, 0.04 x 1 -> max(0.06, 0.04) = 0.06
+    assert np.allclose(stats.holm(p), [0.03, 0.06, 0.06, 0.02])
+    rng = np.random.default_rng(2)
+    q = rng.uniform(0, 0.2, 9)
+    assert np.allclose(stats.holm(q), multipletests(q, method="holm")[1])
+
+
+def test_trend_recovers_a_known_slope_with_the_textbook_standard_error():
+    x = np.array([10.5e3, 24.0e3, 38.3e3, 52.4e3])
+    y = 300.0 + 0.05 * x
+    t = stats.weighted_trend(x, y, np.full(4, 100.0))
+    assert t.slope == pytest.approx(0.05) and t.intercept == pytest.approx(300.0)
+    # equal weights: se(slope) = sd / sqrt(sum (x - mean)^2)
+    assert t.slope_se == pytest.approx(100.0 / math.sqrt(np.sum((x - x.mean()) ** 2)))
+    # on noisy data the estimate lies within its standard errors as often as a normal says
+    rng = np.random.default_rng(3)
+    inside = 0
+    for _ in range(400):
+        tn = stats.weighted_trend(x, y + 100.0 * rng.standard_normal(4), np.full(4, 100.0))
+        inside += abs(tn.slope - 0.05) <= 1.96 * tn.slope_se
+    assert 0.92 <= inside / 400 <= 0.98
+    with pytest.raises(ValueError):
+        stats.weighted_trend([1.0, 1.0], [2.0, 3.0], [1.0, 1.0])
+
+
+def test_lack_of_fit_is_chi2_with_known_variances_and_keeps_its_size_with_three_replicates():
+    rng = np.random.default_rng(4)
+    J = rng.standard_normal((16, 4))
+    M = stats.residual_maker(J)
+    r = M @ rng.standard_normal(16) * 1.3
+    lof = stats.lack_of_fit(r, M, np.full(16, np.inf))
+    assert lof.dof == 12 and lof.p_value == pytest.approx(sps.chi2.sf(r @ r, 12))
+    assert lof.noise_band == pytest.approx((1 - 2 * math.sqrt(2 / 12), 1 + 2 * math.sqrt(2 / 12)))
+    # variances estimated from 3 replicates (df 2): residuals are t_2-like; the test must still reject
+    # about 5 % of true models, where a chi2 reference would reject far more
+    df = np.full(16, 2.0)
+    alarms_mc, alarms_chi2, n = 0, 0, 300
+    draws = stats.null_residuals(M, df, n_sim=4000, seed=9)
+    for _ in range(n):
+        z = M @ rng.standard_normal(16)
+        rr = z / np.sqrt(rng.chisquare(2, 16) / 2)
+        alarms_mc += stats.lack_of_fit(rr, M, df, draws=draws).p_value < 0.05
+        alarms_chi2 += sps.chi2.sf(rr @ rr, 12) < 0.05
+    print(f"false alarms at alpha 0.05: calibrated null {alarms_mc / n:.3f}, chi2 reference {alarms_chi2 / n:.3f}")
+    assert 0.02 <= alarms_mc / n <= 0.09
+    assert alarms_chi2 / n > 0.2
+
+
+def test_boundary_likelihood_ratio_is_half_chi2():
+    # Self & Liang (1987): one parameter on its boundary -> 0.5 chi2_0 + 0.5 chi2_1; 2.71 is the 5 % point
+    assert stats.boundary_lr_pvalue(2.7055) == pytest.approx(0.05, abs=1e-4)
+    assert stats.boundary_lr_pvalue(0.0) == 1.0
+
+
+def test_satterthwaite_degrees_of_freedom_of_the_noise():
+    # two equal variances of 2 df each: (v1 + v2)^2 / (v1^2/2 + v2^2/2) = 4
+    n = Noise(VarianceTerm(1.0, 2, "replicates"), VarianceTerm(1.0, 2, "centre"))
+    assert n.df == pytest.approx(4.0) and n.variance == 2.0
+    assert Noise(VarianceTerm(1.0, math.inf, "stated"), VarianceTerm(0.0, 2, "none")).df == math.inf
+
+
+def test_bic_adds_log_n_per_parameter():
+    assert stats.bic(10.0, 3, 20) == pytest.approx(10.0 + 3 * math.log(20))
