@@ -149,7 +149,7 @@ def campaign_diagnosis(args) -> int:
 def campaign_history(args) -> int:
     h = _call(args, "GET", f"/campaigns/{args.id}/history")
     rows = [[e["number"], ", ".join(e["effects"]) or "-", e["chi2_per_dof"],
-             "-".join(_fmt(x) for x in e["noise_band"] or []), e["verdict"],
+             "[" + ", ".join(_fmt(x) for x in e["noise_band"] or []) + "]", e["verdict"],
              ", ".join(e.get("effect_added_next") or []) or "-"] for e in h["iterations"]]
     return _emit(args, h, _table(["iteration", "effects", "chi2/dof", "noise band", "verdict", "added next"],
                                  [[_fmt(c) if isinstance(c, float) else c for c in row] for row in rows]))
@@ -183,7 +183,7 @@ def campaign_report(args) -> int:
     if lof:
         text += (f"\nlack of fit: chi2 {_fmt(lof['statistic'])} on {lof['dof']} dof "
                  f"(per dof {_fmt(lof['chi2_per_dof'])}, "
-                 f"noise band {_fmt(lof['noise_band'][0])}-{_fmt(lof['noise_band'][1])}), p {_fmt(lof['p_value'])}")
+                 f"noise band [{_fmt(lof['noise_band'][0])}, {_fmt(lof['noise_band'][1])}]), p {_fmt(lof['p_value'])}")
     for b in (r.get("conflicts") or {}).get("active_bounds", []):
         text += f"\nat a bound: {b['parameter']} at its {b['side']} end, pushing {b['pushes']}"
     for p in (r.get("conflicts") or {}).get("priors_pulled", []):
