@@ -27,12 +27,12 @@ function goTo(hash) {
 
 function controls(c, id) {
   const act = (label, path) => h("button", { className: "secondary", "data-action": label, onclick: async () => {
-    if (await attempt(() => api(`/campaigns/${id}/${path}`, { method: "POST" }), `${label}: ok`)) refresh();
+    if (await attempt(() => api(path, { method: "POST" }), `${label}: ok`)) refresh();
   } }, label);
   return h("p", { className: "controls" },
-    c.status === "draft" ? act("Start", "start") : "",
-    c.status === "running" ? act("Pause", "pause") : "",
-    c.status === "paused" ? act("Resume", "resume") : "",
+    c.status === "draft" ? act("Start", `/campaigns/${id}/start`) : "",
+    c.status === "running" ? act("Pause", `/campaigns/${id}/pause`) : "",
+    c.status === "paused" ? act("Resume", `/campaigns/${id}/resume`) : "",
     " ", h("a", { href: `#/jobs?campaign_id=${id}` }, "its jobs"), " · ", h("a", { href: `#/materials/${c.material_id}` }, "its material"));
 }
 

@@ -10,8 +10,8 @@ const KPA = 1e-3, MM = 1e3, MPA = 1e-6;
 const scale = (values, k) => values.map((v) => (v === null || v === undefined ? null : v * k));
 const pairs = (xs, ys) => xs.map((x, i) => [x, ys[i]]).filter(([x, y]) => Number.isFinite(x) && Number.isFinite(y));
 const line = (name, data, extra = {}) => ({ type: "line", name, data, showSymbol: data.length <= 12, symbolSize: 5, lineStyle: { width: 1.4 }, ...extra });
-const legend = { top: 2, right: 6, type: "scroll", textStyle: { fontSize: 10 } };
-const grid = { left: 64, right: 16, top: 38, bottom: 44 };
+const legend = { top: 20, left: 56, right: 6, type: "scroll", textStyle: { fontSize: 10 } };
+const grid = { left: 64, right: 16, top: 52, bottom: 44 };
 
 function xy(title, xName, yName, series, { logY = false, height } = {}) {
   return chart({ title: { text: title }, legend: series.length > 1 ? legend : undefined, grid,
