@@ -59,7 +59,7 @@ def page(browser, service, shots, request):
     pg.watch = watch_page(pg, service.base_url)
     yield pg
     try:
-        pg.screenshot(path=str(shots / f"{request.node.name}.png"), full_page=True)
+        pg.screenshot(path=str(shots / f"{request.node.name}.png"), full_page=os.environ.get("DEMCAL_SCREENSHOT_FULL_PAGE", "1") == "1")
     finally:
         context.close()
     problems = pg.watch.problems()
@@ -78,7 +78,7 @@ def expect_text(page, selector: str, pattern: str):
 
 def section_shot(page, shots, title: str, name: str):
     """One card of a page, for docs/screenshots (smaller than the whole page)."""
-    card = page.locator("section.card", has=page.locator("h3", has_text=title)).first
+    card = page.locator("section.card", has=page.locator("h3", has_text=re.compile("^" + re.escape(title)))).first
     card.scroll_into_view_if_needed()
     card.screenshot(path=str(shots / f"{name}.png"))
 
@@ -95,6 +95,7 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     form.locator("input[name=seed]").fill("11")
     names = form.locator("select[name=factor_name]")
     assert [names.nth(i).input_value() for i in range(3)] == ["particle_density_kg_m3", "particle_stiffness_n_per_m", "friction_pp"]
+    page.screenshot(path=str(shots / "campaign-new.png"))
     form.get_by_role("button", name="Create (draft)").click()
     page.wait_for_url(re.compile(r"#/campaigns/\d+$"))
     campaign_id = int(page.url.rsplit("/", 1)[1])
@@ -139,13 +140,14 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     page.screenshot(path=str(shots / "campaign-iteration-1.png"))
 
 
-def test_job_submission_with_an_effect_shows_its_curves(page, service):
+def test_job_submission_with_an_effect_shows_its_curves(page, service, shots):
     open_view(page, service, "#/submit")
     form = page.locator("form#submit-job")
     form.locator("select[name=evaluator]").select_option("analytic")
     form.locator("select[name=fidelity]").select_option("thesis")
     form.locator("input[name=effect][value=rolling_epsd2]").check()
     form.locator("input[name='effect:rolling_epsd2:rolling_friction']").fill("0.3")
+    page.screenshot(path=str(shots / "job-submit.png"))
     form.get_by_role("button", name="Queue job").click()
     page.wait_for_url(re.compile(r"#/jobs/\d+$"))
     job_id = int(page.url.rsplit("/", 1)[1])
@@ -203,7 +205,7 @@ def test_dem_result_curves_one_quantity_per_axis(page, service, shots):
     assert "cycle 1" in loops and "cycle 2" in loops
     dst = page.locator(".charts [aria-label='DST: shear stress']").inner_text()
     assert len(re.findall(r"σn [\d.]+ kPa", dst)) == 4
-    page.screenshot(path=str(shots / "job-dem-curves.png"), full_page=True)
+    page.locator(".charts").screenshot(path=str(shots / "job-dem-curves.png"))
 
 
 def test_failed_job_shows_one_line_not_a_traceback(page, service):
@@ -218,7 +220,7 @@ def test_failed_job_shows_one_line_not_a_traceback(page, service):
     assert "Traceback" not in body and "/srv/demcal" not in body and "raise ValueError" not in body
 
 
-def test_bad_field_is_shown_beside_its_input(page, service):
+def test_bad_field_is_shown_beside_its_input(page, service, shots):
     page.watch.allowed.append("status of 422")  # the browser logs the API's refusal; it is the point here
     open_view(page, service, "#/submit")
     form = page.locator("form#submit-job")
@@ -240,6 +242,8 @@ def test_bad_field_is_shown_beside_its_input(page, service):
     expect_text(page, "form#new-campaign .field-error", "low .* must be below high")
     assert "field-error" in row.locator("xpath=following-sibling::*[1]").get_attribute("class")
     assert page.url.endswith("#/campaigns")  # nothing was created
+    row.scroll_into_view_if_needed()
+    page.screenshot(path=str(shots / "form-field-error.png"))
 
 
 def test_api_docs_work_offline(page, service, shots):

@@ -26,13 +26,13 @@ function goTo(hash) {
 }
 
 function controls(c, id) {
-  const act = (label, path) => h("button", { className: "secondary", "data-action": label, onclick: async () => {
-    if (await attempt(() => api(path, { method: "POST" }), `${label}: ok`)) refresh();
+  const act = (label, call) => h("button", { className: "secondary", "data-action": label, onclick: async () => {
+    if (await attempt(call, `${label}: ok`)) refresh();
   } }, label);
   return h("p", { className: "controls" },
-    c.status === "draft" ? act("Start", `/campaigns/${id}/start`) : "",
-    c.status === "running" ? act("Pause", `/campaigns/${id}/pause`) : "",
-    c.status === "paused" ? act("Resume", `/campaigns/${id}/resume`) : "",
+    c.status === "draft" ? act("Start", () => api(`/campaigns/${id}/start`, { method: "POST" })) : "",
+    c.status === "running" ? act("Pause", () => api(`/campaigns/${id}/pause`, { method: "POST" })) : "",
+    c.status === "paused" ? act("Resume", () => api(`/campaigns/${id}/resume`, { method: "POST" })) : "",
     " ", h("a", { href: `#/jobs?campaign_id=${id}` }, "its jobs"), " · ", h("a", { href: `#/materials/${c.material_id}` }, "its material"));
 }
 

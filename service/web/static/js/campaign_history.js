@@ -37,7 +37,8 @@ function traceChart(name, rows) {
   if (prior) series[0].markArea = band(prior.value - 2 * prior.uncertainty, prior.value + 2 * prior.uncertainty, "rgba(122,90,248,0.12)", "prior ±2u");
   const numbers = rows.map((r) => r.number);
   return chart({ title: { text: name, textStyle: { fontSize: 11 } }, grid: { left: 64, right: 10, top: 30, bottom: 36 },
-    xAxis: axis("iteration", { min: Math.min(...numbers) - 0.5, max: Math.max(...numbers) + 0.5, interval: 1, scale: false, axisLabel: { formatter: (v) => (Number.isInteger(v) ? String(v) : "") } }),
+    xAxis: axis("iteration", { min: Math.min(...numbers) - 0.5, max: Math.max(...numbers) + 0.5, scale: false,
+      axisLabel: { customValues: numbers, formatter: (v) => String(v) }, axisTick: { customValues: numbers } }),
     yAxis: axis(""), series }, { height: 200, label: `trace ${name}` });
 }
 
@@ -56,7 +57,7 @@ export function historySection(history, iterations, priors) {
   if (!its.length) return "";
   return h("section", { className: "card history" }, h("h3", {}, "Across iterations"),
     h("div", { className: "side-by-side" }, h("div", {}, errorChart(its)),
-      h("div", {}, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (lack of fit)", "Verdict", "Next"],
+      h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (lack of fit)", "Verdict", "Next"],
         its.map((it) => [String(it.number), it.effects.length ? it.effects.join(", ") : "none",
           h("span", { className: "chi2dof", "data-iteration": String(it.number) }, fmt(it.chi2_per_dof, 4)),
           it.noise_band ? `${fmt(Math.max(0, it.noise_band[0]), 2)} – ${fmt(it.noise_band[1], 2)}` : "–",
