@@ -23,8 +23,11 @@ CHUNK = 128  # bodies per parallel task; pairs use twice this
 
 @njit(cache=True, inline='always')
 def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
-            r_i, r_j, m_eff, kn, mu, dt, repulsive_only):
-    """Force on i (n points from i to j, v = v_i - v_j at the contact, w = omega_i - omega_j)."""
+            r_i, r_j, m_eff, i_roll, kn, mu, dt, repulsive_only):
+    """Force on i (n points from i to j, v = v_i - v_j at the contact, w = omega_i - omega_j).
+
+    i_roll is the contact's rolling inertia (Ai et al. 2011): 1/i_roll = sum over the two bodies of
+    1/(7/5 m r^2), the wall counting as infinite; only the EPSD rolling dashpot reads it."""
     p = props[row]
     ks = p[0] * kn
     fn_el = kn * delta
@@ -121,10 +124,12 @@ def pair_one(p, pi, pj, hist, out, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
     kpi = s_kp[i]
     kpj = s_kp[j]
     row = s_mat[i] * n_mat + s_mat[j]
+    roll_i = mi * r_i * r_i
+    roll_j = mj * r_j * r_j
     f0, f1, f2, tr0, tr1, tr2, knt = contact(
         props, row, h, delta, dist, n0, n1, n2, v0, v1, v2,
         wi0 - wj0, wi1 - wj1, wi2 - wj2, r_i, r_j, mi * mj / (mi + mj),
-        kpi * kpj / (kpi + kpj), props[row, 3], dt, repulsive_only)
+        1.4 * roll_i * roll_j / (roll_i + roll_j), kpi * kpj / (kpi + kpj), props[row, 3], dt, repulsive_only)
     out[p, 0], out[p, 1], out[p, 2] = f0, f1, f2
     c0 = n1 * f2 - n2 * f1
     c1 = n2 * f0 - n0 * f2
@@ -214,7 +219,7 @@ def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
         row = n_mat * n_mat + s_mat[i] * n_mat + w_mat[w]
         f0, f1, f2, tr0, tr1, tr2, knt = contact(
             props, row, h, delta, dist, n0, n1, n2, v0, v1, v2, wi0, wi1, wi2,
-            r_i, -1.0, b_mass[b], kp * kw / (kp + kw), w_mu[w], dt, repulsive_only)
+            r_i, -1.0, b_mass[b], 1.4 * b_mass[b] * r_i * r_i, kp * kw / (kp + kw), w_mu[w], dt, repulsive_only)
         s_force[i, 0] += f0
         s_force[i, 1] += f1
         s_force[i, 2] += f2

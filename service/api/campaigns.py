@@ -166,6 +166,9 @@ def history(campaign_id: CampaignId, session: Session = Depends(get_session)) ->
             "per_test": {t["test"]: t["chi2"] for t in report.get("tests", [])},
             "verdict": report.get("verdict"),
             "top_effect": (diag or {}).get("ranking", [{}])[0].get("effect") if diag and diag.get("ranking") else None,
+            # automatic mode: whether this iteration's added effect was kept, and why the loop stopped
+            "decision": (report.get("automatic") or {}).get("decision"),
+            "stop_reason": (report.get("automatic") or {}).get("stop_reason"),
         })
         previous = set(effects)
         for row in report.get("targets", []):

@@ -10,7 +10,8 @@ crash finds the job it already queued instead of queuing a twin.
 Phases of an iteration: design -> batteries -> analysis -> confirmation -> report -> done, and when
 the report's verdict is not "calibrated": report -> diagnosis (a second baseline battery at the optimum,
 then each candidate effect at the optimum's two seeds) -> diagnosed -> done, the ranking stored in the
-report.
+report. In automatic mode (service.campaigns.automatic) a done iteration either configures the next
+one, with the indicated effect as a factor, or records why the loop stopped.
 Paused campaigns are skipped; their queued batteries keep running in the queue
 and are picked up on resume.
 """
@@ -24,7 +25,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from engine.lab.spec import JobSpec, MicroParameters, TestOptions
-from service.campaigns import analysis
+from service.campaigns import analysis, automatic
 from service.campaigns.design import build_design, design_view
 from service.campaigns.report import build_report
 from calibration.keys import responses_of
@@ -248,17 +249,20 @@ class CampaignRunner:
                   "responses": confirmation.responses}
         # a diagnosis needs misfit the parameters cannot absorb: more measured values than free parameters
         diagnosable = ((report.get("lack_of_fit") or {}).get("dof") or 0) > 0
+        # in automatic mode an added effect that did not earn its place needs no diagnosis of its own:
+        # the next candidate comes from the iteration it was built on
+        rejected = False
+        if config.automatic:
+            decision, _ = automatic.judge_iteration(campaign.iterations, it, report)
+            rejected = decision is not None and not decision["accepted"]
         plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed) if (
-            config.diagnose and diagnosable and report["verdict"] != "calibrated") else []
+            config.diagnose and diagnosable and report["verdict"] != "calibrated" and not rejected) else []
         if plan:
             for k, (name, natural, seed) in enumerate(plan):
                 session.add(CampaignRun(iteration_id=it.id, kind="diagnosis", std_order=k + 1, run_order=k + 1,
                                         is_centre=False, coded={}, natural=natural, seed=seed, status="pending"))
             return self._set_phase(session, it, "report", "diagnosis", report=report, confirmation=stored)
-        if not self._set_phase(session, it, "report", "done", report=report, confirmation=stored,
-                               finished_at=utcnow()):
-            return False
-        return self._complete(session, campaign)
+        return self._finish(session, campaign, config, it, "report", report, confirmation=stored)
 
     def _diagnosed(self, session, campaign, config, it) -> bool:
         targets = self._targets(session, campaign, config)
@@ -271,7 +275,20 @@ class CampaignRunner:
                                       [(name, seed, list((r.responses or {}).values()))
                                        for (name, _, seed), r in zip(plan, runs)])
         report = {**(it.report or {}), "diagnosis": diagnosis}
-        if not self._set_phase(session, it, "diagnosed", "done", report=report, finished_at=utcnow()):
+        return self._finish(session, campaign, config, it, "diagnosed", report)
+
+    def _finish(self, session, campaign, config, it, phase: str, report: dict, **values: Any) -> bool:
+        """The iteration is done. In automatic mode the next one is configured in the same
+        transaction (phase "done" with the campaign still running makes ``_step`` start it);
+        otherwise, or when automatic mode stops, the campaign completes."""
+        if config.automatic:
+            record = automatic.next_step(config, campaign.config, campaign.iterations, it, report, self.settings)
+            following = record.pop("next_config", None)
+            report = {**report, "automatic": record}
+            if following is not None:
+                campaign.config = following  # flushed and committed with the phase change, or rolled back
+                return self._set_phase(session, it, phase, "done", report=report, finished_at=utcnow(), **values)
+        if not self._set_phase(session, it, phase, "done", report=report, finished_at=utcnow(), **values):
             return False
         return self._complete(session, campaign)
 

@@ -35,6 +35,35 @@ def test_restart_mid_campaign_completes_without_duplicate_jobs(tmp_path):
         assert len(report["targets"]) == 3
 
 
+def test_restart_mid_diagnosis_resumes_without_duplicate_jobs(tmp_path):
+    """The service dies with the diagnosis batteries half run: the new one queues none twice and
+    ranks the effects from the batteries the old one ran."""
+    settings = s2_settings(tmp_path)
+    n_diagnosis = 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
+    with running_app(settings) as (client, app):
+        cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+        client.post(f"{API}/campaigns/{cid}/start")
+        runner = CampaignRunner(app.state.session_factory, settings)
+        for _ in range(20):
+            runner.tick()
+            if client.get(f"{API}/campaigns/{cid}").json()["phase"] == "diagnosis":
+                break
+            drain(app, settings)
+        runner.tick()  # queues the diagnosis batteries
+        assert drain(app, settings, max_jobs=3) == 3
+        before = client.get(f"{API}/campaigns/{cid}").json()
+        assert before["phase"] == "diagnosis" and before["runs_total"] == 12 + n_diagnosis
+
+    with running_app(settings) as (client, app):
+        final = run_to_end(client, app, settings, cid)
+        assert final["status"] == "completed", final["error"]
+        with app.state.session_factory() as session:
+            jobs = session.scalars(select(Job).where(Job.campaign_id == cid)).all()
+        assert len(jobs) == 12 + n_diagnosis
+        diagnosis = client.get(f"{API}/campaigns/{cid}/diagnosis").json()
+        assert diagnosis["batteries"] == n_diagnosis and diagnosis["ranking"]
+
+
 def test_restart_between_queuing_and_recording_a_job_finds_the_same_job(tmp_path):
     """A crash after submit_job committed but before the run stored the job id must not queue a twin."""
     settings = s2_settings(tmp_path)
