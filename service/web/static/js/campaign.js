@@ -76,6 +76,7 @@ export async function campaignPage(view, id, params) {
         `${c.runs_succeeded}/${c.runs_total}`, String(c.runs_failed)]]),
     iterationTabs(id, iterations, it?.number)];
   if (c.error) parts.push(h("p", { className: "job-error" }, h("b", {}, "Failed: "), c.error));
+  if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), c.stop_reason));
   if (c.status === "running" || c.status === "paused") parts.push(progressCard(c));
   if (it) {
     const effects = activeEffects(it.parameters);

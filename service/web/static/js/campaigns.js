@@ -1,7 +1,7 @@
 // Campaigns: the list, and the creation form that reaches what POST /campaigns accepts: targets
 // picked from the material's measurements, factors (micro parameters or effect strengths), design,
-// fixed parameters and contact effects, options, priors, constraints. (The API has no automatic
-// mode: iterations are added from the campaign's page, so the form offers none.)
+// fixed parameters and contact effects, options, priors, constraints, automatic mode (the loop adds
+// the indicated effects by itself, up to max_iterations).
 import { api, condition, h, status, submitForm, table } from "./core.js";
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
 
@@ -92,7 +92,10 @@ export async function campaignsPage(view, params) {
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "include_anchor", "data-loc": "options" }), " include anchor pull-out"),
       field("Assumed relative uncertainty", h("input", { name: "default_relative_uncertainty", type: "number", step: "any", value: 0.05, "data-loc": "default_relative_uncertainty" })),
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "allow_extrapolation", "data-loc": "allow_extrapolation" }), " allow the optimum outside the box"),
-      h("label", { className: "check" }, h("input", { type: "checkbox", name: "diagnose", checked: true, "data-loc": "diagnose" }), " diagnose a missing effect when the model misses")),
+      h("label", { className: "check" }, h("input", { type: "checkbox", name: "diagnose", checked: true, "data-loc": "diagnose" }), " diagnose a missing effect when the model misses"),
+      h("label", { className: "check", title: "after each iteration, add the effect the diagnosis indicates and run the next one, until the lack of fit passes, nothing improves, or the maximum is reached" },
+        h("input", { type: "checkbox", name: "automatic", "data-loc": "automatic" }), " automatic mode"),
+      field("Max. iterations (automatic)", h("input", { name: "max_iterations", type: "number", value: 4, "data-loc": "max_iterations" }))),
     h("h4", {}, "Priors (directly measured factors)"), priorRows, addPrior,
     h("h4", {}, "Constraints"),
     field("One per line, e.g. friction_pw <= friction_pp", h("textarea", { name: "constraints", rows: 2, "data-loc": "constraints" })),
@@ -143,6 +146,7 @@ function campaignBody(form, material) {
       ...(generators.length ? { generators } : {}) },
     default_relative_uncertainty: num(data.get("default_relative_uncertainty")),
     allow_extrapolation: data.get("allow_extrapolation") === "on", diagnose: data.get("diagnose") === "on",
+    automatic: data.get("automatic") === "on", max_iterations: num(data.get("max_iterations")),
     constraints: String(data.get("constraints") || "").split("\n").map((c) => c.trim()).filter(Boolean),
   };
 }
