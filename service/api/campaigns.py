@@ -121,9 +121,13 @@ def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, sessi
 @router.get("/{campaign_id}/report",
             summary="Per target: measured, predicted (interval), confirmed, residual, reachability", responses=_NOT_YET)
 def report(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    from service.campaigns.report import REACHABLE_LIMIT
+
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
+    # reachable_limit: the cutoff on reachability that decides "reachable" (the UI draws it)
     return {"campaign_id": campaign.id, "name": campaign.name, "material_id": campaign.material_id,
-            "iteration": it.number, "evaluator": campaign.evaluator, "fidelity": campaign.fidelity, **value}
+            "iteration": it.number, "evaluator": campaign.evaluator, "fidelity": campaign.fidelity,
+            "reachable_limit": REACHABLE_LIMIT, **value}
 
 
 @router.get("/{campaign_id}/diagnosis",
