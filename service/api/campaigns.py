@@ -106,11 +106,14 @@ def optimum(campaign_id: CampaignId, number: int | None = IterationQ, session: S
     return {"iteration": it.number, **value}
 
 
-@router.get("/{campaign_id}/confirmation", summary="Confirmation battery at the optimum", responses=_NOT_YET)
+@router.get("/{campaign_id}/confirmation", summary="The battery at the optimum (after polishing on the batteries)",
+            responses=_NOT_YET)
 def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    from service.campaigns.polish import final_run
+
     campaign = get_campaign(session, campaign_id)
     it = iteration(session, campaign, number)
-    run = next((r for r in it.runs if r.kind == "confirmation"), None)
+    run = final_run(it)
     if run is None:
         raise Conflict(f"campaign {campaign_id} iteration {it.number} has no confirmation run yet "
                        f"(phase {it.phase})", ["path", "campaign_id"])

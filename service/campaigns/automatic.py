@@ -15,6 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 from calibration.decisions import judge
+from calibration.localise import ALPHA
 
 STOP_PASSES = "lack of fit passes"
 STOP_MAX = "maximum number of iterations reached"
@@ -70,7 +71,8 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     rejected = decision is not None and not decision["accepted"]
     base = next(p for p in iterations if p.number == base_number) if rejected else it
     base_report = report if base is it else (base.report or {})
-    if not rejected and report.get("verdict") == "calibrated":
+    passes = (_lof(report).get("p_value") or 0.0) >= ALPHA
+    if not rejected and passes and report.get("verdict") != "targets out of reach":
         return {**record, "stop_reason": STOP_PASSES}
     if it.number >= config.max_iterations:
         return {**record, "stop_reason": STOP_MAX}

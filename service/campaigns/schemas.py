@@ -144,6 +144,11 @@ class CampaignCreate(BaseModel):
         True, description="after a report that is not 'calibrated', run one battery per candidate effect at the "
         "optimum and rank the missing effects (docs/diagnosis.md)",
     )
+    polish_steps: int = Field(
+        3, ge=0, le=6, description="Gauss-Newton steps on the batteries after the confirmation (0: none); each "
+        "costs 3 batteries, plus one per factor for the Jacobian: the surfaces' optimum is biased inside the box "
+        "for saturating responses",
+    )
     automatic: bool = Field(
         False, description="after each iteration, add the effect the diagnosis indicates and run the next "
         "iteration by itself, until the lack of fit passes, nothing improves, or max_iterations is reached "

@@ -29,8 +29,13 @@ def test_restart_mid_campaign_completes_without_duplicate_jobs(tmp_path):
         assert final["status"] == "completed", final["error"]
         with app.state.session_factory() as session:
             jobs = session.scalars(select(Job).where(Job.campaign_id == cid)).all()
-        # 11 batteries + confirmation + a second baseline and each candidate effect at two seeds, none twice
-        assert len(jobs) == 12 + 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
+            runs = session.scalars(select(CampaignRun)).all()
+        # 11 batteries + confirmation + polishing + a second baseline and each candidate effect at two
+        # seeds: one job per run, none twice
+        kinds = [r.kind for r in runs]
+        assert kinds.count("design") == 11 and kinds.count("confirmation") == 1 and kinds.count("polish") >= 3
+        assert kinds.count("diagnosis") == 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
+        assert sorted(j.id for j in jobs) == sorted(r.job_id for r in runs)
         report = client.get(f"{API}/campaigns/{cid}/report").json()
         assert len(report["targets"]) == 3
 
@@ -52,14 +57,16 @@ def test_restart_mid_diagnosis_resumes_without_duplicate_jobs(tmp_path):
         runner.tick()  # queues the diagnosis batteries
         assert drain(app, settings, max_jobs=3) == 3
         before = client.get(f"{API}/campaigns/{cid}").json()
-        assert before["phase"] == "diagnosis" and before["runs_total"] == 12 + n_diagnosis
+        assert before["phase"] == "diagnosis"
 
     with running_app(settings) as (client, app):
         final = run_to_end(client, app, settings, cid)
         assert final["status"] == "completed", final["error"]
         with app.state.session_factory() as session:
             jobs = session.scalars(select(Job).where(Job.campaign_id == cid)).all()
-        assert len(jobs) == 12 + n_diagnosis
+            runs = session.scalars(select(CampaignRun)).all()
+        assert sum(r.kind == "diagnosis" for r in runs) == n_diagnosis
+        assert sorted(j.id for j in jobs) == sorted(r.job_id for r in runs)  # one job per run, none twice
         diagnosis = client.get(f"{API}/campaigns/{cid}/diagnosis").json()
         assert diagnosis["batteries"] == n_diagnosis and diagnosis["ranking"]
 
