@@ -83,6 +83,7 @@ class Attribution:
     def to_dict(self) -> dict[str, Any]:
         return {"verdict": self.verdict, "message": self.message,
                 "ranking": [r.to_dict(self.candidates[r.name]) for r in self.ranking],
+                "indicated": self.indicated(),
                 "alias_groups": self.alias_groups, "fingerprints": self.fingerprints,
                 "measure_next": self.measure_next, "alpha": ALPHA, "min_explained": MIN_EXPLAINED,
                 "critical_lm": _critical_lm(len(self.ranking))}

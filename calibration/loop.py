@@ -21,12 +21,12 @@ from engine.lab.spec import MicroParameters
 
 from . import calibrate as cal
 from . import parameters as params_mod
-from . import stats
 from .attribute import PLAUSIBLE_SLACK, Attribution, Signature, attribute
+from .decisions import Decision, effect_range, judge
 from .evaluators import BatchEvaluator
 from .fitting import TargetModel, fit_targets, run_values
 from .keys import find
-from .localise import ALPHA, Localisation, Residuals, localise
+from .localise import Localisation, Residuals, localise
 from .records import Measured
 
 
@@ -109,25 +109,6 @@ class Diagnosis:
 
     def to_dict(self) -> dict[str, Any]:
         return {"iteration": self.iteration, **self.attribution.to_dict()}
-
-
-@dataclass
-class Decision:
-    """Whether an added effect earned its place (design note step 6)."""
-
-    effect: str
-    accepted: bool
-    chi2_before: float
-    chi2_after: float
-    lr: float
-    p_value: float | None            # boundary-corrected LR test; None for a switch (not nested)
-    delta_bic: float
-    lof_p_before: float
-    lof_p_after: float
-    strength: float | None
-
-    def to_dict(self) -> dict[str, Any]:
-        return dict(self.__dict__)
 
 
 @dataclass
@@ -320,19 +301,9 @@ class CalibrationLoop:
             factors.append({"name": c.factor, "low": low, "high": high, "log": c.is_switch})
             return factors, fixed
         ranked = next((r for r in diagnosis.attribution.ranking if r.name == name), None) if diagnosis else None
-        if c.is_switch:
-            ref = (ranked.strength if ranked and ranked.strength else
-                   float(c.reference(MicroParameters.model_validate(it.parameters))))
-            factors.append({"name": c.factor, "low": ref / 4.0, "high": ref * 4.0, "log": True})
-        else:
-            # the whole plausible range, or twice the screen's estimate if that is larger: a linear
-            # signature underestimates a saturating effect, and a strength pinned at the top of its
-            # range is extended by ``iterate`` anyway
-            off = c.off_value or 0.0
-            gamma = ranked.strength - off if ranked and ranked.strength is not None else c.step
-            span = c.plausible_range[1] - off
-            top = min(off + min(max(2.0 * gamma, span), PLAUSIBLE_SLACK * span), params_mod.upper_limit(c.factor))
-            factors.append({"name": c.factor, "low": off, "high": top})
+        reference = float(c.reference(MicroParameters.model_validate(it.parameters))) if c.is_switch else None
+        low, high, log = effect_range(c, ranked.strength if ranked else None, reference)
+        factors.append({"name": c.factor, "low": low, "high": high, "log": log})
         return factors, fixed
 
     def iterate_effect(self, factors: list[dict], fixed: dict, number: int, name: str) -> Iteration:
@@ -357,18 +328,11 @@ class CalibrationLoop:
 
     def accept(self, before: Iteration, after: Iteration, name: str) -> Decision:
         c = all_candidates()[name]
-        chi_b, chi_a = before.residuals.chi2(), after.residuals.chi2()
-        n = before.residuals.r.size
-        lr = chi_b - chi_a
-        p = None if c.is_switch else stats.boundary_lr_pvalue(lr)
-        k_b = sum(before.residuals.absorbing)
-        k_a = sum(after.residuals.absorbing)
-        delta_bic = stats.bic(chi_a, k_a, n) - stats.bic(chi_b, k_b, n)
-        lof_b, lof_a = before.localisation.lack_of_fit.p_value, after.localisation.lack_of_fit.p_value
-        improves = chi_a < chi_b and (lof_a > lof_b or lof_a >= ALPHA)
-        significant = (p is not None and p < ALPHA) or delta_bic < -2.0
-        strength = after.theta.get(c.factor)
-        return Decision(name, bool(improves and significant), chi_b, chi_a, lr, p, delta_bic, lof_b, lof_a, strength)
+        return judge(c, chi2_before=before.residuals.chi2(), chi2_after=after.residuals.chi2(),
+                     n_residuals=before.residuals.r.size, free_before=sum(before.residuals.absorbing),
+                     free_after=sum(after.residuals.absorbing),
+                     lof_p_before=before.localisation.lack_of_fit.p_value,
+                     lof_p_after=after.localisation.lack_of_fit.p_value, strength=after.theta.get(c.factor))
 
     # -- the whole loop -------------------------------------------------------------------------
     def run(self) -> LoopResult:

@@ -68,7 +68,8 @@ class Gains:
     box_friction_deg: float = 2.0
     # cohesion
     cohesion_max_pa: float = 12.0e3
-    cohesion_half_j_m3: float = 5.0e6
+    # half the maximum intercept at this surface energy of the adhesive contact (F_c = 3/2 pi Gamma R*)
+    cohesion_half_j_m2: float = 100.0
     # modulus
     modulus_gain: float = 0.125
     modulus_friction_gain: float = 0.25
@@ -162,16 +163,18 @@ def bulk_values(parameters: Mapping[str, Any], conditions: Conditions, gains: Ga
     radius = float(parameters.get("particle_radius_m") or 0.020)
     elongation = float(parameters.get("clump_aspect_ratio", 1.0)) - 1.0
     effects = _effect_strengths(parameters.get("effects") or {})
-    mu_r = sum(float(effects[n].rolling_friction) for n in ("rolling_epsd2", "rolling_constant_torque")
-               if n in effects)
-    k_c = float(effects["cohesion_sjkr"].cohesion_energy_density_j_m3) if "cohesion_sjkr" in effects else 0.0
+    mu_r = sum(float(effects[n].rolling_friction)
+               for n in ("rolling_epsd", "rolling_epsd2", "rolling_constant_torque") if n in effects)
+    # the adhesive contact gives the intercept; SJKR on a linear spring gives none (engine/effects/
+    # cohesion_sjkr.py) and is not modelled here
+    gamma = float(effects["cohesion_adhesive"].surface_energy_j_m2) if "cohesion_adhesive" in effects else 0.0
     hertz = effects.get("hertz_mindlin")
 
     solid = (g.solid_fraction_0 - g.solid_loss_friction * g.sat(mu / 0.25) - g.solid_loss_wall * g.sat(mu_w / 0.2)
              - g.solid_loss_rolling * _rational(mu_r, 0.2) - g.solid_loss_shape * _rational(elongation, 0.3)
-             - g.solid_loss_cohesion * _rational(k_c, 4.0e6))
+             - g.solid_loss_cohesion * _rational(gamma, 80.0))
     rho_b = rho_p * solid
-    cohesion_pa = g.cohesion_max_pa * _rational(k_c, g.cohesion_half_j_m3)
+    cohesion_pa = g.cohesion_max_pa * _rational(gamma, g.cohesion_half_j_m2)
     ceiling = (g.phi_ceiling_deg + g.phi_ceiling_rolling_deg * _rational(mu_r, 0.2)
                + g.phi_ceiling_shape_deg * _rational(elongation, 0.3))
     phi_cv = g.phi_floor_deg + (ceiling - g.phi_floor_deg) * g.sat(mu / g.friction_scale)

@@ -76,10 +76,12 @@ class LackOfFit:
     dof: int              # residuals - free parameters
     p_value: float
     per_dof: float        # statistic / dof (chi^2 per degree of freedom)
-    noise_band: tuple[float, float]   # 1 -+ 2 sqrt(2/dof): where per_dof lies by chance
+    noise_band: tuple[float, float]   # 1 -+ 2 sqrt(2/dof) (lower edge >= 0): where per_dof lies by chance
+    n_residuals: int = 0  # standardised residuals summed (targets and priors); free = n - dof
 
     def to_dict(self) -> dict:
         return {"statistic": self.statistic, "dof": self.dof, "p_value": self.p_value,
+                "n_residuals": self.n_residuals,
                 "chi2_per_dof": self.per_dof, "noise_band": list(self.noise_band)}
 
 
@@ -126,7 +128,7 @@ def lack_of_fit(r: np.ndarray, M: np.ndarray, df: np.ndarray, *, n_sim: int = 20
     t_obs = float(r @ r)
     dof = int(round(np.trace(M)))
     if dof <= 0:
-        return LackOfFit(t_obs, 0, math.nan, math.nan, (math.nan, math.nan))
+        return LackOfFit(t_obs, 0, math.nan, math.nan, (math.nan, math.nan), int(r.size))
     if draws is None and np.isfinite(df).any():
         draws = null_residuals(M, df, n_sim=n_sim, seed=seed)
     if draws is None:
@@ -135,7 +137,8 @@ def lack_of_fit(r: np.ndarray, M: np.ndarray, df: np.ndarray, *, n_sim: int = 20
         total = np.sum(draws * draws, axis=1)
         p = float((np.count_nonzero(total >= t_obs) + 1) / (total.size + 1))
     half = 2.0 * math.sqrt(2.0 / dof)
-    return LackOfFit(t_obs, dof, p, t_obs / dof, (1.0 - half, 1.0 + half))
+    # a sum of squares per dof is never negative: below 8 dof the lower edge is 0
+    return LackOfFit(t_obs, dof, p, t_obs / dof, (max(0.0, 1.0 - half), 1.0 + half), int(r.size))
 
 
 @dataclass(frozen=True)

@@ -2,6 +2,7 @@
 
 Not imported directly: the text between the markers is the generated module. Placeholders:
 {EFFECT_IMPORTS}, {STIFFNESS_HOOKS}, {NORMAL_EXTRA_HOOKS}, {ROLLING_HOOKS} (8-space indented code),
+{ROLL_INERTIA} (the pair's rolling inertia where a rolling effect is compiled in, else 0.0),
 {ROOT_KNT} (sqrt(kn_tangent m_eff): the precomputed root, or recomputed where a stiffness effect changes kn).
 Property row: [ks_ratio, damping_ratio_normal, damping_ratio_shear, friction, effect columns...];
 history row: [tangential spring displacement (3), effect slots...].
@@ -24,10 +25,12 @@ CHUNK = 128  # bodies per parallel task; pairs use twice this
 
 @njit(cache=True, inline='always')
 def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
-            r_i, r_j, m_eff, kn, root_km, mu, dt, repulsive_only):
+            r_i, r_j, m_eff, i_roll, kn, root_km, mu, dt, repulsive_only):
     """Force on i (n points from i to j, v = v_i - v_j at the contact, w = omega_i - omega_j).
 
-    root_km = sqrt(kn m_eff), precomputed per pair at rebuild (a stiffness effect recomputes it)."""
+    root_km = sqrt(kn m_eff), precomputed per pair at rebuild (a stiffness effect recomputes it).
+    i_roll is the contact's rolling inertia (Ai et al. 2011): 1/i_roll = sum over the two bodies of
+    1/(7/5 m r^2), the wall counting as infinite; only the EPSD rolling dashpot reads it."""
     p = props[row]
     ks = p[0] * kn
     fn_el = kn * delta
@@ -69,6 +72,14 @@ def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
     return f0 - fn * n0, f1 - fn * n1, f2 - fn * n2, tr0, tr1, tr2, knt
 
 
+@njit(cache=True, inline='always')
+def pair_rolling_inertia(mi, mj, r_i, r_j):
+    """1 / (1 / (7/5 mi ri^2) + 1 / (7/5 mj rj^2)), the contact's rolling inertia (Ai et al. 2011)."""
+    roll_i = mi * r_i * r_i
+    roll_j = mj * r_j * r_j
+    return 1.4 * roll_i * roll_j / (roll_i + roll_j)
+
+
 @njit(cache=True, parallel=True)
 def pair_forces(P, S, B, props, n_mat, dt, repulsive_only):
     """All particle-particle contacts, added straight into both spheres' accumulators (P.acc).
@@ -78,19 +89,19 @@ def pair_forces(P, S, B, props, n_mat, dt, repulsive_only):
     """
     row_start, pj, hist, pconst, pk, acc, block_start = P.row_start, P.j, P.hist, P.const, P.k, P.acc, P.block_start
     s_pos, s_vel, s_rad, s_mat, s_body = S.pos, S.vel, S.radius, S.material, S.body
-    b_omega = B.omega
+    b_omega, b_mass = B.omega, B.mass
     n_blocks = block_start.shape[0] - 1
     for colour in range(2):
         n_c = (n_blocks - colour + 1) // 2
         for k in prange(n_c):
             blk = colour + 2 * k
             pair_block(block_start[blk], block_start[blk + 1], row_start, pj, hist, pconst, pk, acc, s_pos,
-                       s_vel, s_rad, s_mat, s_body, b_omega, props, n_mat, dt, repulsive_only)
+                       s_vel, s_rad, s_mat, s_body, b_omega, b_mass, props, n_mat, dt, repulsive_only)
 
 
 @njit(cache=True)
 def pair_block(lo, hi, row_start, pj, hist, pconst, pk, acc, s_pos, s_vel, s_rad, s_mat, s_body, b_omega,
-               props, n_mat, dt, repulsive_only):
+               b_mass, props, n_mat, dt, repulsive_only):
     """Rows lo..hi-1: sphere i's own sums stay in registers; partner j's are added in place."""
     n_hist = hist.shape[1]
     for i in range(lo, hi):
@@ -133,9 +144,11 @@ def pair_block(lo, hi, row_start, pj, hist, pconst, pk, acc, s_pos, s_vel, s_rad
             v1 = u1 - s_vel[j, 1] + a_i * (wi2 * n0 - wi0 * n2) + a_j * (wj2 * n0 - wj0 * n2)
             v2 = u2 - s_vel[j, 2] + a_i * (wi0 * n1 - wi1 * n0) + a_j * (wj0 * n1 - wj1 * n0)
             row = mat_row + s_mat[j]
+            # rolling inertia: only kernels with a rolling effect compute it (ROLL_INERTIA is 0.0 otherwise)
+            i_roll = {ROLL_INERTIA}
             f0, f1, f2, tr0, tr1, tr2, knt = contact(
                 props, row, hist[p], delta, dist, n0, n1, n2, v0, v1, v2,
-                wi0 - wj0, wi1 - wj1, wi2 - wj2, r_i, r_j, pconst[p, 1], pconst[p, 0], pconst[p, 2],
+                wi0 - wj0, wi1 - wj1, wi2 - wj2, r_i, r_j, pconst[p, 1], i_roll, pconst[p, 0], pconst[p, 2],
                 props[row, 3], dt, repulsive_only)
             pk[p] = knt
             c0 = n1 * f2 - n2 * f1
@@ -229,7 +242,8 @@ def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
         kn = kp * kw / (kp + kw)
         f0, f1, f2, tr0, tr1, tr2, knt = contact(
             props, row, h, delta, dist, n0, n1, n2, v0, v1, v2, wi0, wi1, wi2,
-            r_i, -1.0, b_mass[b], kn, math.sqrt(kn * b_mass[b]), w_mu[w], dt, repulsive_only)
+            r_i, -1.0, b_mass[b], 1.4 * b_mass[b] * r_i * r_i, kn, math.sqrt(kn * b_mass[b]), w_mu[w], dt,
+            repulsive_only)
         s_force[i, 0] += f0
         s_force[i, 1] += f1
         s_force[i, 2] += f2

@@ -17,6 +17,7 @@ from pathlib import Path
 from types import ModuleType
 
 from . import blocks, integrate, neighbors, springs, stepping, wallgeom
+from . import effects as effects_package
 from .effects import get as get_effect
 from .effects.base import Effect
 from .kernel_template import TEMPLATE
@@ -64,9 +65,9 @@ def _hooks(layout: Layout) -> dict[str, str]:
         if eff.stage == "stiffness":
             body = f"fn_el, knt, ks = {fn}(pe, delta, r_eff, kn, ks)"
         elif eff.stage == "normal_extra":
-            body = f"fn += {fn}(pe, delta, r_i, r_j, dist)"
+            body = f"fn += {fn}(pe, delta, r_i, r_j, dist, fn_el)"
         else:
-            body = (f"a0, a1, a2 = {fn}(pe, hist, {ho}, n0, n1, n2, w0, w1, w2, fn_el, r_eff, knt, dt)\n"
+            body = (f"a0, a1, a2 = {fn}(pe, hist, {ho}, n0, n1, n2, w0, w1, w2, fn_el, r_eff, knt, ks, i_roll, dt)\n"
                     f"{ind * 2}tr0 += a0\n{ind * 2}tr1 += a1\n{ind * 2}tr2 += a2")
         hooks[eff.stage].append(f"{ind}{sl}\n{ind}if pe[0] != 0.0:\n{ind * 2}{body}")
     return {
@@ -76,6 +77,7 @@ def _hooks(layout: Layout) -> dict[str, str]:
         "NORMAL_EXTRA_HOOKS": "\n".join(hooks["normal_extra"]),
         "ROLLING_HOOKS": "\n".join(hooks["rolling"]),
         "ROOT_KNT": "math.sqrt(knt * m_eff)" if hooks["stiffness"] else "root_km",
+        "ROLL_INERTIA": "pair_rolling_inertia(b_mass[bi], b_mass[bj], r_i, r_j)" if hooks["rolling"] else "0.0",
     }
 
 
@@ -98,8 +100,12 @@ _LOADED: dict[str, ModuleType] = {}
 def load_kernel(layout: Layout, configured_dir: str | None = None) -> ModuleType:
     src = kernel_source(layout)
     digest = hashlib.sha256(src.encode())
-    for mod in (blocks, integrate, neighbors, springs, stepping, wallgeom, *[sys.modules[e.module] for e in layout.effects]):
+    for mod in (blocks, integrate, neighbors, springs, stepping, wallgeom):
         digest.update(inspect.getsource(mod).encode())
+    # every module of the effects package, helpers shared by several effects included: numba's cache
+    # of this kernel does not notice when a function it inlined from another module changes
+    for path in sorted(Path(effects_package.__file__).parent.glob("*.py")):
+        digest.update(path.read_bytes())
     name = "demcal_kernel_" + digest.hexdigest()[:16]
     if name in _LOADED:
         return _LOADED[name]

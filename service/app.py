@@ -94,7 +94,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         title="demcal", version="0.1.0", lifespan=lifespan,
         description="Calibration service for DEM models of bulk materials: materials and measurements, "
                     "queued DEM jobs, designs, calibration campaigns and schedules.",
-        openapi_url=f"{API_PREFIX}/openapi.json", docs_url=f"{API_PREFIX}/docs", redoc_url=None,
+        openapi_url=f"{API_PREFIX}/openapi.json", docs_url=None, redoc_url=None,  # served from vendored files: web.docs
     )
     app.state.settings = settings
     app.state.engine = make_engine(settings.database_url)
@@ -107,5 +107,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.include_router(importlib.import_module(f"service.api.{name}").router, prefix=API_PREFIX)
     from service import web
 
+    from service.web.docs import mount_docs
+
+    mount_docs(app, API_PREFIX)
     web.mount(app)  # at "/", after the API so /api/v1 routes win
     return app

@@ -14,7 +14,7 @@ from service.config import settings_from_env
 from service.security import check_bind
 
 # Each provides register(subparsers): demcal doe ..., demcal run SPEC, demcal material/campaign/schedule ...
-PLUGINS = ("doe.cli", "engine.lab.cli", "service.cli_campaigns")
+PLUGINS = ("doe.cli", "engine.lab.cli", "service.cli_jobs", "service.cli_campaigns")
 
 
 def database_url(value: str | None) -> str | None:

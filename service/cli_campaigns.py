@@ -7,93 +7,15 @@ one-line message on stderr and exit status 2, never a traceback.
 """
 from __future__ import annotations
 
-import argparse
-import json
-import os
-import sys
-from pathlib import Path
-from typing import Any
+from service.cli_http import CliError
+from service.cli_http import call as _call
+from service.cli_http import emit as _emit
+from service.cli_http import fmt as _fmt
+from service.cli_http import leaf as _leaf
+from service.cli_http import pairs as _pairs
+from service.cli_http import read_json as _read_json
+from service.cli_http import table as _table
 
-import httpx
-
-DEFAULT_URL = "http://127.0.0.1:8000"
-TIMEOUT_S = 30.0
-
-
-class CliError(Exception):
-    pass
-
-
-def _client(args) -> httpx.Client:
-    headers = {"X-Client-Id": "demcal-cli"}
-    token = args.token or os.environ.get("DEMCAL_TOKEN")
-    if token:
-        headers["Authorization"] = f"Bearer {token}"
-    return httpx.Client(base_url=args.url.rstrip("/") + "/api/v1", headers=headers, timeout=TIMEOUT_S)
-
-
-def _call(args, method: str, path: str, body: Any = None, params: dict | None = None) -> Any:
-    try:
-        with _client(args) as client:
-            response = client.request(method, path, json=body, params=params)
-    except httpx.HTTPError as exc:
-        raise CliError(f"cannot reach {args.url}: {exc}") from exc
-    if response.status_code == 204:
-        return None
-    try:
-        data = response.json()
-    except ValueError:
-        data = {"detail": [{"loc": [], "msg": response.text[:200]}]}
-    if response.status_code >= 400:
-        detail = data.get("detail") if isinstance(data, dict) else None
-        first = detail[0] if isinstance(detail, list) and detail else {"msg": str(detail), "loc": []}
-        where = ".".join(str(p) for p in first.get("loc", []))
-        raise CliError(f"HTTP {response.status_code}: {first.get('msg')}" + (f" (at {where})" if where else ""))
-    return data
-
-
-def _read_json(path: str) -> Any:
-    try:
-        text = sys.stdin.read() if path == "-" else Path(path).read_text()
-        return json.loads(text)
-    except (OSError, json.JSONDecodeError) as exc:
-        raise CliError(f"cannot read JSON from {path}: {exc}") from exc
-
-
-def _pairs(items: list[str] | None, what: str, cast=float) -> dict:
-    out = {}
-    for item in items or []:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise CliError(f"{what} {item!r}: expected NAME=VALUE")
-        try:
-            out[key.strip()] = cast(value)
-        except ValueError as exc:
-            raise CliError(f"{what} {item!r}: {exc}") from exc
-    return out
-
-
-def _fmt(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.5g}"
-    if value is None:
-        return "-"
-    if isinstance(value, dict):
-        return ", ".join(f"{k}={_fmt(v)}" for k, v in value.items()) or "-"
-    return str(value)
-
-
-def _table(headers: list[str], rows: list[list[Any]]) -> str:
-    cells = [[_fmt(c) for c in row] for row in rows]
-    widths = [max([len(h)] + [len(r[i]) for r in cells]) for i, h in enumerate(headers)]
-    lines = ["  ".join(h.ljust(w) for h, w in zip(headers, widths)), "  ".join("-" * w for w in widths)]
-    lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths)) for row in cells]
-    return "\n".join(lines)
-
-
-def _emit(args, data: Any, text: str | None = None) -> int:
-    print(json.dumps(data, indent=1) if args.json or text is None else text)
-    return 0
 
 
 # -- materials -------------------------------------------------------------------------------------
@@ -127,6 +49,26 @@ def material_add(args) -> int:
     return _emit(args, m, f"measurement {m['id']}: {m['test']}/{m['quantity']} mean {_fmt(m['mean'])} {m['unit']}")
 
 
+def material_create(args) -> int:
+    body = _read_json(args.file) if args.file else {}
+    for key in ("name", "description", "source"):
+        value = getattr(args, key)
+        if value is not None:
+            body[key] = value
+    m = _call(args, "POST", "/materials", body)
+    return _emit(args, m, f"material {m['id']}: {m['name']} ({len(m['measurements'])} measurements)")
+
+
+def material_delete(args) -> int:
+    _call(args, "DELETE", f"/materials/{args.id}")
+    return _emit(args, {"deleted": args.id}, f"material {args.id} deleted")
+
+
+def material_delete_measurement(args) -> int:
+    _call(args, "DELETE", f"/materials/{args.id}/measurements/{args.measurement}")
+    return _emit(args, {"deleted": args.measurement}, f"measurement {args.measurement} of material {args.id} deleted")
+
+
 def material_copy(args) -> int:
     m = _call(args, "POST", f"/materials/{args.id}/copy", {"name": args.name})
     return _emit(args, m, f"material {m['id']}: {m['name']} (copy of #{args.id}, {len(m['measurements'])} measurements)")
@@ -146,10 +88,12 @@ def _factor(text: str) -> dict:
 
 def campaign_create(args) -> int:
     body = _read_json(args.file) if args.file else {}
-    for key in ("name", "material_id", "evaluator", "fidelity", "seed"):
+    for key in ("name", "material_id", "evaluator", "fidelity", "seed", "max_iterations"):
         value = getattr(args, key)
         if value is not None:
             body[key] = value
+    if args.automatic:
+        body["automatic"] = True
     if args.factor:
         body["factors"] = [_factor(f) for f in args.factor]
     if args.centre_runs is not None or args.generators:
@@ -167,6 +111,8 @@ def campaign_create(args) -> int:
 def _status_text(c: dict) -> str:
     text = (f"campaign {c['id']} {c['name']!r}: {c['status']}, iteration {c['current_iteration']}, "
             f"phase {c['phase'] or '-'}, runs {c['runs_succeeded']}/{c['runs_total']}")
+    if c.get("stop_reason"):
+        text += f"\nautomatic mode stopped: {c['stop_reason']}"
     return text + (f"\nerror: {c['error']}" if c.get("error") else "")
 
 
@@ -203,7 +149,7 @@ def campaign_diagnosis(args) -> int:
 def campaign_history(args) -> int:
     h = _call(args, "GET", f"/campaigns/{args.id}/history")
     rows = [[e["number"], ", ".join(e["effects"]) or "-", e["chi2_per_dof"],
-             "-".join(_fmt(x) for x in e["noise_band"] or []), e["verdict"],
+             "[" + ", ".join(_fmt(x) for x in e["noise_band"] or []) + "]", e["verdict"],
              ", ".join(e.get("effect_added_next") or []) or "-"] for e in h["iterations"]]
     return _emit(args, h, _table(["iteration", "effects", "chi2/dof", "noise band", "verdict", "added next"],
                                  [[_fmt(c) if isinstance(c, float) else c for c in row] for row in rows]))
@@ -237,7 +183,7 @@ def campaign_report(args) -> int:
     if lof:
         text += (f"\nlack of fit: chi2 {_fmt(lof['statistic'])} on {lof['dof']} dof "
                  f"(per dof {_fmt(lof['chi2_per_dof'])}, "
-                 f"noise band {_fmt(lof['noise_band'][0])}-{_fmt(lof['noise_band'][1])}), p {_fmt(lof['p_value'])}")
+                 f"noise band [{_fmt(lof['noise_band'][0])}, {_fmt(lof['noise_band'][1])}]), p {_fmt(lof['p_value'])}")
     for b in (r.get("conflicts") or {}).get("active_bounds", []):
         text += f"\nat a bound: {b['parameter']} at its {b['side']} end, pushing {b['pushes']}"
     for p in (r.get("conflicts") or {}).get("priors_pulled", []):
@@ -275,30 +221,21 @@ def schedule_delete(args) -> int:
 
 # -- wiring ----------------------------------------------------------------------------------------
 
-def _guard(func):
-    def run(args) -> int:
-        try:
-            return func(args)
-        except CliError as exc:
-            print(f"demcal: {exc}", file=sys.stderr)
-            return 2
-    return run
-
-
-def _leaf(sub, name: str, func, help_text: str) -> argparse.ArgumentParser:
-    parser = sub.add_parser(name, help=help_text, description=help_text)
-    parser.add_argument("--url", default=os.environ.get("DEMCAL_URL", DEFAULT_URL), help="service base URL")
-    parser.add_argument("--token", default=None, help="bearer token for writes (or $DEMCAL_TOKEN)")
-    parser.add_argument("--json", action="store_true", help="print the API's JSON")
-    parser.set_defaults(func=_guard(func))
-    return parser
-
-
 def register(subparsers) -> None:
     material = subparsers.add_parser("material", help="materials and their measurements")
     msub = material.add_subparsers(dest="material_command", required=True)
     _leaf(msub, "list", material_list, "list materials")
     _leaf(msub, "show", material_show, "show a material's measurements (SI)").add_argument("id", type=int)
+    mcreate = _leaf(msub, "create", material_create, "create a material from a JSON body (as POST /materials) "
+                    "and/or flags")
+    mcreate.add_argument("--file", help="JSON body, '-' for stdin")
+    mcreate.add_argument("--name")
+    mcreate.add_argument("--description")
+    mcreate.add_argument("--source")
+    _leaf(msub, "delete", material_delete, "delete a material no campaign uses").add_argument("id", type=int)
+    dm = _leaf(msub, "delete-measurement", material_delete_measurement, "delete one measurement of a material")
+    dm.add_argument("id", type=int)
+    dm.add_argument("measurement", type=int)
     cp = _leaf(msub, "copy", material_copy, "copy a material (e.g. the read-only bundled one) to edit it")
     cp.add_argument("id", type=int)
     cp.add_argument("--name", required=True, help="name of the copy")
@@ -324,6 +261,10 @@ def register(subparsers) -> None:
     create.add_argument("--centre-runs", type=int)
     create.add_argument("--generators", nargs="+", help="e.g. D=ABC (makes the design fractional)")
     create.add_argument("--seed", type=int)
+    create.add_argument("--automatic", action="store_true",
+                        help="add the indicated effects and iterate by itself until the lack of fit passes, "
+                             "nothing improves, or --max-iterations")
+    create.add_argument("--max-iterations", type=int, help="automatic mode: iterations at most (default 4)")
     create.add_argument("--start", action="store_true", help="start it right away")
     list_parser = _leaf(csub, "list", campaign_list, "list campaigns")
     list_parser.add_argument("--status", choices=["draft", "running", "paused", "completed", "failed"])
@@ -334,12 +275,14 @@ def register(subparsers) -> None:
     report = _leaf(csub, "report", campaign_report, "measured vs predicted vs confirmed per target")
     report.add_argument("id", type=int)
     report.add_argument("--iteration", type=int)
-    diag = _leaf(csub, "diagnosis", campaign_diagnosis, "which effect is missing: ranking, alias groups")
+    diag = _leaf(csub, "diagnosis", campaign_diagnosis, "which effect is missing: ranking, alias groups",
+                 aliases=("diagnose",))
     diag.add_argument("id", type=int)
     diag.add_argument("--iteration", type=int)
     _leaf(csub, "history", campaign_history, "weighted error per iteration and the effect added").add_argument(
         "id", type=int)
-    nxt = _leaf(csub, "next", campaign_next, "start the next iteration, e.g. with an effect added as a factor")
+    nxt = _leaf(csub, "next", campaign_next, "start the next iteration, e.g. with an effect added as a factor",
+                aliases=("iterate",))
     nxt.add_argument("id", type=int)
     nxt.add_argument("--add-effect", help="a candidate from GET /api/v1/effects, e.g. rolling_epsd2")
     nxt.add_argument("--strength-range", help="LOW:HIGH of the added effect's strength (SI)")

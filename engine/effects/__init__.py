@@ -5,6 +5,7 @@ columns of the per-pair property table, how many history slots it keeps per cont
 contact law it hooks into and the name of its numba function. ``engine.kernelgen`` writes a pair kernel
 that calls only the active effects, so an unused effect costs nothing. Adding a fifth effect means
 adding one module and one line in ``_MODULES`` below.
+Modules that are not effects (``rolling_spring``) hold kernel code shared by several effects.
 """
 from __future__ import annotations
 
@@ -15,6 +16,8 @@ from .base import STAGES, Effect
 _MODULES = (
     "engine.effects.hertz_mindlin",
     "engine.effects.cohesion_sjkr",
+    "engine.effects.cohesion_adhesive",
+    "engine.effects.rolling_epsd",
     "engine.effects.rolling_epsd2",
     "engine.effects.rolling_constant_torque",
 )

@@ -4,11 +4,14 @@ Stages (the order the pair kernel runs them in, with the numba function's signat
 
 * ``"stiffness"``: ``apply(p, delta, r_eff, kn, ks) -> (fn_elastic, kn_tangent, ks)`` replaces the
   linear normal force and the stiffnesses (used for damping and the time step) of the contact.
-* ``"normal_extra"``: ``apply(p, delta, r_i, r_j, dist) -> f_normal`` adds a normal force (positive
-  pushes apart); ``r_j < 0`` marks a wall.
-* ``"rolling"``: ``apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, dt) -> (t0, t1, t2)``
-  returns the torque on particle i (particle j gets the opposite); ``w`` is the relative angular
-  velocity omega_i - omega_j, ``hist[h0:h0 + n_hist]`` are this effect's history slots.
+* ``"normal_extra"``: ``apply(p, delta, r_i, r_j, dist, fn_elastic) -> f_normal`` adds a normal
+  force (positive pushes apart) to the contact law's elastic force ``fn_elastic``; ``r_j < 0`` marks a
+  wall. The Coulomb limit stays mu times the contact law's own (repulsive) force.
+* ``"rolling"``: ``apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, ks, i_roll, dt) ->
+  (t0, t1, t2)`` returns the torque on particle i (particle j gets the opposite); ``w`` is the relative
+  angular velocity omega_i - omega_j, ``kn``/``ks`` the contact's normal and tangential stiffness,
+  ``i_roll`` its rolling inertia (Ai et al. 2011), ``hist[h0:h0 + n_hist]`` this effect's history
+  slots.
 
 History slots must hold quantities of i relative to j that change sign when i and j swap roles: the
 engine renumbers particles for locality and stores each pair once with i < j, negating the history

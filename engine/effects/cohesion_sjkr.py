@@ -2,6 +2,11 @@
 
 A = pi a^2 is the area of the circle where the two sphere surfaces intersect (for a wall: the cap
 of the sphere cut by the wall), k_c the cohesion energy density in J/m3. Acts while overlapping.
+
+Not the diagnosis's cohesion candidate: on a linear spring the attraction grows with the overlap
+(A ~ 2 pi R* delta), so it acts as a softer spring with a raised friction limit and leaves no
+Mohr-Coulomb intercept (LIGGGHTS' `sjkr` at 5e6 J/m3 on the screening shear test: intercept
++2.4 +- 10 kPa against -0.1 +- 4.1 without it, E' -30 %). ``cohesion_adhesive`` gives the intercept.
 """
 from __future__ import annotations
 
@@ -10,7 +15,7 @@ import math
 from numba import njit
 from pydantic import BaseModel, ConfigDict, Field
 
-from .base import Candidate, Effect
+from .base import Effect
 
 
 class Params(BaseModel):
@@ -36,23 +41,11 @@ def contact_area(delta, r_i, r_j, dist):
 
 
 @njit(cache=True, inline='always')
-def apply(p, delta, r_i, r_j, dist):
+def apply(p, delta, r_i, r_j, dist, fn_elastic):
     return -p[1] * contact_area(delta, r_i, r_j, dist)
 
 
-# Plausible range: a moist aggregate with fines has a bulk cohesion of 1-10 kPa. With a linear contact
-# of ~1e6 N/m on 20-40 mm grains, a contact at 30 kPa overlaps ~4e-5 m, so its contact area
-# pi R* delta is ~1.5e-6 m2 and a pull of c d^2 ~ 6 N per contact needs k_c ~ 4e6 J/m3: 1e6-1e7 J/m3.
-CANDIDATE = Candidate(
-    name="cohesion_sjkr", title="cohesion", factor="effects.cohesion_sjkr.cohesion_energy_density_j_m3",
-    unit="J/m3", plausible_range=(1.0e6, 1.0e7), step=3.0e6,
-    fingerprint={"bulk_density": "-", "cohesion": "++", "angle_of_repose": "++", "pull_force": "+"},
-    physics="Moisture and fines bind grains: the Mohr-Coulomb line gains an intercept c > 0 while its "
-            "slope stays, the angle of repose rises steeply. Calibration raises phi to compensate, so "
-            "the shear-stress residual falls with normal stress (+ at the lowest load, - at the highest).",
-)
-
 EFFECT = Effect(
     name="cohesion_sjkr", stage="normal_extra", params_model=Params, n_props=1, n_hist=0,
-    pair_props=pair_props, module=__name__, doc=__doc__, candidate=CANDIDATE,
+    pair_props=pair_props, module=__name__, doc=__doc__,
 )

@@ -23,7 +23,7 @@ def pair_props(params: Params, contact_type: str, mat_i, mat_other) -> list[floa
 
 
 @njit(cache=True, inline='always')
-def apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, dt):
+def apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, ks, i_roll, dt):
     wn = w0 * n0 + w1 * n1 + w2 * n2
     w0 -= wn * n0
     w1 -= wn * n1

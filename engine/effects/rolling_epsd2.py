@@ -1,17 +1,19 @@
-"""Elastic-plastic spring rolling resistance, EPSD2 / type C (Ai et al. 2011; LIGGGHTS `epsd2`).
+"""Elastic-plastic spring rolling resistance, EPSD2 (Iwashita & Oda 1998; Wensrich & Katterfeld 2012;
+LIGGGHTS `rolling_friction epsd2`).
 
-A rolling spring k_r = 2.25 kn mu_r^2 R*^2 accumulates torque from the relative rolling rotation
-(normal twisting excluded) and is capped at mu_r R* fn. No rolling dashpot (that is EPSD).
+A rolling spring of stiffness k_r = k_t R*^2 (the contact's tangential stiffness times the squared
+effective radius) accumulates torque from the relative rolling rotation (twisting about the normal
+excluded) and is capped at mu_r R* fn. No rolling dashpot: that is EPSD (``rolling_epsd``), whose
+spring is 2.25 k_n mu_r^2 R*^2. At mu_r = 0.15 and k_t = k_n the EPSD2 spring is about 20 times
+stiffer than EPSD's, so the two reach full mobilisation at very different rolling angles.
 """
 from __future__ import annotations
-
-import math
 
 from numba import njit
 from pydantic import BaseModel, ConfigDict, Field
 
-from ..springs import onto_plane_keep_length
 from .base import Candidate, Effect
+from .rolling_spring import spring_torque
 
 
 class Params(BaseModel):
@@ -24,28 +26,9 @@ def pair_props(params: Params, contact_type: str, mat_i, mat_other) -> list[floa
 
 
 @njit(cache=True, inline='always')
-def apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, dt):
-    mu_r = p[1]
-    wn = w0 * n0 + w1 * n1 + w2 * n2
-    w0 -= wn * n0
-    w1 -= wn * n1
-    w2 -= wn * n2
-    # keep the spring torque in the current tangent plane, magnitude preserved
-    m0, m1, m2 = onto_plane_keep_length(hist[h0], hist[h0 + 1], hist[h0 + 2], n0, n1, n2)
-    kr = 2.25 * kn * mu_r * mu_r * r_eff * r_eff
-    m0 -= kr * w0 * dt
-    m1 -= kr * w1 * dt
-    m2 -= kr * w2 * dt
-    limit = mu_r * r_eff * max(fn, 0.0)
-    mag = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
-    if mag > limit:
-        s = limit / mag if mag > 0.0 else 0.0
-        m0 *= s
-        m1 *= s
-        m2 *= s
-    hist[h0] = m0
-    hist[h0 + 1] = m1
-    hist[h0 + 2] = m2
+def apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, ks, i_roll, dt):
+    m0, m1, m2, _ = spring_torque(hist, h0, n0, n1, n2, w0, w1, w2, ks * r_eff * r_eff,
+                                  p[1] * r_eff * max(fn, 0.0), dt)
     return m0, m1, m2
 
 

@@ -106,11 +106,14 @@ def optimum(campaign_id: CampaignId, number: int | None = IterationQ, session: S
     return {"iteration": it.number, **value}
 
 
-@router.get("/{campaign_id}/confirmation", summary="Confirmation battery at the optimum", responses=_NOT_YET)
+@router.get("/{campaign_id}/confirmation", summary="The battery at the optimum (after polishing on the batteries)",
+            responses=_NOT_YET)
 def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    from service.campaigns.polish import final_run
+
     campaign = get_campaign(session, campaign_id)
     it = iteration(session, campaign, number)
-    run = next((r for r in it.runs if r.kind == "confirmation"), None)
+    run = final_run(it)
     if run is None:
         raise Conflict(f"campaign {campaign_id} iteration {it.number} has no confirmation run yet "
                        f"(phase {it.phase})", ["path", "campaign_id"])
@@ -121,9 +124,13 @@ def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, sessi
 @router.get("/{campaign_id}/report",
             summary="Per target: measured, predicted (interval), confirmed, residual, reachability", responses=_NOT_YET)
 def report(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+    from service.campaigns.report import REACHABLE_LIMIT
+
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
+    # reachable_limit: the cutoff on reachability that decides "reachable" (the UI draws it)
     return {"campaign_id": campaign.id, "name": campaign.name, "material_id": campaign.material_id,
-            "iteration": it.number, "evaluator": campaign.evaluator, "fidelity": campaign.fidelity, **value}
+            "iteration": it.number, "evaluator": campaign.evaluator, "fidelity": campaign.fidelity,
+            "reachable_limit": REACHABLE_LIMIT, **value}
 
 
 @router.get("/{campaign_id}/diagnosis",
@@ -162,6 +169,9 @@ def history(campaign_id: CampaignId, session: Session = Depends(get_session)) ->
             "per_test": {t["test"]: t["chi2"] for t in report.get("tests", [])},
             "verdict": report.get("verdict"),
             "top_effect": (diag or {}).get("ranking", [{}])[0].get("effect") if diag and diag.get("ranking") else None,
+            # automatic mode: whether this iteration's added effect was kept, and why the loop stopped
+            "decision": (report.get("automatic") or {}).get("decision"),
+            "stop_reason": (report.get("automatic") or {}).get("stop_reason"),
         })
         previous = set(effects)
         for row in report.get("targets", []):

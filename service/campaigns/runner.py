@@ -7,10 +7,12 @@ between two steps) resumes where the database says: nothing lives in memory.
 Job submission uses an idempotency key per run, so a step repeated after a
 crash finds the job it already queued instead of queuing a twin.
 
-Phases of an iteration: design -> batteries -> analysis -> confirmation -> report -> done, and when
+Phases of an iteration: design -> batteries -> analysis -> confirmation -> polish (Gauss-Newton on the
+batteries, service.campaigns.polish) -> report -> done, and when
 the report's verdict is not "calibrated": report -> diagnosis (a second baseline battery at the optimum,
 then each candidate effect at the optimum's two seeds) -> diagnosed -> done, the ranking stored in the
-report.
+report. In automatic mode (service.campaigns.automatic) a done iteration either configures the next
+one, with the indicated effect as a factor, or records why the loop stopped.
 Paused campaigns are skipped; their queued batteries keep running in the queue
 and are picked up on resume.
 """
@@ -24,7 +26,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from engine.lab.spec import JobSpec, MicroParameters, TestOptions
-from service.campaigns import analysis
+from service.campaigns import analysis, automatic, polish
 from service.campaigns.design import build_design, design_view
 from service.campaigns.report import build_report
 from calibration.keys import responses_of
@@ -91,7 +93,9 @@ class CampaignRunner:
         if it.phase == "analysis":
             return self._analysis(session, campaign, config, it)
         if it.phase == "confirmation":
-            return self._batteries(session, campaign, config, it, kind="confirmation", next_phase="report")
+            return self._batteries(session, campaign, config, it, kind="confirmation", next_phase="polish")
+        if it.phase == "polish":
+            return self._polish(session, campaign, config, it)
         if it.phase == "report":
             return self._report(session, campaign, config, it)
         if it.phase == "diagnosis":
@@ -179,13 +183,21 @@ class CampaignRunner:
         return True
 
     def _batteries(self, session, campaign, config, it, *, kind: str, next_phase: str) -> bool:
+        runs = [r for r in it.runs if r.kind == kind]
+        progressed, done = self._run_all(session, campaign, config, runs, kind)
+        if done:
+            return self._set_phase(session, it, it.phase, next_phase)
+        return progressed
+
+    def _run_all(self, session, campaign, config, runs, kind: str) -> tuple[bool, bool]:
+        """Queue what is not queued, record what finished: (progressed, all succeeded)."""
         # queued in the design's randomised run order, so drifts in the service do not alias with factors
-        runs = sorted((r for r in it.runs if r.kind == kind), key=lambda r: (r.run_order, r.id))
+        runs = sorted(runs, key=lambda r: (r.run_order, r.id))
         progressed = False
         for run in runs:
             if run.job_id is None:
                 if not self._submit(session, campaign, config, run):
-                    return progressed
+                    return progressed, False
                 progressed = True
         pending = [r for r in runs if r.status not in ("succeeded",)]
         if pending:
@@ -207,9 +219,43 @@ class CampaignRunner:
                 elif run.status != job.status:
                     run.status = job.status
             session.commit()
-        if all(r.status == "succeeded" for r in runs):
-            return self._set_phase(session, it, it.phase, next_phase)
-        return False
+        return progressed, all(r.status == "succeeded" for r in runs)
+
+    # -- polishing on the batteries (service.campaigns.polish) ----------------------------------
+    def _polish(self, session, campaign, config, it) -> bool:
+        state = (it.optimum or {}).get("polish")
+        if config.polish_steps == 0 or (state and state["stage"] == "done"):
+            return self._set_phase(session, it, "polish", "report")
+        targets = self._targets(session, campaign, config)
+        design, models = analysis.fit(it.design["doe"], [r for r in it.runs if r.kind == "design"], targets)
+        modelled = [m for m in models if m.fit is not None]
+        if state is None:
+            confirmation = next(r for r in it.runs if r.kind == "confirmation")
+            state, points = polish.start(config, design, modelled, dict(it.optimum["parameters"]), confirmation.id,
+                                         list((confirmation.responses or {}).values()), confirmation.seed)
+            self._add_polish_runs(session, it, state, points)
+            return self._set_phase(session, it, "polish", "polish", optimum={**it.optimum, "polish": state})
+        round_runs = sorted((r for r in it.runs if r.kind == "polish" and r.std_order // polish.ROUND == state["round"]),
+                            key=lambda r: r.std_order)
+        progressed, done = self._run_all(session, campaign, config, round_runs, "polish")
+        if not done:
+            return progressed
+        state, points = polish.advance(config, design, modelled, state, round_runs, config.polish_steps)
+        if points:
+            self._add_polish_runs(session, it, state, points)
+            return self._set_phase(session, it, "polish", "polish", optimum={**it.optimum, "polish": state})
+        theta = state["theta"]
+        optimum = {**it.optimum, "polish": state, "surrogate_parameters": it.optimum["parameters"],
+                   "parameters": theta, "coded": {f.name: float(f.to_coded(theta[f.name])) for f in design.factors}}
+        return self._set_phase(session, it, "polish", "report", optimum=optimum)
+
+    @staticmethod
+    def _add_polish_runs(session, it, state: dict, points) -> None:
+        for k, (natural, coded) in enumerate(points):
+            order = state["round"] * polish.ROUND + k + 1
+            session.add(CampaignRun(iteration_id=it.id, kind="polish", std_order=order, run_order=order,
+                                    is_centre=False, coded=coded, natural=natural, seed=state["seed"],
+                                    status="pending"))
 
     # -- analysis and report -----------------------------------------------------------------
     def _targets(self, session, campaign, config):
@@ -239,30 +285,39 @@ class CampaignRunner:
 
     def _report(self, session, campaign, config, it) -> bool:
         targets = self._targets(session, campaign, config)
-        confirmation = next(r for r in it.runs if r.kind == "confirmation")
+        confirmation = polish.final_run(it)
         design_runs = [r for r in it.runs if r.kind == "design"]
         assessment = analysis.assess(config, it.design["doe"], design_runs, targets, it.optimum,
                                      list((confirmation.responses or {}).values()), confirmation.seed)
+        polished = polish.summary((it.optimum or {}).get("polish"))
+        assessment["polished"] = bool(polished and polished["steps"] > 0)
         report = build_report(config, it.models, it.optimum, confirmation, targets, assessment)
+        report["polish"] = polished
         stored = {"job_id": confirmation.job_id, "seed": confirmation.seed, "parameters": confirmation.natural,
                   "responses": confirmation.responses}
         # a diagnosis needs misfit the parameters cannot absorb: more measured values than free parameters
         diagnosable = ((report.get("lack_of_fit") or {}).get("dof") or 0) > 0
+        # in automatic mode an added effect that did not earn its place needs no diagnosis of its own:
+        # the next candidate comes from the iteration it was built on
+        rejected = False
+        if config.automatic:
+            decision, _ = automatic.judge_iteration(campaign.iterations, it, report)
+            rejected = decision is not None and not decision["accepted"]
+        # a diagnosis attributes misfit: none to attribute when the lack of fit passes and every target
+        # is reachable (whatever the surfaces' check says)
+        misfit = report["verdict"] in ("targets out of reach", "model misses the measurements")
         plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed) if (
-            config.diagnose and diagnosable and report["verdict"] != "calibrated") else []
+            config.diagnose and diagnosable and misfit and not rejected) else []
         if plan:
             for k, (name, natural, seed) in enumerate(plan):
                 session.add(CampaignRun(iteration_id=it.id, kind="diagnosis", std_order=k + 1, run_order=k + 1,
                                         is_centre=False, coded={}, natural=natural, seed=seed, status="pending"))
             return self._set_phase(session, it, "report", "diagnosis", report=report, confirmation=stored)
-        if not self._set_phase(session, it, "report", "done", report=report, confirmation=stored,
-                               finished_at=utcnow()):
-            return False
-        return self._complete(session, campaign)
+        return self._finish(session, campaign, config, it, "report", report, confirmation=stored)
 
     def _diagnosed(self, session, campaign, config, it) -> bool:
         targets = self._targets(session, campaign, config)
-        confirmation = next(r for r in it.runs if r.kind == "confirmation")
+        confirmation = polish.final_run(it)
         design_runs = [r for r in it.runs if r.kind == "design"]
         runs = sorted((r for r in it.runs if r.kind == "diagnosis"), key=lambda r: r.std_order)
         plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed)
@@ -271,7 +326,20 @@ class CampaignRunner:
                                       [(name, seed, list((r.responses or {}).values()))
                                        for (name, _, seed), r in zip(plan, runs)])
         report = {**(it.report or {}), "diagnosis": diagnosis}
-        if not self._set_phase(session, it, "diagnosed", "done", report=report, finished_at=utcnow()):
+        return self._finish(session, campaign, config, it, "diagnosed", report)
+
+    def _finish(self, session, campaign, config, it, phase: str, report: dict, **values: Any) -> bool:
+        """The iteration is done. In automatic mode the next one is configured in the same
+        transaction (phase "done" with the campaign still running makes ``_step`` start it);
+        otherwise, or when automatic mode stops, the campaign completes."""
+        if config.automatic:
+            record = automatic.next_step(config, campaign.config, campaign.iterations, it, report, self.settings)
+            following = record.pop("next_config", None)
+            report = {**report, "automatic": record}
+            if following is not None:
+                campaign.config = following  # flushed and committed with the phase change, or rolled back
+                return self._set_phase(session, it, phase, "done", report=report, finished_at=utcnow(), **values)
+        if not self._set_phase(session, it, phase, "done", report=report, finished_at=utcnow(), **values):
             return False
         return self._complete(session, campaign)
 

@@ -144,6 +144,17 @@ class CampaignCreate(BaseModel):
         True, description="after a report that is not 'calibrated', run one battery per candidate effect at the "
         "optimum and rank the missing effects (docs/diagnosis.md)",
     )
+    polish_steps: int = Field(
+        3, ge=0, le=6, description="Gauss-Newton steps on the batteries after the confirmation (0: none); each "
+        "costs 3 batteries, plus one per factor for the Jacobian: the surfaces' optimum is biased inside the box "
+        "for saturating responses",
+    )
+    automatic: bool = Field(
+        False, description="after each iteration, add the effect the diagnosis indicates and run the next "
+        "iteration by itself, until the lack of fit passes, nothing improves, or max_iterations is reached "
+        "(the reason is in the summary's stop_reason)",
+    )
+    max_iterations: int = Field(4, ge=1, le=10, description="automatic mode: iterations at most, the first included")
     seed: int = Field(0, ge=0, le=2**31 - 1_000_000)
     priority: int = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="of every job the campaign queues")
 
@@ -176,6 +187,8 @@ class CampaignCreate(BaseModel):
 
     @model_validator(mode="after")
     def _no_overlap(self) -> "CampaignCreate":
+        if self.automatic and not self.diagnose:
+            raise ValueError("automatic mode needs diagnose: it adds the effects the diagnosis indicates")
         overlap = {f.name for f in self.factors} & set(self.fixed_parameters)
         if overlap:
             raise ValueError(f"{sorted(overlap)} are both factors and fixed parameters")

@@ -97,11 +97,17 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     return get_campaign(session, campaign_id)
 
 
-def with_effect_factor(config: dict, name: str, strength_range=None) -> dict:
-    """The configuration with candidate ``name``'s strength as one more factor (its plausible range
-    from its 'off' value, a log range about the matched value for a switch-type effect, or the
-    user's range) and a half fraction of highest resolution for the larger design."""
+def with_effect_factor(config: dict, name: str, strength_range=None, *, strength: float | None = None,
+                       at: dict | None = None) -> dict:
+    """The configuration with candidate ``name``'s strength as one more factor and a half fraction of
+    highest resolution for the larger design.
+
+    The range is the user's ``strength_range``, else ``calibration.decisions.effect_range``: from
+    the effect's "off" value over its plausible range (or twice the diagnosis's ``strength``
+    estimate), or for a switch-type effect a log range about its strength matched at ``at`` (the
+    optimum's factor values; default the centre of the box)."""
     from calibration.calibrate import generators_for
+    from calibration.decisions import effect_range
     from engine.candidates import get as get_candidate
     from engine.lab.spec import MicroParameters
     from calibration import parameters as factor_paths
@@ -114,15 +120,15 @@ def with_effect_factor(config: dict, name: str, strength_range=None) -> dict:
         raise Conflict(f"{name} is already a factor ({c.factor})", "add_effect")
     if strength_range is not None:
         low, high = strength_range
-    elif c.is_switch:
-        optimum = factor_paths.apply(config.get("fixed_parameters") or {},
-                                     {f["name"]: 0.5 * (f["low"] + f["high"]) for f in config["factors"]})
-        ref = float(c.reference(MicroParameters.model_validate(optimum)))
-        low, high = ref / 4.0, ref * 4.0
+        log = c.is_switch
     else:
-        low, high = (c.off_value or 0.0), c.plausible_range[1]
-    factors = list(config["factors"]) + [{"name": c.factor, "low": low, "high": high, "unit": c.unit,
-                                          "log": c.is_switch}]
+        reference = None
+        if c.is_switch:
+            point = at or {f["name"]: 0.5 * (f["low"] + f["high"]) for f in config["factors"]}
+            optimum = factor_paths.apply(config.get("fixed_parameters") or {}, point)
+            reference = float(c.reference(MicroParameters.model_validate(optimum)))
+        low, high, log = effect_range(c, strength, reference)
+    factors = list(config["factors"]) + [{"name": c.factor, "low": low, "high": high, "unit": c.unit, "log": log}]
     generators = generators_for(len(factors))
     design = dict(config.get("design") or {})
     design.update({"type": "fractional", "generators": generators} if generators else {"type": "full",
@@ -151,6 +157,7 @@ def campaign_summary(campaign: Campaign) -> dict[str, Any]:
         "error": campaign.error, "schedule_id": campaign.schedule_id,
         "created_at": _iso(campaign.created_at), "started_at": _iso(campaign.started_at),
         "finished_at": _iso(campaign.finished_at), "config": campaign.config,
+        "stop_reason": (((current.report or {}).get("automatic") or {}).get("stop_reason") if current else None),
     }
 
 

@@ -109,3 +109,10 @@ def test_satterthwaite_degrees_of_freedom_of_the_noise():
 
 def test_bic_adds_log_n_per_parameter():
     assert stats.bic(10.0, 3, 20) == pytest.approx(10.0 + 3 * math.log(20))
+
+
+def test_noise_band_never_goes_below_zero():
+    """chi2/dof is a sum of squares over dof: with 6 dof 1 - 2 sqrt(2/6) < 0, and the band stops at 0."""
+    M = np.eye(6)
+    lof = stats.lack_of_fit(np.ones(6), M, np.full(6, np.inf))
+    assert lof.noise_band == pytest.approx((0.0, 1 + 2 * math.sqrt(2 / 6)))

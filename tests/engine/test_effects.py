@@ -47,7 +47,7 @@ def _roll_distance(sim, v0):
     raise AssertionError("sphere never stopped")
 
 
-@pytest.mark.parametrize("name", ["rolling_epsd2", "rolling_constant_torque"])
+@pytest.mark.parametrize("name", ["rolling_epsd", "rolling_epsd2", "rolling_constant_torque"])
 def test_rolling_resistance_stops_at_predicted_distance(name):
     mu_r = 0.05
     v0 = 0.3

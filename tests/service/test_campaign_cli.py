@@ -129,3 +129,49 @@ def test_campaign_and_schedule_commands(server, capsys, tmp_path):
 def test_unreachable_service_is_a_message_not_a_traceback(capsys):
     code, _, err = run(capsys, "campaign", "list", "--url", "http://127.0.0.1:9")
     assert code == 2 and err.startswith("demcal: cannot reach")
+
+
+def test_job_commands(server, capsys):
+    """submit -> list -> status -> result, cancel of a queued job and its retry, errors in one line."""
+    url, app, settings = server
+    code, out, _ = run(capsys, "job", "submit", "--url", url, "--test", "dst", "--evaluator", "analytic",
+                       "--seed", "3", "--param", "friction_pp=0.6", "--json")
+    job = json.loads(out)
+    assert code == 0 and job["status"] == "queued" and job["test"] == "dst"
+    code, out, _ = run(capsys, "job", "submit", "--url", url, "--test", "fill", "--evaluator", "analytic", "--json")
+    second = json.loads(out)
+    code, out, _ = run(capsys, "job", "cancel", str(second["id"]), "--url", url)
+    assert code == 0 and "cancelled" in out
+    code, out, _ = run(capsys, "job", "retry", str(second["id"]), "--url", url)
+    assert code == 0 and "queued" in out
+    drain(app, settings)
+    code, out, _ = run(capsys, "job", "list", "--url", url, "--status", "succeeded")
+    assert code == 0 and str(job["id"]) in out and "dst" in out
+    code, out, _ = run(capsys, "job", "status", str(job["id"]), "--url", url)
+    assert code == 0 and "succeeded" in out
+    code, out, _ = run(capsys, "job", "result", str(job["id"]), "--url", url)
+    assert code == 0 and "friction_angle_deg" in out
+    code, _, err = run(capsys, "job", "submit", "--url", url, "--param", "friction_pp=-1")
+    assert code == 2 and "HTTP 422" in err and "friction_pp" in err and "Traceback" not in err
+    code, _, err = run(capsys, "job", "cancel", "999999", "--url", url)
+    assert code == 2 and "HTTP 404" in err
+
+
+def test_material_create_and_delete(server, capsys):
+    url, _, _ = server
+    code, out, _ = run(capsys, "material", "create", "--url", url, "--name", "gravel 4/32",
+                       "--description", "river gravel", "--json")
+    material = json.loads(out)
+    assert code == 0 and material["name"] == "gravel 4/32" and material["measurements"] == []
+    code, _, err = run(capsys, "material", "create", "--url", url, "--name", "gravel 4/32")
+    assert code == 2 and "HTTP 409" in err
+    code, out, _ = run(capsys, "material", "add-measurement", str(material["id"]), "--url", url, "--test", "fill",
+                       "--quantity", "bulk_density_kg_m3", "--values", "1600,1610", "--json")
+    measurement = json.loads(out)
+    code, out, _ = run(capsys, "material", "delete-measurement", str(material["id"]), str(measurement["id"]),
+                       "--url", url)
+    assert code == 0 and "deleted" in out
+    code, out, _ = run(capsys, "material", "delete", str(material["id"]), "--url", url)
+    assert code == 0
+    code, _, err = run(capsys, "material", "delete", "1", "--url", url)
+    assert code == 2 and "HTTP 409" in err  # the bundled material stays

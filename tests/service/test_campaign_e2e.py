@@ -20,11 +20,16 @@ def test_analytic_campaign_from_creation_to_report(s2):
     runs = iteration["runs"]
     design_runs = [r for r in runs if r["kind"] == "design"]
     assert len(design_runs) == 11 and sum(r["is_centre"] for r in design_runs) == 3
-    own = [r for r in runs if r["kind"] != "diagnosis"]
+    own = [r for r in runs if r["kind"] in ("design", "confirmation")]
     assert len({r["seed"] for r in own}) == len(own)  # centre replicates (and confirmation) use distinct seeds
     # the diagnosis batteries run at the optimum with the confirmation's seed and one more (two seeds, common
     # random numbers): a second baseline, then every candidate effect at both
     confirmation_seed = next(r["seed"] for r in runs if r["kind"] == "confirmation")
+    # polishing on the batteries: one Jacobian run per factor, then three trial lengths per step, all at
+    # the confirmation's seed (common random numbers)
+    polish_runs = [r for r in runs if r["kind"] == "polish"]
+    assert len(polish_runs) >= 3 and (len(polish_runs) - 3) % 3 == 0
+    assert {r["seed"] for r in polish_runs} == {confirmation_seed}
     diagnosis_runs = [r for r in runs if r["kind"] == "diagnosis"]
     assert {r["seed"] for r in diagnosis_runs} == {confirmation_seed, confirmation_seed + 1}
     # (particle shape is built at the screening fidelity only; this campaign is at the thesis's)
@@ -32,7 +37,7 @@ def test_analytic_campaign_from_creation_to_report(s2):
     with app.state.session_factory() as session:
         jobs = session.query(Job).filter(Job.campaign_id == cid).all()
     assert {j.id for j in jobs} == {r["job_id"] for r in runs}
-    assert len(jobs) == 12 + sum(r["kind"] == "diagnosis" for r in runs)
+    assert len(jobs) == 12 + len(diagnosis_runs) + len(polish_runs)
     assert all(j.evaluator == "analytic" and j.spec["test"] == "battery" for j in jobs)
     assert {j.seed for j in jobs} == {r["seed"] for r in runs}
     assert iteration["parameters"]["factors"][0]["name"] == "particle_density_kg_m3"
@@ -138,7 +143,7 @@ def test_next_iteration_with_an_effect_keeps_the_first(s2):
     # with rolling friction 0.3 the stand-in's ceiling rises by 30 x 0.3/0.5 = 18 deg and the dilatancy by
     # 5 x 0.3/0.5 = 3 deg (x 0.8 in phi): about 55 deg at mu_pp = 1, so 60.6 deg is now within 3 u (9.1 deg)
     assert second["friction_angle_deg"]["reachable"] is True
-    second_runs = [r for r in iterations[1]["runs"] if r["kind"] != "diagnosis"]
+    second_runs = [r for r in iterations[1]["runs"] if r["kind"] in ("design", "confirmation")]
     assert len(second_runs) == 12
     with app.state.session_factory() as session:
         jobs = {j.id: j for j in session.query(Job).filter(Job.campaign_id == cid).all()}

@@ -41,3 +41,30 @@ def test_diagnosis_names_the_effect_and_adding_it_lets_the_error_fall(s2):
     assert second["chi2"] < first["chi2"]
     phi = next(v for k, v in history["targets"].items() if k.startswith("dst__friction_angle_deg"))
     assert abs(phi["residuals"]["2"]) < abs(phi["residuals"]["1"])
+
+
+def test_automatic_mode_adds_the_indicated_effect_and_stops_with_a_reason(s2):
+    """The same hidden strength deficit, with nobody at the keyboard: the campaign diagnoses, adds
+    the effect the diagnosis indicates, judges it, and says why it stopped."""
+    client, app, settings = s2
+    body = campaign_body(thesis_material_id(client), targets=None, automatic=True, max_iterations=3)
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    summary = run_to_end(client, app, settings, cid, max_rounds=60)
+    assert summary["status"] == "completed", summary
+    assert summary["stop_reason"] in ("lack of fit passes", "maximum number of iterations reached",
+                                      "nothing improves"), summary["stop_reason"]
+    history = client.get(f"{API}/campaigns/{cid}/history").json()["iterations"]
+    assert 2 <= len(history) <= 3
+    first, second = history[0], history[1]
+    assert first["effect_added_next"] and first["effect_added_next"][0] in ("rolling_epsd2", "particle_shape")
+    assert second["decision"]["effect"] == first["effect_added_next"][0]
+    assert second["decision"]["accepted"] and second["chi2"] < first["chi2"]
+    assert history[-1]["stop_reason"] == summary["stop_reason"]
+
+
+def test_automatic_mode_without_diagnosis_is_refused(s2):
+    client, _, _ = s2
+    body = campaign_body(thesis_material_id(client), automatic=True, diagnose=False)
+    response = client.post(f"{API}/campaigns", json=body)
+    assert response.status_code == 422 and "automatic" in response.text

@@ -29,10 +29,46 @@ def test_restart_mid_campaign_completes_without_duplicate_jobs(tmp_path):
         assert final["status"] == "completed", final["error"]
         with app.state.session_factory() as session:
             jobs = session.scalars(select(Job).where(Job.campaign_id == cid)).all()
-        # 11 batteries + confirmation + a second baseline and each candidate effect at two seeds, none twice
-        assert len(jobs) == 12 + 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
+            runs = session.scalars(select(CampaignRun)).all()
+        # 11 batteries + confirmation + polishing + a second baseline and each candidate effect at two
+        # seeds: one job per run, none twice
+        kinds = [r.kind for r in runs]
+        assert kinds.count("design") == 11 and kinds.count("confirmation") == 1 and kinds.count("polish") >= 3
+        assert kinds.count("diagnosis") == 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
+        assert sorted(j.id for j in jobs) == sorted(r.job_id for r in runs)
         report = client.get(f"{API}/campaigns/{cid}/report").json()
         assert len(report["targets"]) == 3
+
+
+def test_restart_mid_diagnosis_resumes_without_duplicate_jobs(tmp_path):
+    """The service dies with the diagnosis batteries half run: the new one queues none twice and
+    ranks the effects from the batteries the old one ran."""
+    settings = s2_settings(tmp_path)
+    n_diagnosis = 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
+    with running_app(settings) as (client, app):
+        cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+        client.post(f"{API}/campaigns/{cid}/start")
+        runner = CampaignRunner(app.state.session_factory, settings)
+        for _ in range(20):
+            runner.tick()
+            if client.get(f"{API}/campaigns/{cid}").json()["phase"] == "diagnosis":
+                break
+            drain(app, settings)
+        runner.tick()  # queues the diagnosis batteries
+        assert drain(app, settings, max_jobs=3) == 3
+        before = client.get(f"{API}/campaigns/{cid}").json()
+        assert before["phase"] == "diagnosis"
+
+    with running_app(settings) as (client, app):
+        final = run_to_end(client, app, settings, cid)
+        assert final["status"] == "completed", final["error"]
+        with app.state.session_factory() as session:
+            jobs = session.scalars(select(Job).where(Job.campaign_id == cid)).all()
+            runs = session.scalars(select(CampaignRun)).all()
+        assert sum(r.kind == "diagnosis" for r in runs) == n_diagnosis
+        assert sorted(j.id for j in jobs) == sorted(r.job_id for r in runs)  # one job per run, none twice
+        diagnosis = client.get(f"{API}/campaigns/{cid}/diagnosis").json()
+        assert diagnosis["batteries"] == n_diagnosis and diagnosis["ranking"]
 
 
 def test_restart_between_queuing_and_recording_a_job_finds_the_same_job(tmp_path):

@@ -43,7 +43,7 @@ def test_index_and_assets_are_served_locally(s2):
     assert css.status_code == 200 and "text/css" in css.headers["content-type"]
     modules = _fetch_modules(client)
     assert {"/static/js/app.js", "/static/js/core.js", "/static/js/jobs.js", "/static/js/materials.js",
-            "/static/js/campaigns.js", "/static/js/charts.js"} <= set(modules)
+            "/static/js/campaigns.js", "/static/js/campaign.js", "/static/js/plot.js", "/static/js/live.js"} <= set(modules)
     for path, text in {**modules, "/": html, "/static/style.css": css.text}.items():
         urls = re.findall(r"https?://[^\s\"'`)]+", text)
         assert urls in ([], ["http://www.w3.org/2000/svg"]), (path, urls)  # SVG namespace is a name, not a fetch
@@ -60,7 +60,8 @@ def test_pages_call_only_existing_api_endpoints(s2):
             # `/jobs/${id}/cancel` -> /jobs/1/cancel; a query string is not part of the path
             calls.add(re.sub(r"\$\{[^}]*\}", "1", literal[0] or literal[1]).split("?")[0])
     assert {"/jobs", "/jobs/1/cancel", "/materials/1/measurements", "/campaigns/1/report", "/schedules/1",
-            "/campaigns/1/start", "/campaigns/1/models", "/openapi.json"} <= calls
+            "/campaigns/1/start", "/campaigns/1/models", "/campaigns/1/iterations", "/campaigns/1/history", "/effects", "/jobs/1/result",
+            "/openapi.json"} <= calls
     for call in calls - {"/openapi.json"}:
         assert any(t.match(call) for t in templates), call
 
@@ -68,7 +69,7 @@ def test_pages_call_only_existing_api_endpoints(s2):
 def test_ui_pages_show_campaign_and_material_data_through_the_api(s2):
     """What the pages render comes from these endpoints; check the fields the scripts read exist."""
     client, _, _ = s2
-    campaigns_js = client.get("/static/js/campaigns.js").text
+    campaigns_js = client.get("/static/js/campaign_report.js").text
     for field in ("measured_uncertainty", "prediction_interval", "confirmed", "standardised_residual",
                   "reachability", "reachable", "uncertainty_assumed"):
         assert field in campaigns_js
@@ -87,3 +88,48 @@ def test_scripts_parse(s2, tmp_path):
         target.write_text(text)
         result = subprocess.run(["node", "--check", str(target)], capture_output=True, text=True, timeout=60)
         assert result.returncode == 0, (path, result.stderr)
+
+
+def test_charts_library_is_vendored_with_its_licence(s2):
+    """The chart library the modules import is served by the app, with its licence; nothing from a CDN."""
+    client, _, _ = s2
+    plot = client.get("/static/js/plot.js").text
+    (library,) = re.findall(r'from "(\.\./vendor/[^"]+)"', plot)
+    path = "/static/js/" + library
+    path = re.sub(r"/js/\.\./", "/", path)
+    response = client.get(path)
+    assert response.status_code == 200 and "javascript" in response.headers["content-type"]
+    folder = path.rsplit("/", 1)[0]
+    assert "Apache License" in client.get(f"{folder}/LICENSE").text
+
+
+def test_api_docs_pages_load_only_the_services_own_files(s2):
+    """Swagger UI and ReDoc pages name only local assets (the browser test checks the rendering offline)."""
+    client, _, _ = s2
+    for page, expected in (("/api/v1/docs", "swagger-ui-bundle.js"), ("/api/v1/redoc", "redoc.standalone.js")):
+        response = client.get(page)
+        assert response.status_code == 200 and expected in response.text
+        assets = re.findall(r"""(?:href|src|url)\s*[=:]\s*["']([^"']+)["']""", response.text)
+        assert assets and all(a.startswith("/") for a in assets), (page, assets)
+        assert not re.search(r"https?://(?!www\.w3\.org)", response.text), page
+        for asset in assets:
+            assert client.get(asset).status_code == 200, asset
+    redoc = client.get("/static/vendor/redoc-2.5.4/redoc.standalone.js").text
+    assert "cdn.redoc.ly" not in redoc  # its logo was its one request outside the service
+
+
+def test_report_gives_the_reachability_cutoff(s2):
+    """The page draws the cutoff that decides 'reachable'; the report says it rather than the page guessing."""
+    from conftest_s2 import API, campaign_body, run_to_end, thesis_material_id
+    from service.campaigns.report import REACHABLE_LIMIT
+
+    client, app, settings = s2
+    body = campaign_body(thesis_material_id(client), diagnose=False)
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    report = client.get(f"{API}/campaigns/{cid}/report").json()
+    assert report["reachable_limit"] == REACHABLE_LIMIT
+    for row in report["targets"]:
+        if row.get("reachability") is not None:
+            assert row["reachable"] == (row["reachability"] <= REACHABLE_LIMIT)

@@ -1,8 +1,13 @@
-// Hash router: #/jobs, #/jobs/7, #/submit, #/materials, #/materials/1, #/campaigns, #/campaigns/3, #/schedules.
+// Hash router: #/jobs, #/jobs/7, #/submit, #/materials, #/materials/1, #/campaigns, #/campaigns/3[?iteration=2],
+// #/schedules. Unknown pages and missing rows get a not-found page (never the previous page's content).
 import { flash, h } from "./core.js";
 import { jobPage, jobsPage, submitPage } from "./jobs.js";
 import { materialPage, materialsPage } from "./materials.js";
-import { campaignPage, campaignsPage, schedulesPage } from "./campaigns.js";
+import { campaignsPage } from "./campaigns.js";
+import { campaignPage } from "./campaign.js";
+import { schedulesPage } from "./schedules.js";
+import { schedule, setRenderer } from "./live.js";
+import { sweepCharts } from "./plot.js";
 
 const ROUTES = [
   [/^\/submit$/, (v) => submitPage(v)],
@@ -11,28 +16,45 @@ const ROUTES = [
   [/^\/materials$/, (v) => materialsPage(v)],
   [/^\/materials\/(\d+)$/, (v, m) => materialPage(v, m[1])],
   [/^\/campaigns$/, (v, _, q) => campaignsPage(v, q)],
-  [/^\/campaigns\/(\d+)$/, (v, m) => campaignPage(v, m[1])],
+  [/^\/campaigns\/(\d+)$/, (v, m, q) => campaignPage(v, m[1], q)],
   [/^\/schedules$/, (v) => schedulesPage(v)],
 ];
-const REFRESH_MS = 2000;
-let timer = null;
 
+function notFound(view, what) {
+  sweepCharts();
+  document.title = "Not found · demcal";
+  view.replaceChildren(h("section", { className: "card not-found" }, h("h2", {}, "Not found"),
+    h("p", {}, what), h("p", {}, h("a", { href: "#/jobs" }, "Jobs"), " · ", h("a", { href: "#/campaigns" }, "Campaigns"),
+      " · ", h("a", { href: "#/materials" }, "Materials"))));
+}
+
+let rendering = 0;
 async function render() {
-  clearTimeout(timer);
+  const ticket = ++rendering;
   const [path, query] = (location.hash.slice(1) || "/jobs").split("?");
   const params = new URLSearchParams(query || "");
   const view = document.getElementById("view");
   const route = ROUTES.find(([re]) => re.test(path));
-  if (!route) { view.replaceChildren(h("p", {}, `No page ${path}`)); return; }
+  if (!route) { schedule(false); notFound(view, `There is no page ${path}.`); return; }
   try {
-    const live = await route[1](view, path.match(route[0]), params);
-    // pages with queued or running work refresh themselves, unless the user is typing in a form
-    if (live) timer = setTimeout(() => { if (!view.contains(document.activeElement) || document.activeElement === document.body) render(); else timer = setTimeout(render, REFRESH_MS); }, REFRESH_MS);
+    // the page is built off-screen and swapped in whole, so a slow answer for an old page can
+    // never overwrite a newer one (navigation or an action's refresh)
+    const fresh = h("div");
+    const live = await route[1](fresh, path.match(route[0]), params);
+    if (ticket !== rendering) return;
+    document.title = `${fresh.querySelector("h2")?.textContent || "demcal"} · demcal`;
+    view.replaceChildren(...fresh.childNodes);
+    sweepCharts();
+    schedule(live);
   } catch (error) {
-    flash(error.message);
+    if (ticket !== rendering) return;
+    schedule(false);
+    if (error.status === 404) notFound(view, error.detail?.[0]?.msg || `There is no page ${path}.`);
+    else { view.replaceChildren(h("section", { className: "card" }, h("h2", {}, "This page could not be shown"), h("p", { className: "bad" }, error.message))); flash(""); }
   }
 }
 
+setRenderer(render);
 const tokenInput = document.getElementById("token");
 tokenInput.value = localStorage.getItem("demcal-token") || "";
 tokenInput.addEventListener("change", () => localStorage.setItem("demcal-token", tokenInput.value));

@@ -7,7 +7,8 @@ export class ApiError extends Error {
   constructor(status, detail) {
     const first = Array.isArray(detail) && detail.length ? detail[0] : { msg: String(detail), loc: [] };
     super(`${status}: ${first.msg}${first.loc && first.loc.length ? " (" + first.loc.join(".") + ")" : ""}`);
-    this.status = status; this.detail = detail;
+    this.status = status;
+    this.detail = Array.isArray(detail) ? detail : [{ msg: String(detail), loc: [] }];
   }
 }
 
@@ -66,6 +67,81 @@ export function flash(message, kind = "error") {
 
 export function formValues(form) {
   return Object.fromEntries(new FormData(form).entries());
+}
+
+// A 422's errors beside the fields they name. Each input that maps to an API field carries
+// data-loc="factors.0.low" (the error's loc without "body"); an error is shown at the input whose
+// data-loc is the longest prefix of its loc, or at the form's top when none matches (a rule across
+// fields names them in its message). Returns how many were placed beside a field.
+export function showFieldErrors(form, error) {
+  clearFieldErrors(form);
+  const fields = [...form.querySelectorAll("[data-loc]")];
+  const general = [];
+  let placed = 0;
+  for (const item of error.detail || []) {
+    const loc = (item.loc || []).filter((part) => part !== "body").map(String);
+    let best = null, bestLen = 0;
+    for (const field of fields) {
+      const parts = field.dataset.loc.split(".");
+      if (parts.length > bestLen && parts.length <= loc.length && parts.every((p, i) => p === loc[i])) { best = field; bestLen = parts.length; }
+    }
+    const text = item.msg.replace(/^Value error, /, "");
+    if (best) {
+      best.classList.add("invalid");
+      best.setAttribute("aria-invalid", "true");
+      const holder = best.closest("label") || best;
+      holder.after(h("span", { className: "field-error", role: "alert" }, text));
+      placed += 1;
+    } else {
+      general.push(`${loc.join(".") || "request"}: ${text}`);
+    }
+  }
+  const top = form.querySelector(".form-errors");
+  if (top) top.replaceChildren(...general.map((msg) => h("div", { role: "alert" }, msg)));
+  return placed;
+}
+
+export function clearFieldErrors(form) {
+  form.querySelectorAll(".field-error").forEach((el) => el.remove());
+  form.querySelectorAll(".invalid").forEach((el) => { el.classList.remove("invalid"); el.removeAttribute("aria-invalid"); });
+  const top = form.querySelector(".form-errors");
+  if (top) top.replaceChildren();
+}
+
+// Submit a form's request; a 422 goes beside the fields, anything else to the flash line.
+export async function submitForm(form, action) {
+  clearFieldErrors(form);
+  try {
+    const result = await action();
+    flash("");
+    return result;
+  } catch (error) {
+    if (error instanceof ApiError && error.status === 422) {
+      showFieldErrors(form, error);
+      flash("Some fields need attention (marked below).", "error");
+    } else {
+      flash(error.message, "error");
+    }
+    return undefined;
+  }
+}
+
+// The first line of a stored error: the workers store one line, but older rows may hold a traceback,
+// whose last line is the exception and its message.
+export function oneLine(text) {
+  const lines = String(text || "").split("\n").map((l) => l.trim()).filter(Boolean);
+  if (!lines.length) return "";
+  return lines[0].startsWith("Traceback") ? lines[lines.length - 1] : lines[0];
+}
+
+// Read an endpoint that answers 409 (not produced yet) or 404 (gone) as "nothing to show".
+export async function optional(path) {
+  try { return await api(path); } catch (error) { if (error.status === 409 || error.status === 404) return null; throw error; }
+}
+
+// A table in a box that scrolls sideways instead of overflowing its card (wide designs, many factors).
+export function wideTable(headers, rows) {
+  return h("div", { className: "scroll" }, table(headers, rows));
 }
 
 // Run an async action from a button or form, showing errors (with the field named) instead of failing silently.

@@ -1,6 +1,9 @@
-// Jobs: the submission form (fields from the OpenAPI schema), the list with progress, and a result page.
-import { api, attempt, condition, flash, h, status, table } from "./core.js";
-import { lineChart } from "./charts.js";
+// Jobs: the submission form (micro parameters from the OpenAPI schema, effects from the catalogue),
+// the list with progress, and a job's page (status, one-line error, properties, engineering curves).
+import { api, attempt, condition, h, oneLine, status, submitForm, table } from "./core.js";
+import { catalogue, effectPicker, pickedEffects } from "./effects.js";
+import { curveViews } from "./jobcurves.js";
+import { refresh } from "./live.js";
 
 let schemaCache = null;
 async function schemas() {
@@ -8,48 +11,56 @@ async function schemas() {
   return schemaCache;
 }
 
-function numberField(name, prop) {
+function numberField(name, prop, loc) {
   const value = prop.default ?? "";
-  return h("label", { title: prop.description || "" }, name, h("input", { name, type: "number", step: "any", value }));
+  return h("label", { title: prop.description || "" }, name,
+    h("input", { name, type: "number", step: "any", value, "data-loc": loc }));
 }
 
+const isNumber = (p) => p.type === "number" || p.type === "integer" || (p.anyOf || []).some((a) => a.type === "number" || a.type === "integer");
+
 export async function submitPage(view) {
-  const defs = await schemas();
+  const [defs, effects] = await Promise.all([schemas(), catalogue()]);
   const micro = defs.MicroParameters.properties;
-  const form = h("form", { className: "card" },
+  const numeric = Object.entries(micro).filter(([, p]) => isNumber(p));
+  const form = h("form", { className: "card", id: "submit-job", novalidate: true },
     h("h2", {}, "Submit a job"),
+    h("div", { className: "form-errors" }),
     h("div", {},
-      h("label", {}, "Test", h("select", { name: "test" }, ["battery", "fill", "cct", "dst", "aor", "anchor"].map((t) => h("option", {}, t)))),
-      h("label", {}, "Fidelity", h("select", { name: "fidelity" }, h("option", {}, "screening"), h("option", {}, "thesis"))),
-      h("label", {}, "Evaluator", h("select", { name: "evaluator" }, h("option", {}, "dem"), h("option", {}, "analytic"))),
-      h("label", {}, "Seed", h("input", { name: "seed", type: "number", min: 0, value: 0 })),
-      h("label", {}, "Priority", h("input", { name: "priority", type: "number", value: 0 }))),
+      h("label", {}, "Test", h("select", { name: "test", "data-loc": "test" }, ["battery", "fill", "cct", "dst", "aor", "anchor"].map((t) => h("option", {}, t)))),
+      h("label", {}, "Fidelity", h("select", { name: "fidelity", "data-loc": "fidelity" }, h("option", {}, "screening"), h("option", {}, "thesis"))),
+      h("label", {}, "Evaluator", h("select", { name: "evaluator", "data-loc": "evaluator" }, h("option", { value: "dem" }, "dem (simulation)"), h("option", { value: "analytic" }, "analytic (closed-form stand-in)"))),
+      h("label", {}, "Seed", h("input", { name: "seed", type: "number", value: 0, "data-loc": "seed" })),
+      h("label", {}, "Priority", h("input", { name: "priority", type: "number", value: 0, "data-loc": "priority" }))),
     h("h3", {}, "Micro parameters (SI)"),
-    h("div", {}, Object.entries(micro).filter(([, p]) => p.type === "number" || (p.anyOf || []).some((a) => a.type === "number"))
-      .map(([name, prop]) => numberField(name, prop))),
+    h("div", {}, numeric.map(([name, prop]) => numberField(name, prop, `parameters.${name}`))),
+    effectPicker(effects.effects, "parameters.effects"),
     h("h3", {}, "Options"),
     h("div", {},
-      h("label", {}, "DST normal stresses (kPa, comma-separated)", h("input", { name: "dst_kpa", placeholder: "fidelity default" })),
-      h("label", {}, "Include angle of repose", h("input", { name: "include_aor", type: "checkbox" })),
-      h("label", {}, "Include anchor pull-out", h("input", { name: "include_anchor", type: "checkbox" }))),
-    h("button", { type: "submit" }, "Queue job"));
+      h("label", {}, "DST normal stresses (kPa, comma-separated)", h("input", { name: "dst_kpa", placeholder: "fidelity default", "data-loc": "options.dst_normal_stresses_pa" })),
+      h("label", { className: "check" }, h("input", { name: "include_aor", type: "checkbox", "data-loc": "options.include_aor" }), " include angle of repose"),
+      h("label", { className: "check" }, h("input", { name: "include_anchor", type: "checkbox", "data-loc": "options.include_anchor" }), " include anchor pull-out")),
+    h("p", {}, h("button", { type: "submit" }, "Queue job")));
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
     const data = new FormData(form);
     const parameters = {};
-    for (const name of Object.keys(micro)) {
+    for (const [name] of numeric) {
       const raw = data.get(name);
       if (raw !== null && raw !== "") parameters[name] = Number(raw);
     }
+    const effectsPicked = pickedEffects(form);
+    if (Object.keys(effectsPicked).length) parameters.effects = effectsPicked;
     const options = { include_aor: data.get("include_aor") === "on", include_anchor: data.get("include_anchor") === "on" };
     const dst = String(data.get("dst_kpa") || "").trim();
     if (dst) options.dst_normal_stresses_pa = dst.split(",").map((v) => Number(v) * 1000);
     const body = { test: data.get("test"), fidelity: data.get("fidelity"), evaluator: data.get("evaluator"),
       seed: Number(data.get("seed")), priority: Number(data.get("priority")), parameters, options };
-    const job = await attempt(() => api("/jobs", { method: "POST", body }));
+    const job = await submitForm(form, () => api("/jobs", { method: "POST", body }));
     if (job) location.hash = `#/jobs/${job.id}`;
   });
   view.replaceChildren(form);
+  return false;
 }
 
 function progress(job) {
@@ -67,45 +78,34 @@ export async function jobsPage(view, params) {
   const select = h("select", { onchange: (e) => { location.hash = `#/jobs${e.target.value ? "?status=" + e.target.value : ""}`; } },
     ["", "queued", "running", "succeeded", "failed", "cancelled"].map((s) => h("option", { value: s, selected: s === filter }, s || "all")));
   view.replaceChildren(h("h2", {}, `Jobs (${list.total})`), h("p", {}, "Status ", select, " ", h("a", { href: "#/submit" }, "submit a job")),
-    table(["Id", "Test", "Evaluator", "Fidelity", "Seed", "Status", "Progress", "Campaign", "Created"],
+    h("div", { className: "scroll" }, table(["Id", "Test", "Evaluator", "Fidelity", "Seed", "Status", "Progress", "Campaign", "Created"],
       list.items.map((j) => [h("a", { href: `#/jobs/${j.id}` }, `#${j.id}`), j.test, j.evaluator, j.fidelity, String(j.seed),
         status(j.status), progress(j), j.campaign_id ? h("a", { href: `#/campaigns/${j.campaign_id}` }, `#${j.campaign_id}`) : "–",
-        j.created_at.replace("T", " ").slice(0, 19)])));
+        j.created_at.replace("T", " ").slice(0, 19)]))));
   return list.items.some((j) => j.status === "queued" || j.status === "running");  // keep refreshing
-}
-
-function curveCharts(curves) {
-  return Object.entries(curves || {}).map(([name, columns]) => {
-    const keys = Object.keys(columns);
-    if (keys.length < 2) return null;
-    const [xKey, ...yKeys] = keys;
-    return lineChart(name, xKey, yKeys.length === 1 ? yKeys[0] : "", yKeys.map((k) => ({ name: k, x: columns[xKey], y: columns[k] })));
-  }).filter(Boolean);
 }
 
 export async function jobPage(view, id) {
   const job = await api(`/jobs/${id}`);
   const actions = h("p", {},
     h("button", { className: "secondary", disabled: !["queued", "running"].includes(job.status),
-      onclick: async () => { if (await attempt(() => api(`/jobs/${id}/cancel`, { method: "POST" }), "cancel requested")) jobPage(view, id); } }, "Cancel"), " ",
+      onclick: async () => { if (await attempt(() => api(`/jobs/${id}/cancel`, { method: "POST" }), "cancel requested")) refresh(); } }, "Cancel"), " ",
     h("button", { className: "secondary", disabled: !["failed", "cancelled"].includes(job.status),
-      onclick: async () => { if (await attempt(() => api(`/jobs/${id}/retry`, { method: "POST" }), "queued again")) jobPage(view, id); } }, "Retry"));
+      onclick: async () => { if (await attempt(() => api(`/jobs/${id}/retry`, { method: "POST" }), "queued again")) refresh(); } }, "Retry"));
   const parts = [h("h2", {}, `Job #${job.id} `, status(job.status)), actions,
-    table(["Test", "Evaluator", "Fidelity", "Seed", "Attempts", "Progress", "Engine", "Wall time (s)"],
+    h("div", { className: "scroll" }, table(["Test", "Evaluator", "Fidelity", "Seed", "Attempts", "Progress", "Engine", "Wall time (s)", "Campaign"],
       [[job.test, job.evaluator, job.fidelity, String(job.seed), `${job.attempts}/${job.max_attempts}`, progress(job),
-        job.engine_version || "–", job.wall_time_s]])];
-  if (job.error) parts.push(h("h3", {}, "Error"), h("pre", {}, job.error));
+        job.engine_version || "–", job.wall_time_s, job.campaign_id ? h("a", { href: `#/campaigns/${job.campaign_id}` }, `#${job.campaign_id}`) : "–"]]))];
+  if (job.error) parts.push(h("p", { className: "job-error" }, h("b", {}, job.status === "failed" ? "Failed: " : "Error: "), oneLine(job.error)));
   if (job.result_available) {
     const result = await api(`/jobs/${id}/result`);
-    parts.push(h("h3", {}, "Bulk properties"),
+    parts.push(h("h3", {}, "Curves"), h("div", { className: "charts" }, curveViews(result.curves || {}, result.properties)),
+      h("h3", {}, "Bulk properties"),
       table(["Test", "Quantity", "Condition", "Value", "Unit"],
         result.properties.map((p) => [p.test, p.quantity, condition(p.condition), p.value, p.unit])),
-      h("h3", {}, "Curves"), h("div", {}, curveCharts(result.curves)),
-      h("h3", {}, "Provenance"), h("pre", {}, JSON.stringify(result.provenance, null, 1)));
+      h("details", {}, h("summary", {}, "Provenance"), h("pre", {}, JSON.stringify(result.provenance, null, 1))));
   }
-  parts.push(h("h3", {}, "Spec"), h("pre", {}, JSON.stringify(job.spec, null, 1)));
+  parts.push(h("details", {}, h("summary", {}, "Spec"), h("pre", {}, JSON.stringify(job.spec, null, 1))));
   view.replaceChildren(...parts);
-  flash("");
   return job.status === "queued" || job.status === "running";
 }
-

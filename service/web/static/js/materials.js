@@ -1,5 +1,6 @@
 // Materials: list, measurements (SI, with replicates and uncertainty), adding measurements in any accepted unit.
 import { api, attempt, condition, h, table } from "./core.js";
+import { refresh } from "./live.js";
 
 export async function materialsPage(view) {
   const materials = await api("/materials");
@@ -53,7 +54,7 @@ export async function materialPage(view, id) {
       body.condition = { [name]: Number(data.get("cond_value")) };
       if (data.get("cond_unit")) body.condition_units = { [name]: data.get("cond_unit") };
     }
-    if (await attempt(() => api(`/materials/${id}/measurements`, { method: "POST", body }), "measurement added")) materialPage(view, id);
+    if (await attempt(() => api(`/materials/${id}/measurements`, { method: "POST", body }), "measurement added")) refresh();
   });
   view.replaceChildren(h("h2", {}, material.name), h("p", { className: "muted" }, material.description),
     h("p", { className: "muted" }, material.source),
@@ -64,7 +65,7 @@ export async function materialPage(view, id) {
         m.values.map((v) => (v === null ? "n/a" : Number(v.toPrecision(5)))).join(", "), m.source,
         material.bundled ? "" : h("button", { className: "secondary", onclick: async () => {
           if (!window.confirm(`Delete the ${m.test} ${m.quantity} measurement (${m.n} values)?`)) return;
-          if (await attempt(() => api(`/materials/${id}/measurements/${m.id}`, { method: "DELETE" }), "deleted")) materialPage(view, id);
+          if (await attempt(() => api(`/materials/${id}/measurements/${m.id}`, { method: "DELETE" }), "deleted")) refresh();
         } }, "Delete")])),
     Object.keys(material.direct_estimates || {}).length ? h("div", {}, h("h3", {}, "Direct estimates"),
       h("pre", {}, JSON.stringify(material.direct_estimates, null, 1))) : "",

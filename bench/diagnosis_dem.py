@@ -1,0 +1,308 @@
+"""Tier B of the missing-physics diagnosis: hidden effects on the DEM engine, through the service.
+
+Five scenarios at screening fidelity (issue 11). Four hide one effect each in the "measuring world":
+rolling resistance (EPSD2, mu_r 0.15), cohesion (the adhesive contact, Gamma 80 J/m2, a few kPa of
+bulk cohesion on 20 mm spheres), Hertz-Mindlin (the Young's modulus matched to kp at 30 kPa, so E'
+at mid stress is about the same) and elongated clumps (aspect ratio 1.5); the fifth hides none.
+
+The measurements are batteries run by the service's own workers with the effect on, at three
+seeds the calibration never uses, plus laboratory scatter (calibration.testbed.MEASUREMENT_SD) and
+a nuisance: the pycnometer prior on particle density is 2 % off the truth. Each scenario then runs
+one automatic campaign through the queue and workers: the 2^(4-1) design with 3 centre runs, the
+confirmation, the diagnosis, the top effect added as a fifth factor and its confirmation
+(max_iterations 2). Printed per scenario: whether the lack of fit rejects, the truth's rank in the
+diagnosis, the error before and after, chi2/dof after, the particle density found, the batteries
+and the wall time; then the pass criteria of the issue and a machine-readable last line.
+
+    python3 bench/diagnosis_dem.py                               # all five, DEM, a local service
+    python3 bench/diagnosis_dem.py --scenarios rolling,null --workers 2
+    python3 bench/diagnosis_dem.py --evaluator analytic         # the plumbing, in seconds
+    python3 bench/diagnosis_dem.py --url http://host:8000       # an existing service
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+sys.path.insert(0, ROOT)
+
+import httpx  # noqa: E402
+
+from calibration.keys import responses_of  # noqa: E402
+from calibration.testbed import PYCNOMETER_RELATIVE_SD, TILT_TEST_SD, measurement_sd  # noqa: E402
+from engine.candidates import candidates  # noqa: E402
+from engine.lab.spec import MicroParameters  # noqa: E402
+
+API = "/api/v1"
+TRUTH = {"particle_density_kg_m3": 2650.0, "friction_pp": 0.6, "friction_pw": 0.5,
+         "particle_stiffness_n_per_m": 2.0e6}
+FACTORS = [
+    {"name": "particle_density_kg_m3", "low": 2300.0, "high": 2900.0},
+    {"name": "friction_pp", "low": 0.2, "high": 1.0},
+    {"name": "friction_pw", "low": 0.2, "high": 0.8},
+    {"name": "particle_stiffness_n_per_m", "low": 1.0e6, "high": 3.0e6},
+]
+OPTIONS = {"dst_normal_stresses_pa": [10.5e3, 24.0e3, 38.3e3, 52.4e3],
+           "cct_window_stresses_pa": [15.0e3, 30.0e3, 45.0e3, 60.0e3]}
+MEASURING_SEEDS = (910001, 910002, 910003)
+DENSITY_PRIOR_BIAS = 0.02
+
+
+@dataclass
+class Scenario:
+    name: str
+    effect: str | None              # candidate name hidden in the measuring world
+    strength: float | None = None   # None: a switch-type effect at its matched strength
+    noise_seed: int = 0
+    truth: dict[str, Any] = field(default_factory=dict)
+
+    def parameters(self) -> dict[str, Any]:
+        from calibration import parameters as factor_paths
+
+        truth = dict(TRUTH)
+        if self.effect is None:
+            return truth
+        c = candidates()[self.effect]
+        strength = self.strength
+        if strength is None:
+            strength = float(c.reference(MicroParameters.model_validate(truth)))
+        return factor_paths.apply(truth, {c.factor: strength})
+
+
+SCENARIOS = {
+    "rolling": Scenario("rolling", "rolling_epsd2", 0.15, 1),
+    "cohesion": Scenario("cohesion", "cohesion_adhesive", 80.0, 2),
+    "hertz": Scenario("hertz", "hertz_mindlin", None, 3),
+    "shape": Scenario("shape", "particle_shape", 1.5, 4),
+    "null": Scenario("null", None, None, 5),
+}
+
+
+class Service:
+    """A running demcal service: the one at ``url``, or a fresh local one in a temporary folder."""
+
+    def __init__(self, url: str | None, workers: int):
+        self.process = None
+        self.folder = None
+        if url is None:
+            self.folder = tempfile.TemporaryDirectory(prefix="demcal-tierb-")
+            with socket.socket() as sock:
+                sock.bind(("127.0.0.1", 0))
+                port = sock.getsockname()[1]
+            url = f"http://127.0.0.1:{port}"
+            env = {**os.environ, "PYTHONPATH": os.path.abspath(ROOT), "DEMCAL_DATABASE_URL": f"sqlite:///{self.folder.name}/demcal.db",
+                   "DEMCAL_MAX_QUEUED_JOBS_PER_CLIENT": "1000", "DEMCAL_KERNEL_DIR": os.environ.get(
+                       "DEMCAL_KERNEL_DIR", os.path.join(os.path.expanduser("~"), ".cache", "demcal", "kernels"))}
+            self.process = subprocess.Popen(
+                [sys.executable, "-m", "service.cli", "serve", "--port", str(port), "--workers", str(workers)],
+                cwd=self.folder.name, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        self.client = httpx.Client(base_url=url + API, timeout=60.0, headers={"X-Client-Id": "tier-b"})
+        deadline = time.monotonic() + 120
+        while True:
+            try:
+                if self.client.get("/health").status_code == 200:
+                    break
+            except httpx.HTTPError:
+                pass
+            if time.monotonic() > deadline:
+                raise SystemExit(f"no service answered at {url}")
+            time.sleep(0.5)
+
+    def call(self, method: str, path: str, **kw) -> Any:
+        response = self.client.request(method, path, **kw)
+        if response.status_code >= 400:
+            raise SystemExit(f"{method} {path}: HTTP {response.status_code}: {response.text[:500]}")
+        return response.json() if response.content else None
+
+    def close(self):
+        self.client.close()
+        if self.process is not None:
+            self.process.terminate()
+            self.process.wait(30)
+        if self.folder is not None:
+            self.folder.cleanup()
+
+
+def _wait_jobs(svc: Service, ids: list[int], poll_s: float) -> list[dict]:
+    while True:
+        jobs = [svc.call("GET", f"/jobs/{i}") for i in ids]
+        bad = [j for j in jobs if j["status"] in ("failed", "cancelled")]
+        if bad:
+            raise SystemExit(f"measuring job {bad[0]['id']} {bad[0]['status']}: {bad[0]['error']}")
+        if all(j["status"] == "succeeded" for j in jobs):
+            return [svc.call("GET", f"/jobs/{i}/result", params={"include_curves": "false"}) for i in ids]
+        time.sleep(poll_s)
+
+
+def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float) -> tuple[list[dict], int]:
+    """The measuring world's replicates: one battery per measuring seed, plus laboratory scatter."""
+    truth = sc.parameters()
+    ids = [svc.call("POST", "/jobs", json={"test": "battery", "fidelity": "screening", "seed": seed,
+                                           "evaluator": evaluator, "parameters": truth, "options": OPTIONS,
+                                           "idempotency_key": f"tierb:{sc.name}:{evaluator}:{seed}"})["id"]
+           for seed in MEASURING_SEEDS]
+    results = _wait_jobs(svc, ids, poll_s)
+    rng = np.random.default_rng([sc.noise_seed, 20261123])
+    by_key: dict[str, list[dict]] = {}
+    for result in results:
+        for name, record in responses_of(result).items():
+            if measurement_sd(record) is None:
+                continue
+            if record["quantity"] == "confined_modulus_pa" and not record["condition"]:
+                continue  # E' per stress window only
+            by_key.setdefault(name, []).append(record)
+    measurements = []
+    for records in by_key.values():
+        first = records[0]
+        values = [r["value"] + measurement_sd(r) * float(rng.standard_normal()) for r in records]
+        measurements.append({"test": first["test"], "quantity": first["quantity"], "condition": first["condition"],
+                             "values": values, "source": f"tier B {sc.name}: engine runs + laboratory scatter"})
+    return measurements, len(ids)
+
+
+def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: str, seed: int,
+             density_bias: float = DENSITY_PRIOR_BIAS) -> int:
+    material = svc.call("POST", "/materials", json={
+        "name": f"tier B {sc.name} {evaluator} {int(time.time())}", "measurements": measurements,
+        "description": f"hidden effect: {sc.effect or 'none'}"})
+    rho = sc.parameters()["particle_density_kg_m3"]
+    truth = sc.parameters()
+    body = {
+        "name": f"tier B {sc.name}", "material_id": material["id"], "evaluator": evaluator,
+        "fidelity": "screening", "factors": FACTORS, "design": {"type": "fractional", "generators": ["D=ABC"], "centre_runs": 3},
+        "priors": [
+            {"parameter": "particle_density_kg_m3", "value": rho * (1.0 + density_bias),
+             "uncertainty": PYCNOMETER_RELATIVE_SD * rho, "source": "pycnometer, 2 % off"},
+            {"parameter": "friction_pw", "value": truth["friction_pw"], "uncertainty": TILT_TEST_SD,
+             "source": "tilt test"}],
+        "automatic": True, "max_iterations": 2, "seed": seed,
+    }
+    c = svc.call("POST", "/campaigns", json=body)
+    svc.call("POST", f"/campaigns/{c['id']}/start")
+    return c["id"]
+
+
+def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
+    history = svc.call("GET", f"/campaigns/{cid}/history")["iterations"]
+    first = history[0]
+    out: dict[str, Any] = {"scenario": sc.name, "effect": sc.effect, "lof_rejects": None, "rank": None,
+                           "ranking": [], "added": None, "error_ratio": None, "chi2_per_dof_after": None,
+                           "density_error": None, "verdicts": [h["verdict"] for h in history],
+                           "stop_reason": history[-1].get("stop_reason")}
+    out["lof_rejects"] = first["lack_of_fit_p"] is not None and first["lack_of_fit_p"] < 0.05
+    try:
+        diagnosis = svc.call("GET", f"/campaigns/{cid}/diagnosis", params={"number": 1})
+        out["ranking"] = [r["effect"] for r in diagnosis["ranking"]]
+        out["alias_groups"] = [g["effects"] for g in diagnosis.get("alias_groups", [])]
+    except SystemExit:
+        pass  # no diagnosis ran (the lack of fit passed)
+    if sc.effect in out["ranking"]:
+        out["rank"] = out["ranking"].index(sc.effect) + 1
+    final = history[-1]
+    if len(history) > 1:
+        out["added"] = (history[1].get("added_effect") or [None])[0]
+        out["error_ratio"] = final["chi2"] / first["chi2"] if first["chi2"] else None
+        out["chi2_per_dof_after"] = final["chi2_per_dof"]
+    rho = (final.get("optimum") or {}).get("particle_density_kg_m3")
+    if rho is not None:
+        out["density_error"] = rho / sc.parameters()["particle_density_kg_m3"] - 1.0
+    return out
+
+
+def _wait_campaign(svc: Service, cid: int, poll_s: float) -> dict:
+    while True:
+        c = svc.call("GET", f"/campaigns/{cid}")
+        if c["status"] in ("completed", "failed"):
+            return c
+        time.sleep(poll_s)
+
+
+def _batteries(svc: Service, cid: int) -> int:
+    return sum(len(it["runs"]) for it in svc.call("GET", f"/campaigns/{cid}/iterations"))
+
+
+def criteria(outs: list[dict]) -> dict[str, Any]:
+    """The issue's pass criteria over the scenarios that ran."""
+    effects = [o for o in outs if o["effect"]]
+    null = [o for o in outs if not o["effect"]]
+    res: dict[str, Any] = {}
+    res["lof_rejects_effects"] = sum(bool(o["lof_rejects"]) for o in effects)
+    res["lof_rejects_null"] = sum(bool(o["lof_rejects"]) for o in null)
+    res["true_first"] = sum(o["rank"] == 1 for o in effects)
+    res["true_top2"] = sum(o["rank"] is not None and o["rank"] <= 2 for o in effects)
+    res["error_halved_chi2_le_2"] = sum(o["error_ratio"] is not None and o["error_ratio"] <= 0.5
+                                        and o["chi2_per_dof_after"] is not None and o["chi2_per_dof_after"] <= 2.0
+                                        for o in effects)
+    dens = [o for o in effects if o["effect"] in ("rolling_epsd2", "particle_shape")]
+    res["density_within_5pc"] = sum(o["density_error"] is not None and abs(o["density_error"]) <= 0.05 for o in dens)
+    res["n_effects"], res["n_null"], res["n_density"] = len(effects), len(null), len(dens)
+    return res
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenarios", default=",".join(SCENARIOS), help="comma-separated: " + ", ".join(SCENARIOS))
+    ap.add_argument("--evaluator", choices=["dem", "analytic"], default="dem")
+    ap.add_argument("--url", help="an existing service (default: start one in a temporary folder)")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--seed", type=int, default=41)
+    ap.add_argument("--density-bias", type=float, default=DENSITY_PRIOR_BIAS,
+                    help="relative error of the particle-density prior (the nuisance)")
+    args = ap.parse_args(argv)
+    names = [n.strip() for n in args.scenarios.split(",") if n.strip()]
+    unknown = set(names) - set(SCENARIOS)
+    if unknown:
+        ap.error(f"unknown scenarios {sorted(unknown)}; choose from {', '.join(SCENARIOS)}")
+    poll_s = 0.2 if args.evaluator == "analytic" else 5.0
+    svc = Service(args.url, args.workers)
+    outs = []
+    try:
+        for name in names:
+            sc = SCENARIOS[name]
+            started = time.perf_counter()
+            measurements, n_measuring = measure(svc, sc, args.evaluator, poll_s)
+            cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias)
+            final = _wait_campaign(svc, cid, poll_s)
+            if final["status"] != "completed":
+                print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)
+                continue
+            o = outcome(svc, sc, cid)
+            o["batteries"] = n_measuring + _batteries(svc, cid)
+            o["wall_s"] = time.perf_counter() - started
+            outs.append(o)
+            print(f"{name:<9} hidden={sc.effect or '-':<18} lof={'rejects' if o['lof_rejects'] else 'passes'} "
+                  f"ranking={o['ranking'][:3]} rank={o['rank']} added={o['added']} "
+                  f"error_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
+                  f"density_error={_f(o['density_error'])} stop='{o['stop_reason']}' "
+                  f"batteries={o['batteries']} wall={o['wall_s']:.0f}s", flush=True)
+    finally:
+        svc.close()
+    res = criteria(outs)
+    print(f"lack of fit rejects: {res['lof_rejects_effects']}/{res['n_effects']} effect scenarios "
+          f"(target all), {res['lof_rejects_null']}/{res['n_null']} null (target none)")
+    print(f"true effect first: {res['true_first']}/{res['n_effects']} (target >= 3 of 4); "
+          f"top two: {res['true_top2']}/{res['n_effects']} (target all)")
+    print(f"error halved with chi2/dof <= 2 after adding: {res['error_halved_chi2_le_2']}/{res['n_effects']} "
+          f"(target all)")
+    print(f"particle density within 5 %: {res['density_within_5pc']}/{res['n_density']} rolling and shape "
+          f"(target all)")
+    print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={args.evaluator}")
+    return 0
+
+
+def _f(value) -> str:
+    return "-" if value is None else f"{value:.3g}"
+
+
+if __name__ == "__main__":
+    sys.exit(main())

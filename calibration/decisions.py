@@ -1,0 +1,77 @@
+"""The loop's two judgements, shared by the library loop and the service's automatic mode.
+
+* ``effect_range``: the range an added effect's strength gets as a design factor.
+* ``judge``: whether an iteration with an added effect earned its place over the one before
+  (design note step 6): the weighted error must fall with the lack of fit no worse, and the fall
+  must be significant, by the boundary-corrected likelihood-ratio test for an effect that vanishes
+  at its "off" strength (Self & Liang 1987: 1/2 chi2_0 + 1/2 chi2_1) or, for a switch-type effect
+  (not nested), by BIC.
+
+Both work on plain numbers, so the service can call them on what it stored in the database.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from engine.effects.base import Candidate
+
+from . import parameters as params_mod
+from . import stats
+from .attribute import PLAUSIBLE_SLACK
+from .localise import ALPHA
+
+
+def effect_range(candidate: Candidate, strength: float | None = None,
+                 reference: float | None = None) -> tuple[float, float, bool]:
+    """(low, high, log) of the added effect's strength factor.
+
+    A switch-type effect (no "off" strength) spans a factor of 4 either way about its matched
+    strength (``reference``, or the diagnosis's estimate ``strength``), on a log scale. Any other
+    spans from "off" to the whole plausible range, or to twice the diagnosis's estimate if that is
+    larger (a linear signature underestimates a saturating effect), at most PLAUSIBLE_SLACK x the
+    plausible top and never past the engine's limit.
+    """
+    if candidate.is_switch:
+        centre = strength if strength else reference
+        if centre is None or not centre > 0:
+            raise ValueError(f"{candidate.name}: a switch-type effect needs its matched strength")
+        return centre / 4.0, centre * 4.0, True
+    off = candidate.off_value or 0.0
+    gamma = strength - off if strength is not None else candidate.step
+    span = candidate.plausible_range[1] - off
+    top = min(off + min(max(2.0 * gamma, span), PLAUSIBLE_SLACK * span), params_mod.upper_limit(candidate.factor))
+    return off, top, False
+
+
+@dataclass
+class Decision:
+    """Whether an added effect earned its place."""
+
+    effect: str
+    accepted: bool
+    chi2_before: float
+    chi2_after: float
+    lr: float
+    p_value: float | None            # boundary-corrected LR test; None for a switch (not nested)
+    delta_bic: float
+    lof_p_before: float
+    lof_p_after: float
+    strength: float | None
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+def judge(candidate: Candidate, *, chi2_before: float, chi2_after: float, n_residuals: int,
+          free_before: int, free_after: int, lof_p_before: float, lof_p_after: float,
+          strength: float | None = None) -> Decision:
+    """The added effect is accepted when the weighted error falls, the lack of fit gets no worse
+    (or passes), and the fall is significant (LR p < ALPHA, or BIC falls by more than 2)."""
+    lr = chi2_before - chi2_after
+    p = None if candidate.is_switch else stats.boundary_lr_pvalue(lr)
+    delta_bic = stats.bic(chi2_after, free_after, n_residuals) - stats.bic(chi2_before, free_before, n_residuals)
+    improves = chi2_after < chi2_before and (lof_p_after > lof_p_before or lof_p_after >= ALPHA)
+    significant = (p is not None and p < ALPHA) or delta_bic < -2.0
+    return Decision(candidate.name, bool(improves and significant), float(chi2_before), float(chi2_after),
+                    float(lr), p, float(delta_bic), float(lof_p_before), float(lof_p_after), strength)

@@ -1,0 +1,104 @@
+"""Automatic mode: after each iteration, take the step a user would take next.
+
+localise -> attribute -> add -> confirm, until the lack of fit passes, nothing improves, or the
+campaign's ``max_iterations`` is reached; the reason it stopped is stored with the last iteration
+(``report.automatic.stop_reason``) and shown in the campaign's summary and history.
+
+An iteration that added an effect is judged against the iteration it was built on
+(``calibration.decisions.judge``: the error must fall significantly with the lack of fit no worse).
+A rejected effect leaves the model as it was: the next candidate indicated by that earlier
+iteration's diagnosis is tried instead, and when none is left nothing improves. Pure functions of
+what the database holds, so the runner stays resumable.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from calibration.decisions import judge
+from calibration.localise import ALPHA
+
+STOP_PASSES = "lack of fit passes"
+STOP_MAX = "maximum number of iterations reached"
+STOP_NOTHING = "nothing improves"
+
+
+def _record(it) -> dict[str, Any]:
+    return dict(((it.report or {}).get("automatic")) or {})
+
+
+def _lof(report: dict) -> dict:
+    return report.get("lack_of_fit") or {}
+
+
+def judge_iteration(iterations: list, it, report: dict) -> tuple[dict | None, int | None]:
+    """(decision, base iteration number) when ``it`` added an effect in automatic mode, else (None, None)."""
+    from engine.candidates import get as get_candidate
+
+    previous = next((p for p in iterations if p.number == it.number - 1), None)
+    plan = _record(previous) if previous is not None else {}
+    name, base_number = plan.get("next_effect"), plan.get("next_base")
+    if not name or base_number is None:
+        return None, None
+    base = next(p for p in iterations if p.number == base_number)
+    before, after = _lof(base.report or {}), _lof(report)
+    if not before.get("dof") or not after.get("dof"):
+        return None, base_number
+    c = get_candidate(name)
+    n = int(before.get("n_residuals") or 0)
+    decision = judge(c, chi2_before=before["statistic"], chi2_after=after["statistic"], n_residuals=n,
+                     free_before=n - int(before["dof"]), free_after=n - int(after["dof"]),
+                     lof_p_before=before["p_value"], lof_p_after=after["p_value"],
+                     strength=((report.get("optimum") or {}).get(c.factor)))
+    return decision.to_dict(), base_number
+
+
+def _tried_from(iterations: list, base_number: int) -> set[str]:
+    return {_record(p).get("next_effect") for p in iterations if _record(p).get("next_base") == base_number} - {None}
+
+
+def next_step(config, campaign_config: dict, iterations: list, it, report: dict, settings=None) -> dict[str, Any]:
+    """The automatic record of iteration ``it``: its decision, and either the next effect with the
+    next iteration's configuration (``config``) or the reason to stop."""
+    from service.campaigns.analysis import active_effects
+    from service.campaigns.store import with_effect_factor
+    from service.errors import ApiError
+    from service.limits import check_campaign_limits
+    from service.campaigns.schemas import CampaignCreate
+
+    decision, base_number = judge_iteration(iterations, it, report)
+    record: dict[str, Any] = {"decision": decision, "base_iteration": base_number, "next_effect": None,
+                              "next_base": None, "stop_reason": None}
+    rejected = decision is not None and not decision["accepted"]
+    base = next(p for p in iterations if p.number == base_number) if rejected else it
+    base_report = report if base is it else (base.report or {})
+    passes = (_lof(report).get("p_value") or 0.0) >= ALPHA
+    if not rejected and passes and report.get("verdict") != "targets out of reach":
+        return {**record, "stop_reason": STOP_PASSES}
+    if it.number >= config.max_iterations:
+        return {**record, "stop_reason": STOP_MAX}
+    diagnosis = base_report.get("diagnosis") or {}
+    skip = active_effects(base.parameters) | _tried_from(iterations, base.number) | (
+        {decision["effect"]} if rejected else set())
+    options = [name for name in diagnosis.get("indicated", []) if name not in skip]
+    if not options:
+        reason = STOP_NOTHING if rejected or decision is not None else (
+            f"diagnosis: {diagnosis.get('verdict', 'not run')}")
+        return {**record, "stop_reason": reason}
+    name = options[0]
+    ranked = next((r for r in diagnosis.get("ranking", []) if r.get("effect") == name), {})
+    params = base.parameters
+    fixed = dict(params.get("fixed") or {})
+    if params.get("effects"):
+        fixed["effects"] = params["effects"]
+    base_config = {**campaign_config, "factors": params["factors"], "fixed_parameters": fixed}
+    try:
+        nxt = with_effect_factor(base_config, name, strength=ranked.get("strength"),
+                                 at=(base_report.get("optimum") or None))
+        validated = CampaignCreate.model_validate(nxt)
+        if settings is not None:
+            check_campaign_limits(validated, settings)
+    except (ApiError, ValueError) as exc:
+        message = getattr(exc, "message", None) or str(exc)
+        return {**record, "stop_reason": f"the next iteration with {name} cannot run: {message}"}
+    return {**record, "next_effect": name, "next_base": base.number,
+            "next_config": validated.model_dump(mode="json")}

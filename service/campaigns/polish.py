@@ -1,0 +1,132 @@
+"""Gauss-Newton on the batteries themselves, after the confirmation: the service's polishing phase.
+
+Why: a two-level response surface of a saturating response (friction angle against mu_pp,
+anything against an added effect's strength) is biased inside its box, so the surfaces' optimum is
+not the simulator's, and an added effect that would fit the measurements can look as if it did
+not. The library loop polishes (``calibration.loop.CalibrationLoop._polish``); this is the same
+method cut into rounds the campaign runner can queue and resume:
+
+* round 0, the Jacobian: one battery per free factor, a coded step of 0.1 from the optimum (inward
+  at a bound), at the confirmation's seed (common random numbers); the targets' rows of J are these
+  forward differences, the priors' rows stay analytic;
+* rounds 1..polish_steps: the bounded Gauss-Newton step minimising |r + J du| in the box, tried at
+  full, half and quarter length side by side; the longest that lowers the batteries' misfit is
+  taken and J is updated by Broyden's rule; no improvement (or a step below 1e-3) ends it.
+
+The state is a JSON dict kept in the iteration's optimum, so every round survives a restart. Costs
+(free factors + 3 x steps) batteries, all of a round queued at once.
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from calibration import calibrate as cal
+
+CODED_STEP = 0.1
+SHRINKS = (1.0, 0.5, 0.25)
+MIN_STEP = 1e-3
+ROUND = 1000  # std_order of a polish run = round x ROUND + index + 1
+
+
+def _residuals(config, design, modelled, theta: dict, records: list[dict], seed: int):
+    conf = cal.confirm(modelled, [records], [seed])
+    return cal.residuals_at(design, modelled, theta, conf, [p.model_dump() for p in config.priors],
+                            config.default_relative_uncertainty)
+
+
+def _point(design, theta: dict) -> tuple[dict, dict]:
+    natural = {k: float(v) for k, v in theta.items()}
+    coded = {f.name: float(f.to_coded(natural[f.name])) for f in design.factors}
+    return natural, coded
+
+
+def _step_points(design, state: dict) -> list[tuple[dict, dict]]:
+    """The trial points of the next Gauss-Newton step from the state's r and J, or [] when the
+    step is negligible."""
+    current = SimpleNamespace(r=np.array(state["r"]), J=np.array(state["J"]), free=state["free"])
+    step = cal.gauss_newton_step(design, current, state["theta"])
+    if float(np.max(np.abs(step))) < MIN_STEP:
+        return []
+    return [_point(design, cal.move(design, state["theta"], state["free"], s * step)) for s in SHRINKS]
+
+
+def start(config, design, modelled, theta: dict, run_id: int, records: list[dict], seed: int
+          ) -> tuple[dict, list[tuple[dict, dict]]]:
+    """State at the surfaces' optimum and the Jacobian round's points (natural, coded)."""
+    res = _residuals(config, design, modelled, theta, records, seed)
+    state = {"round": 0, "stage": "jacobian", "theta": dict(theta), "run_id": run_id, "seed": seed,
+             "chi2_start": res.chi2(), "chi2": res.chi2(), "r": res.r.tolist(), "J": res.J.tolist(),
+             "free": list(res.free), "n_targets": len(res.keys), "steps": 0, "batteries": 0, "h": []}
+    points = []
+    for j, name in enumerate(res.free):
+        u = float(design.factor(name).to_coded(theta[name]))
+        h = CODED_STEP if u + CODED_STEP <= 1.0 else -CODED_STEP
+        state["h"].append(h)
+        points.append(_point(design, cal.move(design, theta, res.free, np.eye(len(res.free))[j] * h)))
+    return state, points
+
+
+def advance(config, design, modelled, state: dict, round_runs: list, max_steps: int
+            ) -> tuple[dict, list[tuple[dict, dict]]]:
+    """Evaluate a finished round (its runs in std_order); the new state and the next round's points
+    ([] when polishing is over: ``state["stage"] == "done"``)."""
+    state = dict(state)
+    state["batteries"] += len(round_runs)
+    n_t = state["n_targets"]
+    records = [list((run.responses or {}).values()) for run in round_runs]
+    if state["stage"] == "jacobian":
+        J = np.array(state["J"])
+        r0 = np.array(state["r"])
+        for j, (run, recs) in enumerate(zip(round_runs, records)):
+            res_j = _residuals(config, design, modelled, run.natural, recs, state["seed"])
+            if len(res_j.keys) == n_t:
+                J[:n_t, j] = (res_j.r[:n_t] - r0[:n_t]) / state["h"][j]
+        state["J"] = J.tolist()
+    else:
+        taken = None
+        for run, recs in zip(round_runs, records):
+            res_k = _residuals(config, design, modelled, run.natural, recs, state["seed"])
+            if len(res_k.keys) == n_t and res_k.chi2() < state["chi2"]:
+                taken = (run, res_k)
+                break
+        if taken is None:
+            return _done(state), []
+        run, res_k = taken
+        du = np.array([float(design.factor(n).to_coded(run.natural[n]) - design.factor(n).to_coded(state["theta"][n]))
+                       for n in state["free"]])
+        J = np.array(state["J"])
+        dr = res_k.r - np.array(state["r"])
+        J = J + np.outer(dr - J @ du, du) / float(du @ du)  # Broyden's good update
+        state.update(theta={n: float(v) for n, v in run.natural.items()}, run_id=run.id, chi2=res_k.chi2(),
+                     r=res_k.r.tolist(), J=J.tolist(), steps=state["steps"] + 1)
+    if state["steps"] >= max_steps:
+        return _done(state), []
+    points = _step_points(design, state)
+    if not points:
+        return _done(state), []
+    state.update(stage="step", round=state["round"] + 1)
+    return state, points
+
+
+def _done(state: dict) -> dict:
+    state = dict(state)
+    state.update(stage="done")
+    return state
+
+
+def final_run(it):
+    """The battery at the iteration's final optimum: the best polishing run, else the confirmation."""
+    run_id = ((it.optimum or {}).get("polish") or {}).get("run_id")
+    return next((r for r in it.runs if r.id == run_id), None) or next(
+        (r for r in it.runs if r.kind == "confirmation"), None)
+
+
+def summary(state: dict | None) -> dict[str, Any] | None:
+    """What the report shows of the polishing."""
+    if not state:
+        return None
+    return {"chi2_start": state["chi2_start"], "chi2": state["chi2"], "steps": state["steps"],
+            "batteries": state["batteries"], "parameters": state["theta"]}

@@ -1,0 +1,107 @@
+// A campaign's page, the calibration loop's cockpit: drive it (start, pause, resume), pick an
+// iteration, read its verdict, targets, conditions and diagnosis, add the indicated effect to run
+// the next iteration, and follow the error and the parameters across iterations.
+import { api, attempt, fmt, h, optional, status, table } from "./core.js";
+import { refresh } from "./live.js";
+import { targetsSection, verdictSection } from "./campaign_report.js";
+import { conditionsSection } from "./campaign_conditions.js";
+import { diagnosisSection } from "./campaign_diagnosis.js";
+import { historySection } from "./campaign_history.js";
+import { designSection, modelsSection } from "./campaign_models.js";
+
+// Candidate names in an iteration's model (as the service's active_effects): fixed effects, effect
+// strengths as factors, particle shape.
+function activeEffects(parameters) {
+  const out = new Set(Object.keys(parameters?.effects || {}));
+  for (const f of parameters?.factors || []) {
+    if (f.name.startsWith("effects.")) out.add(f.name.split(".")[1]);
+    if (f.name === "clump_aspect_ratio") out.add("particle_shape");
+  }
+  if ((parameters?.fixed?.clump_aspect_ratio ?? 1) !== 1) out.add("particle_shape");
+  return [...out].sort();
+}
+
+function goTo(hash) {
+  if (location.hash === hash) refresh(); else location.hash = hash;
+}
+
+function controls(c, id) {
+  const act = (label, call) => h("button", { className: "secondary", "data-action": label, onclick: async () => {
+    if (await attempt(call, `${label}: ok`)) refresh();
+  } }, label);
+  return h("p", { className: "controls" },
+    c.status === "draft" ? act("Start", () => api(`/campaigns/${id}/start`, { method: "POST" })) : "",
+    c.status === "running" ? act("Pause", () => api(`/campaigns/${id}/pause`, { method: "POST" })) : "",
+    c.status === "paused" ? act("Resume", () => api(`/campaigns/${id}/resume`, { method: "POST" })) : "",
+    " ", h("a", { href: `#/jobs?campaign_id=${id}` }, "its jobs"), " · ", h("a", { href: `#/materials/${c.material_id}` }, "its material"));
+}
+
+function progressCard(c) {
+  const pct = c.runs_total ? Math.round((100 * (c.runs_succeeded + c.runs_failed)) / c.runs_total) : 0;
+  return h("section", { className: "card progress" },
+    h("p", {}, h("b", {}, `Iteration ${c.current_iteration}: `), `phase ${c.phase || "starting"}, runs ${c.runs_succeeded}/${c.runs_total} done`,
+      c.runs_failed ? h("span", { className: "bad" }, `, ${c.runs_failed} failed`) : "", " ",
+      h("span", { className: "bar" }, h("span", { style: `width:${pct}%` }))),
+    h("p", { className: "muted" }, "This page updates by itself while the campaign runs."));
+}
+
+function iterationTabs(id, iterations, selected) {
+  if (!iterations.length) return "";
+  return h("nav", { className: "iterations", "aria-label": "iterations" }, h("span", { className: "muted" }, "Iteration: "),
+    iterations.map((it) => {
+      const effects = activeEffects(it.parameters);
+      return h("a", { href: `#/campaigns/${id}?iteration=${it.number}`, className: it.number === selected ? "selected" : "",
+        "aria-current": it.number === selected ? "page" : undefined, title: `phase ${it.phase}` },
+      `${it.number}${effects.length ? " · " + effects.join(", ") : ""}${it.report ? "" : " (running)"}`);
+    }));
+}
+
+function scheduleForm(c) {
+  const cronInput = h("input", { value: "0 2 * * *", title: "5-field cron, UTC", "aria-label": "cron" });
+  return h("p", { className: "muted" }, "Repeat on a schedule (cron, UTC) ", cronInput, " ",
+    h("button", { className: "secondary", onclick: async () => {
+      const body = { name: c.name, cron: cronInput.value, template: c.config, only_if_new_measurements: true };
+      if (await attempt(() => api("/schedules", { method: "POST", body }), "schedule created")) location.hash = "#/schedules";
+    } }, "Schedule (when new measurements arrive)"));
+}
+
+export async function campaignPage(view, id, params) {
+  const [c, iterations, history] = await Promise.all([api(`/campaigns/${id}`), api(`/campaigns/${id}/iterations`), api(`/campaigns/${id}/history`)]);
+  const asked = Number(params?.get("iteration"));
+  const it = iterations.find((x) => x.number === asked) || iterations.find((x) => x.number === c.current_iteration) || iterations[iterations.length - 1];
+  const latest = iterations.length ? Math.max(...iterations.map((x) => x.number)) : 0;
+  const parts = [h("h2", {}, `Campaign #${c.id} ${c.name} `, status(c.status)), controls(c, id),
+    table(["Material", "Evaluator", "Fidelity", "Iteration", "Phase", "Runs done", "Failed"],
+      [[h("a", { href: `#/materials/${c.material_id}` }, `#${c.material_id}`), c.evaluator, c.fidelity, String(c.current_iteration), c.phase || "–",
+        `${c.runs_succeeded}/${c.runs_total}`, String(c.runs_failed)]]),
+    iterationTabs(id, iterations, it?.number)];
+  if (c.error) parts.push(h("p", { className: "job-error" }, h("b", {}, "Failed: "), c.error));
+  if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), c.stop_reason));
+  if (c.status === "running" || c.status === "paused") parts.push(progressCard(c));
+  if (it) {
+    const effects = activeEffects(it.parameters);
+    parts.push(h("p", { className: "active-effects" }, h("b", {}, `Iteration ${it.number} model: `),
+      effects.length ? `contact effects ${effects.join(", ")}` : "no contact effects beyond the base contact law",
+      `; factors ${(it.parameters?.factors || []).map((f) => f.name).join(", ")}.`));
+  }
+  if (it?.report) {
+    const n = it.number;
+    const [report, models] = await Promise.all([api(`/campaigns/${id}/report?number=${n}`), optional(`/campaigns/${id}/models?number=${n}`)]);
+    const confirmation = report.confirmation_job_id ? await optional(`/jobs/${report.confirmation_job_id}/result`) : null;
+    parts.push(verdictSection(report), targetsSection(report), conditionsSection(report.targets, confirmation));
+    if (report.diagnosis) {
+      parts.push(diagnosisSection(id, report.diagnosis, {
+        canAdd: c.status === "completed" && n === latest, nextNumber: latest + 1,
+        onAdded: () => goTo(`#/campaigns/${id}`),
+      }));
+    }
+    parts.push(historySection(history, iterations, c.config?.priors || []));
+    if (models) parts.push(modelsSection(models.models));
+  } else if (history.iterations.length) {
+    parts.push(historySection(history, iterations, c.config?.priors || []));
+  }
+  if (it?.design) parts.push(designSection(it.design));
+  parts.push(scheduleForm(c));
+  view.replaceChildren(...parts);
+  return c.status === "running";
+}

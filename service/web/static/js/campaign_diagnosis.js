@@ -1,0 +1,80 @@
+// The diagnosis of one iteration: which candidate effect explains the misfit the fitted parameters
+// cannot absorb. Ranking bars (score LM with its critical line, coloured by alias group), each
+// effect's strength against its plausible range, the fingerprint table, alias groups with the
+// measurement that separates them, and "add this effect and run the next iteration".
+import { api, fmt, h, submitForm, table } from "./core.js";
+import { COLOURS, axis, chart } from "./plot.js";
+
+const GROUP_COLOURS = ["#7a5af8", "#dc6803", "#0e9384", "#c11574"];
+const colourOf = (r) => (r.alias_group ? GROUP_COLOURS[(r.alias_group - 1) % GROUP_COLOURS.length] : r.significant ? COLOURS[0] : "#98a2b3");
+
+function rankingChart(d) {
+  const rows = d.ranking;
+  return chart({ title: { text: "Effect ranking: score (LM) against its critical value" },
+    grid: { left: 170, right: 70, top: 34, bottom: 40 },
+    yAxis: { type: "category", inverse: true, data: rows.map((r) => `${r.title} (${r.effect})`), axisLabel: { fontSize: 10, width: 160, overflow: "truncate" } },
+    xAxis: axis("Lagrange-multiplier score LM (-)", { min: 0, scale: false }),
+    series: [{ type: "bar", name: "LM", barMaxWidth: 18,
+      data: rows.map((r) => ({ value: r.lm, itemStyle: { color: colourOf(r) } })),
+      label: { show: true, position: "right", formatter: (p) => `${fmt(100 * rows[p.dataIndex].explained, 2)} % explained` },
+      markLine: { silent: true, symbol: "none", data: [{ xAxis: d.critical_lm }], lineStyle: { color: "#b42318", type: "dashed" },
+        label: { formatter: `critical ${fmt(d.critical_lm, 3)}`, position: "end" } } }] },
+  { height: 70 + 30 * rows.length, label: "effect ranking" });
+}
+
+// The strength the data ask for, on the plausible range's scale (0 = low end, 1 = high end).
+function strengthBar(r) {
+  const [lo, hi] = r.plausible_range || [null, null];
+  if (!Number.isFinite(lo) || !Number.isFinite(hi) || !Number.isFinite(r.strength)) return fmt(r.strength);
+  const frac = (r.strength - lo) / (hi - lo), pos = Math.max(0, Math.min(1, frac));
+  return h("span", { className: "strength", title: `plausible ${fmt(lo)} – ${fmt(hi)} ${r.unit}` },
+    h("span", { className: "range" }, h("span", { className: `mark ${frac < 0 || frac > 1 ? "outside" : ""}`, style: `left:${(100 * pos).toFixed(1)}%` })),
+    ` ${fmt(r.strength, 3)} ${r.unit === "1" ? "" : r.unit} (${fmt(lo)}–${fmt(hi)})`);
+}
+
+function addEffectForm(campaignId, r, nextNumber, enabled, onAdded) {
+  const [lo, hi] = r.plausible_range || ["", ""];
+  const form = h("form", { className: "add-effect", "data-effect": r.effect, novalidate: true },
+    h("div", { className: "form-errors" }),
+    h("label", {}, "strength low", h("input", { name: "low", type: "number", step: "any", value: lo, "data-loc": "strength_range" })),
+    h("label", {}, "high", h("input", { name: "high", type: "number", step: "any", value: hi, "data-loc": "strength_range" })),
+    h("button", { type: "submit", disabled: !enabled, title: enabled ? "" : "the campaign must be completed and this its latest iteration" },
+      `Add ${r.title} and run iteration ${nextNumber}`));
+  form.addEventListener("submit", async (event) => {
+    event.preventDefault();
+    const data = new FormData(form);
+    const body = { add_effect: r.effect, strength_range: [Number(data.get("low")), Number(data.get("high"))] };
+    const done = await submitForm(form, () => api(`/campaigns/${campaignId}/iterations`, { method: "POST", body }));
+    if (done) onAdded(done);
+  });
+  return form;
+}
+
+function fingerprints(f) {
+  const cols = f.columns;
+  const cell = (v) => h("span", { className: `fp fp-${v === "" ? "none" : v.includes("+") ? "up" : v.includes("-") ? "down" : "zero"}` }, v === "" ? "·" : v);
+  return h("div", { className: "scroll" }, table(["", ...cols.map((c) => c.replaceAll("_", " "))],
+    [[h("b", {}, "observed"), ...cols.map((c) => cell(f.observed[c] ?? ""))],
+      ...Object.entries(f.effects).map(([name, row]) => [name, ...cols.map((c) => cell(row[c] ?? ""))])]));
+}
+
+// canAdd: the campaign is completed and this is its latest iteration.
+export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded }) {
+  const groups = d.alias_groups || [];
+  const suggested = d.ranking.filter((r) => r.significant);
+  return h("section", { className: "card diagnosis" }, h("h3", {}, `Diagnosis: ${d.verdict}`),
+    h("p", {}, d.message),
+    h("div", { className: "side-by-side" },
+      h("div", {}, rankingChart(d)),
+      h("div", {}, h("h4", {}, "Fingerprints (sign of the change each effect makes)"), fingerprints(d.fingerprints))),
+    h("div", { className: "scroll" }, table(["Effect", "LM", "Holm p", "Explained", "Strength (plausible range)", "Alias group", ""],
+      d.ranking.map((r) => [
+        h("span", {}, h("span", { className: "swatch", style: `background:${colourOf(r)}` }), ` ${r.title} `, h("code", {}, r.effect)),
+        r.lm, r.p_holm, `${fmt(100 * r.explained, 3)} %`, strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
+        r.significant ? addEffectForm(campaignId, r, nextNumber, canAdd, onAdded) : h("span", { className: "muted" }, "not significant")]))),
+    groups.length ? h("div", {}, h("h4", {}, "Alias groups: effects the data cannot tell apart"),
+      h("ul", {}, groups.map((g) => h("li", {}, h("b", {}, `group ${g.group}: ${g.effects.join(", ")}. `), g.message || "",
+        h("ul", {}, (g.separators || []).map((s) => h("li", {}, `${s.effects.join(" vs ")}: measure ${s.separating_measurement} (cos ${fmt(s.cos, 3)})`))))))) : "",
+    (d.measure_next || []).length ? h("p", {}, h("b", {}, "Measure next: "), d.measure_next.join("; ")) : "",
+    suggested.length ? "" : h("p", { className: "muted" }, "No effect is significant: nothing to add."));
+}

@@ -1,0 +1,70 @@
+// Across iterations: the weighted error (chi2 per degree of freedom) stacked by test, with the noise
+// band and each step labelled with the effect added; and each parameter's optimum against its
+// bounds and prior. From GET /campaigns/{id}/history and the iterations' configurations.
+import { fmt, h, table } from "./core.js";
+import { TEST_COLOURS, axis, band, chart, errorBars } from "./plot.js";
+
+const stepLabel = (it) => `${it.number}${it.added_effect ? " + " + it.added_effect.join(", ") : ""}`;
+
+function errorChart(iterations) {
+  const tests = [...new Set(iterations.flatMap((it) => Object.keys(it.per_test || {})))];
+  const labels = iterations.map(stepLabel);
+  // the noise band of the last iteration (it narrows as dof grows; each is in the table)
+  const last = iterations[iterations.length - 1];
+  const series = tests.map((t, k) => ({
+    type: "bar", stack: "chi2", name: t, barMaxWidth: 60, itemStyle: { color: TEST_COLOURS[t] },
+    data: iterations.map((it) => (it.dof ? (it.per_test?.[t] ?? 0) / it.dof : null)),
+    ...(k === tests.length - 1 ? {
+      label: { show: true, position: "top", formatter: (p) => `χ²/dof ${fmt(iterations[p.dataIndex].chi2_per_dof, 3)}` },
+      markArea: last?.noise_band ? band(Math.max(0, last.noise_band[0]), last.noise_band[1], "rgba(7,148,85,0.12)", "noise band") : undefined,
+    } : {}),
+  }));
+  return chart({ title: { text: "Error history: χ²/dof per iteration, by test" }, legend: { top: 2, right: 6 },
+    grid: { left: 56, right: 14, top: 40, bottom: 52 },
+    xAxis: { type: "category", data: labels, name: "iteration (+ effect added)", nameLocation: "middle", nameGap: 30 },
+    yAxis: axis("χ² / dof (-)", { min: 0, scale: false }), series }, { height: 300, label: "error history" });
+}
+
+function traceChart(name, rows) {
+  // rows: [{number, value, std, low, high, prior}]
+  const series = [
+    { type: "line", name: "optimum", data: rows.map((r) => [r.number, r.value]), symbolSize: 8, itemStyle: { color: "#1f5fa8" }, z: 3 },
+    errorBars("±2 sd", rows.filter((r) => Number.isFinite(r.std)).map((r) => [r.number, r.value, null, null, r.value - 2 * r.std, r.value + 2 * r.std]), "#1f5fa8"),
+    { type: "line", name: "bounds", step: "middle", data: rows.map((r) => [r.number, r.low]), showSymbol: false, lineStyle: { color: "#98a2b3", type: "dashed" } },
+    { type: "line", name: "bounds ", step: "middle", data: rows.map((r) => [r.number, r.high]), showSymbol: false, lineStyle: { color: "#98a2b3", type: "dashed" } },
+  ];
+  const prior = rows.find((r) => r.prior)?.prior;
+  if (prior) series[0].markArea = band(prior.value - 2 * prior.uncertainty, prior.value + 2 * prior.uncertainty, "rgba(122,90,248,0.12)", "prior ±2u");
+  const numbers = rows.map((r) => r.number);
+  return chart({ title: { text: name, textStyle: { fontSize: 11 } }, grid: { left: 64, right: 10, top: 30, bottom: 36 },
+    xAxis: axis("iteration", { min: Math.min(...numbers) - 0.5, max: Math.max(...numbers) + 0.5, scale: false,
+      axisLabel: { customValues: numbers, formatter: (v) => String(v) }, axisTick: { customValues: numbers } }),
+    yAxis: axis(""), series }, { height: 200, label: `trace ${name}` });
+}
+
+function parameterTraces(history, iterations, priors) {
+  const names = [...new Set(history.iterations.flatMap((it) => Object.keys(it.optimum || {})))];
+  const factorsOf = new Map(iterations.map((it) => [it.number, Object.fromEntries((it.parameters?.factors || []).map((f) => [f.name, f]))]));
+  return names.map((name) => traceChart(name, history.iterations.filter((it) => it.optimum && name in it.optimum).map((it) => {
+    const f = factorsOf.get(it.number)?.[name];
+    return { number: it.number, value: it.optimum[name], std: it.parameter_std?.[name], low: f?.low, high: f?.high,
+      prior: priors.find((p) => p.parameter === name) };
+  })));
+}
+
+export function historySection(history, iterations, priors) {
+  const its = history.iterations;
+  if (!its.length) return "";
+  return h("section", { className: "card history" }, h("h3", {}, "Across iterations"),
+    h("div", { className: "side-by-side" }, h("div", {}, errorChart(its)),
+      h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (lack of fit)", "Verdict", "Next", "Automatic"],
+        its.map((it) => [String(it.number), it.effects.length ? it.effects.join(", ") : "none",
+          h("span", { className: "chi2dof", "data-iteration": String(it.number) }, fmt(it.chi2_per_dof, 4)),
+          it.noise_band ? `${fmt(Math.max(0, it.noise_band[0]), 2)} – ${fmt(it.noise_band[1], 2)}` : "–",
+          it.lack_of_fit_p, it.verdict || "–",
+          it.effect_added_next ? `+ ${it.effect_added_next.join(", ")}` : "–",
+          // automatic mode: whether the effect this iteration added was kept (calibration.decisions)
+          it.decision ? h("span", { className: it.decision.accepted ? "good" : "bad" }, `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`) : "–"])))),
+    h("h4", {}, "Parameters: optimum ±2 sd against the design box (dashed) and priors"),
+    h("div", { className: "panels small" }, parameterTraces(history, iterations, priors)));
+}

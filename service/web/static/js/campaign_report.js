@@ -1,0 +1,106 @@
+// One iteration's report: the verdict (printed once), the targets as a parity plot per test, the
+// standardised residual strip with its +-2 band, reachability against its cutoff, and the table.
+import { condition, fmt, h, status, wideTable } from "./core.js";
+import { COLOURS, TEST_COLOURS, axis, band, chart, errorBars } from "./plot.js";
+
+export const targetLabel = (r) => `${r.test} · ${r.quantity}${Object.keys(r.condition || {}).length ? " @ " + condition(r.condition) : ""}`;
+const modelled = (report) => report.targets.filter((r) => r.status === "modelled" && Number.isFinite(r.measured));
+// sigma of a residual: the measurement's and the simulator's standard uncertainties together
+const sigma = (r) => Math.hypot(r.measured_uncertainty || 0, r.simulator_sd || 0);
+
+export function verdictSection(report) {
+  const lof = report.lack_of_fit;
+  const failing = (report.tests || []).filter((t) => t.fails).map((t) => t.test);
+  return h("section", { className: "card verdict" },
+    h("h3", {}, "Verdict: ", h("span", { className: `status verdict-${(report.verdict || "").replaceAll(" ", "_")}` }, report.verdict)),
+    report.meaning ? h("p", {}, report.meaning) : "",
+    lof ? h("p", {}, h("b", {}, "Model against measurements: "),
+      `χ²/dof ${fmt(lof.chi2_per_dof, 3)} on ${lof.dof} dof (noise band ${fmt(lof.noise_band[0], 2)} – ${fmt(lof.noise_band[1], 2)}), p = ${fmt(lof.p_value, 3)}`,
+      failing.length ? h("span", { className: "bad" }, ` · failing tests: ${failing.join(", ")}`) : "") : "",
+    ...((report.conflicts?.active_bounds) || []).map((b) => h("p", { className: "bad" }, `${b.parameter} is pinned at its ${b.side} bound: ${b.meaning}`)),
+    ...((report.conflicts?.priors_pulled) || []).map((p) => h("p", { className: "bad" }, p.meaning)),
+    report.surrogate_check ? h("p", { className: "muted" }, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${report.surrogate_check.reason}`) : "");
+}
+
+// Parity per test. Quantities of one test have different units, so each is divided by its own
+// mean measured value (over its conditions): the diagonal is "model = measurement" for all of them,
+// and the bars are +-2 sigma on the same scale.
+function parityPanel(test, rows) {
+  const byQuantity = new Map();
+  for (const r of rows) { if (!byQuantity.has(r.quantity)) byQuantity.set(r.quantity, []); byQuantity.get(r.quantity).push(r); }
+  const series = [];
+  let lo = Infinity, hi = -Infinity;
+  [...byQuantity.entries()].forEach(([quantity, group], k) => {
+    const ref = group.reduce((s, r) => s + Math.abs(r.measured), 0) / group.length || 1;
+    const colour = COLOURS[k % COLOURS.length];
+    const points = group.map((r) => {
+      const model = Number.isFinite(r.confirmed) ? r.confirmed : r.predicted;
+      const x = r.measured / ref, y = model / ref, ux = (2 * (r.measured_uncertainty || 0)) / ref, uy = (2 * sigma(r)) / ref;
+      lo = Math.min(lo, x - ux, y - uy); hi = Math.max(hi, x + ux, y + uy);
+      return { value: [x, y, x - ux, x + ux, y - uy, y + uy], name: targetLabel(r) };
+    });
+    series.push({ type: "scatter", name: quantity, data: points, symbolSize: 9, itemStyle: { color: colour }, z: 3,
+      tooltip: { formatter: (p) => `${p.name}<br>measured/ref ${fmt(p.value[0], 3)}, model/ref ${fmt(p.value[1], 3)}` } });
+    series.push(errorBars(`${quantity} ±2σ`, points.map((p) => p.value), colour));
+  });
+  const pad = (hi - lo) * 0.08 || 0.05;
+  const [a, b] = [lo - pad, hi + pad];
+  series.push({ type: "line", name: "model = measured", data: [[a, a], [b, b]], showSymbol: false, silent: true,
+    lineStyle: { color: "#98a2b3", type: "dashed", width: 1 }, z: 0 });
+  return chart({ title: { text: `Parity: ${test}` }, legend: { top: 20, left: 4, type: "scroll", textStyle: { fontSize: 10 }, data: [...byQuantity.keys()] },
+    grid: { left: 56, right: 14, top: 60, bottom: 44 },
+    xAxis: axis("measured / mean measured (-)", { min: a, max: b }), yAxis: axis("model / mean measured (-)", { min: a, max: b }), series },
+  { height: 300, label: `parity ${test}` });
+}
+
+function residualStrip(rows) {
+  const labels = rows.map(targetLabel);
+  const data = rows.map((r, i) => ({ value: [i, r.standardised_residual], name: labels[i], itemStyle: { color: TEST_COLOURS[r.test] || COLOURS[0] } }));
+  const predicted = rows.map((r, i) => ({ value: [i, r.predicted_standardised_residual], name: labels[i] }));
+  const extreme = Math.max(3, ...rows.flatMap((r) => [Math.abs(r.standardised_residual || 0), Math.abs(r.predicted_standardised_residual || 0)])) * 1.1;
+  return chart({ title: { text: "Standardised residuals (model − measured) / σ" },
+    legend: { top: 2, right: 6, data: ["confirmation run", "surface prediction"] },
+    grid: { left: 56, right: 14, top: 36, bottom: 110 },
+    xAxis: { type: "category", data: labels, axisLabel: { rotate: 35, fontSize: 10, interval: 0 } },
+    yAxis: axis("residual (σ)", { min: -extreme, max: extreme }),
+    series: [
+      { type: "scatter", name: "confirmation run", data, symbolSize: 10, z: 3, markArea: band(-2, 2, "rgba(7,148,85,0.10)", "±2σ"),
+        markLine: { silent: true, symbol: "none", data: [{ yAxis: 0 }], lineStyle: { color: "#667085" }, label: { show: false } } },
+      { type: "scatter", name: "surface prediction", data: predicted, symbol: "emptyCircle", symbolSize: 8, itemStyle: { color: "#667085" } },
+    ] }, { height: 320, label: "residual strip" });
+}
+
+function reachabilityBars(rows, cutoff) {
+  const labels = rows.map(targetLabel);
+  return chart({ title: { text: "Reachability: closest the design box gets (min |z|)" },
+    grid: { left: 210, right: 30, top: 34, bottom: 40 },
+    yAxis: { type: "category", data: labels, inverse: true, axisLabel: { fontSize: 10, width: 200, overflow: "truncate" } },
+    xAxis: axis("min |standardised residual| over the box (σ)", { min: 0, scale: false }),
+    series: [{ type: "bar", name: "reachability", barMaxWidth: 16,
+      data: rows.map((r) => ({ value: r.reachability, itemStyle: { color: r.reachable ? "#079455" : "#d92d20" } })),
+      markLine: { silent: true, symbol: "none", data: [{ xAxis: cutoff, name: "cutoff" }], lineStyle: { color: "#b42318", type: "dashed" },
+        label: { formatter: `cutoff ${cutoff}`, position: "end" } } }] },
+  { height: 60 + 26 * rows.length, label: "reachability" });
+}
+
+export function targetsSection(report) {
+  const rows = modelled(report);
+  const tests = [...new Set(rows.map((r) => r.test))];
+  const cutoff = report.reachable_limit ?? 3;
+  return h("section", { className: "card" }, h("h3", {}, "Targets"),
+    h("div", { className: "panels" }, tests.map((t) => parityPanel(t, rows.filter((r) => r.test === t)))),
+    h("p", { className: "muted" }, "Dots: confirmation run at the optimum (the surface's prediction where it has none); horizontal bars ±2 u of the measurement, vertical ±2σ of the residual."),
+    rows.length ? residualStrip(rows) : "",
+    rows.some((r) => Number.isFinite(r.reachability)) ? reachabilityBars(rows.filter((r) => Number.isFinite(r.reachability)), cutoff) : "",
+    wideTable(["Test", "Quantity", "Condition", "Measured ± u", "Predicted [95% PI]", "Confirmed", "z", "Reachability", "Status"],
+      report.targets.map((r) => {
+        const fails = Number.isFinite(r.standardised_residual) && Math.abs(r.standardised_residual) > 2;
+        return [r.test, r.quantity, condition(r.condition),
+          r.measured_uncertainty ? `${fmt(r.measured)} ± ${fmt(r.measured_uncertainty, 3)} ${r.unit || ""}${r.uncertainty_assumed ? " (assumed)" : ""}` : fmt(r.measured),
+          r.predicted !== undefined ? `${fmt(r.predicted)} [${fmt(r.prediction_interval?.[0])}, ${fmt(r.prediction_interval?.[1])}]` : "–",
+          r.confirmed !== undefined && r.confirmed !== null ? h("span", { className: r.confirmation_in_interval === false ? "bad" : "" }, fmt(r.confirmed)) : "–",
+          r.standardised_residual !== undefined ? h("span", { className: fails ? "bad target-fails" : "target-ok" }, fmt(r.standardised_residual, 3)) : "–",
+          r.reachability !== undefined ? h("span", { className: r.reachable ? "good" : "bad" }, `${fmt(r.reachability, 3)} ${r.reachable ? "reachable" : "out of reach"}`) : "–",
+          status(r.status)];
+      })));
+}
