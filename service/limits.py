@@ -52,15 +52,24 @@ class Cost:
 
 def _preset(spec: JobSpec, field_prefix: str) -> Fidelity:
     try:
-        return fidelity(spec.fidelity, spec.parameters.particle_radius_m)
+        return fidelity(spec.fidelity, spec.parameters.particle_radius_m, spec.parameters.clump_aspect_ratio)
     except ValueError as exc:
-        raise Invalid(str(exc), f"{field_prefix}parameters.particle_radius_m") from None
+        field = "clump_aspect_ratio" if spec.parameters.clump_aspect_ratio != 1.0 else "particle_radius_m"
+        raise Invalid(str(exc), f"{field_prefix}parameters.{field}") from None
 
 
 def _count(solid_m3: float, margin: float, shapes: tuple[ShapeFraction, ...]) -> int:
-    mean_volume_m3 = sum(
-        s.volume_fraction * 4.0 / 3.0 * math.pi * (0.5 * (s.radius_min_m + s.radius_max_m)) ** 3 for s in shapes)
-    return int(math.ceil(solid_m3 * margin / mean_volume_m3))
+    """Spheres of the packing (what a step costs): bodies from the solids volume, times the spheres of
+    each body. A shape with its own template (the elongated screening clumps) counts its template's
+    volume and spheres; the others count as one sphere of their mean radius."""
+    spheres_per_m3 = 0.0
+    for s in shapes:
+        if s.template is not None:
+            volume, spheres = s.template.volume_m3, s.template.n_spheres
+        else:
+            volume, spheres = 4.0 / 3.0 * math.pi * (0.5 * (s.radius_min_m + s.radius_max_m)) ** 3, 1
+        spheres_per_m3 += s.volume_fraction / volume * spheres
+    return int(math.ceil(solid_m3 * margin * spheres_per_m3))
 
 
 def _tests(spec: JobSpec) -> list[str]:
