@@ -17,7 +17,6 @@ limit mu_r R* fn is checked by the stopping distance in test_effects.py.
 import math
 
 import numpy as np
-import pytest
 from scipy.linalg import expm
 
 from engine.config import EffectSpec, MaterialSpec, PlaneGeom, SimulationConfig, WallSpec
