@@ -160,7 +160,12 @@ def campaign_next(args) -> int:
     if args.add_effect:
         body["add_effect"] = args.add_effect
     if args.strength_range:
-        body["strength_range"] = [float(x) for x in args.strength_range.split(":")]
+        try:
+            body["strength_range"] = [float(x) for x in args.strength_range.split(":")]
+        except ValueError as exc:
+            raise CliError(f"--strength-range {args.strength_range!r}: expected LOW:HIGH ({exc})") from exc
+    if args.proposed_design:
+        body["proposed_design"] = True
     c = _call(args, "POST", f"/campaigns/{args.id}/iterations", body=body)
     return _emit(args, c, _status_text(c))
 
@@ -286,6 +291,8 @@ def register(subparsers) -> None:
     nxt.add_argument("id", type=int)
     nxt.add_argument("--add-effect", help="a candidate from GET /api/v1/effects, e.g. rolling_epsd2")
     nxt.add_argument("--strength-range", help="LOW:HIGH of the added effect's strength (SI)")
+    nxt.add_argument("--proposed-design", action="store_true",
+                     help="run the design the surface check proposed (narrowed factorial or axial runs)")
 
     schedule = subparsers.add_parser("schedule", help="cron schedules that start campaigns")
     ssub = schedule.add_subparsers(dest="schedule_command", required=True)

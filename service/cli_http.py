@@ -101,6 +101,9 @@ def guard(func):
         except CliError as exc:
             print(f"demcal: {exc}", file=sys.stderr)
             return 2
+        except BrokenPipeError:  # the reader left early (``| head``): not an error of ours
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 0
     return run
 
 

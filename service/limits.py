@@ -52,15 +52,24 @@ class Cost:
 
 def _preset(spec: JobSpec, field_prefix: str) -> Fidelity:
     try:
-        return fidelity(spec.fidelity, spec.parameters.particle_radius_m)
+        return fidelity(spec.fidelity, spec.parameters.particle_radius_m, spec.parameters.clump_aspect_ratio)
     except ValueError as exc:
-        raise Invalid(str(exc), f"{field_prefix}parameters.particle_radius_m") from None
+        field = "clump_aspect_ratio" if spec.parameters.clump_aspect_ratio != 1.0 else "particle_radius_m"
+        raise Invalid(str(exc), f"{field_prefix}parameters.{field}") from None
 
 
 def _count(solid_m3: float, margin: float, shapes: tuple[ShapeFraction, ...]) -> int:
-    mean_volume_m3 = sum(
-        s.volume_fraction * 4.0 / 3.0 * math.pi * (0.5 * (s.radius_min_m + s.radius_max_m)) ** 3 for s in shapes)
-    return int(math.ceil(solid_m3 * margin / mean_volume_m3))
+    """Spheres of the packing (what a step costs): bodies from the solids volume, times the spheres of
+    each body. A shape with its own template (the elongated screening clumps) counts its template's
+    volume and spheres; the others count as one sphere of their mean radius."""
+    spheres_per_m3 = 0.0
+    for s in shapes:
+        if s.template is not None:
+            volume, spheres = s.template.volume_m3, s.template.n_spheres
+        else:
+            volume, spheres = 4.0 / 3.0 * math.pi * (0.5 * (s.radius_min_m + s.radius_max_m)) ** 3, 1
+        spheres_per_m3 += s.volume_fraction / volume * spheres
+    return int(math.ceil(solid_m3 * margin * spheres_per_m3))
 
 
 def _tests(spec: JobSpec) -> list[str]:
@@ -178,16 +187,16 @@ def check_limits(spec: JobSpec, settings: Settings, field_prefix: str = "") -> C
     return cost
 
 
-def design_runs(n_factors: int, n_generators: int, replicates: int, centre_runs: int) -> int:
-    """Runs of a two-level design, computed before it is built: 2^(k-p) x replicates + centre runs."""
-    return 2 ** max(0, n_factors - n_generators) * replicates + centre_runs
+def design_runs(n_factors: int, n_generators: int, replicates: int, centre_runs: int, axial: bool = False) -> int:
+    """Runs of a design, computed before it is built: 2^(k-p) x replicates + centre runs (+ 2k axial)."""
+    return 2 ** max(0, n_factors - n_generators) * replicates + centre_runs + (2 * n_factors if axial else 0)
 
 
 def check_design_size(n_factors: int, n_generators: int, replicates: int, centre_runs: int,
-                      settings: Settings, field_prefix: str = "", design_prefix: str = "") -> int:
+                      settings: Settings, field_prefix: str = "", design_prefix: str = "", axial: bool = False) -> int:
     """A design (preview or campaign) larger than ``max_design_runs`` is refused before it is built: one
     15-factor, 10-replicate preview used 2 GB and 20 s and answered 133 MB."""
-    runs = design_runs(n_factors, n_generators, replicates, centre_runs)
+    runs = design_runs(n_factors, n_generators, replicates, centre_runs, axial)
     if runs > settings.max_design_runs:
         raise Invalid(f"the design has {runs} runs, over the limit of {settings.max_design_runs} "
                       "(use a fractional design, fewer factors or replicates, or DEMCAL_MAX_DESIGN_RUNS)",
@@ -209,7 +218,7 @@ def check_campaign_limits(config, settings: Settings, field_prefix: str = "") ->
 
     design = config.design
     check_design_size(len(config.factors), len(design.generators or ()), design.replicates, design.centre_runs,
-                      settings, field_prefix, "design.")
+                      settings, field_prefix, "design.", axial=design.axial != "none")
     built = build_design(config.factors, design, config.seed, field_prefix=f"{field_prefix}design.")
     options = TestOptions.model_validate(config.options)
     seen: set[tuple] = set()

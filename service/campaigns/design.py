@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from doe.designs import Design, fractional_factorial, full_factorial
+from doe.designs import Design, augment_ccd, fractional_factorial, full_factorial
 from doe.factors import DoeError
 
 from service.campaigns.schemas import DesignIn, FactorIn
@@ -15,10 +15,14 @@ def build_design(factors: list[FactorIn], design: DesignIn, seed: int, field_pre
     raw = [{"name": f.name, "low": f.low, "high": f.high, "unit": f.unit, "log": f.log} for f in factors]
     try:
         if design.type == "full":
-            return full_factorial(raw, center_runs=design.centre_runs, replicates=design.replicates,
-                                  seed=seed, randomize=design.randomise)
-        return fractional_factorial(raw, design.generators, center_runs=design.centre_runs,
-                                    replicates=design.replicates, seed=seed, randomize=design.randomise)
+            built = full_factorial(raw, center_runs=design.centre_runs, replicates=design.replicates,
+                                   seed=seed, randomize=design.randomise)
+        else:
+            built = fractional_factorial(raw, design.generators, center_runs=design.centre_runs,
+                                         replicates=design.replicates, seed=seed, randomize=design.randomise)
+        if design.axial == "face":  # the factorial's centre runs serve the composite design too
+            built = augment_ccd(built, "face", 0)
+        return built
     except DoeError as exc:
         field = field_prefix + ("generators" if design.type == "fractional" else "type")
         raise Invalid(str(exc), field) from exc

@@ -9,7 +9,7 @@ crash finds the job it already queued instead of queuing a twin.
 
 Phases of an iteration: design -> batteries -> analysis -> confirmation -> polish (Gauss-Newton on the
 batteries, service.campaigns.polish) -> report -> done, and when
-the report's verdict is not "calibrated": report -> diagnosis (a second baseline battery at the optimum,
+the report finds misfit (lack of fit, or a target out of reach): report -> diagnosis (a second baseline battery at the optimum,
 then each candidate effect at the optimum's two seeds) -> diagnosed -> done, the ranking stored in the
 report. In automatic mode (service.campaigns.automatic) a done iteration either configures the next
 one, with the indicated effect as a factor, or records why the loop stopped.

@@ -55,6 +55,9 @@ class DesignIn(BaseModel):
     centre_runs: int = Field(3, ge=0, le=50, description="centre replicates, each with its own seed")
     replicates: int = Field(1, ge=1, le=10)
     randomise: bool = True
+    axial: Literal["none", "face"] = Field(
+        "none", description="'face': add face-centred axial runs (2 per factor), making a central composite "
+        "design whose fit has squared terms (what the surface check proposes after curvature or lack of fit)")
 
     @model_validator(mode="after")
     def _generators(self) -> "DesignIn":
@@ -246,6 +249,10 @@ class IterationIn(BaseModel):
         "factor over its plausible range (or strength_range), keeping the previous factors",
     )
     strength_range: tuple[float, float] | None = Field(None, description="low, high of the added effect's strength")
+    proposed_design: bool = Field(
+        False, description="run the design the last iteration's surface check proposed (report.surrogate_check: "
+        "a narrowed factorial about the optimum, or face-centred axial runs for a central composite design)",
+    )
 
     @field_validator("add_effect")
     @classmethod
@@ -265,4 +272,6 @@ class IterationIn(BaseModel):
                 raise ValueError("strength_range: low must be below high")
         if self.add_effect is not None and self.factors is not None:
             raise ValueError("give either factors or add_effect, not both")
+        if self.proposed_design and (self.factors is not None or self.design is not None):
+            raise ValueError("proposed_design sets the factors' ranges or the design itself: give neither with it")
         return self

@@ -13,7 +13,7 @@ import pytest
 from engine.config import EffectSpec, MaterialSpec, PlaneGeom, SimulationConfig, WallSpec
 from engine.simulation import Simulation
 
-from engine_helpers import G, sphere_mass
+from engine_helpers import sphere_mass
 
 R = 0.01
 RHO = 2500.0

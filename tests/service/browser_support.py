@@ -22,7 +22,7 @@ from urllib.parse import urlparse
 
 import httpx
 
-from service_net import free_port
+from service_net import free_port, wait_healthy
 
 CHROMIUM_CANDIDATES = ("/usr/bin/chromium", "/usr/bin/chromium-browser")
 REQUIRE_ENV = "DEMCAL_REQUIRE_BROWSER"
@@ -71,18 +71,11 @@ def start_service(data_dir: Path, workers: int = 1) -> LiveService:
     proc = subprocess.Popen([sys.executable, "-m", "service.cli", "serve", "--port", str(port), "--workers", str(workers)],
                             env=env, cwd=data_dir)
     base_url = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 90.0
-    while True:
-        if proc.poll() is not None:
-            raise RuntimeError(f"demcal serve exited with {proc.returncode}")
-        try:
-            if httpx.get(f"{base_url}/api/v1/health", timeout=1.0).status_code == 200:
-                break
-        except httpx.HTTPError:
-            pass
-        if time.monotonic() > deadline:
-            stop_service(proc)
-            raise TimeoutError("demcal serve did not become healthy in 90 s")
+    try:
+        wait_healthy(base_url, proc)
+    except (RuntimeError, TimeoutError):
+        stop_service(proc)
+        raise
         time.sleep(0.1)
     return LiveService(base_url, database_url, proc, data_dir)
 

@@ -5,10 +5,8 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
-import httpx
 import pytest
 from fastapi.testclient import TestClient
 
@@ -18,7 +16,7 @@ from service.db import make_engine, make_session_factory
 from service.migrate import upgrade
 
 
-from service_net import LOOPBACK_PEER, free_port  # noqa: F401  (re-exported for older imports)
+from service_net import LOOPBACK_PEER, free_port, wait_healthy  # noqa: F401  (re-exported for older imports)
 
 
 @pytest.fixture
@@ -60,19 +58,6 @@ def demcal_cmd(*args: str) -> list[str]:
     return [sys.executable, "-m", "service.cli", *args]
 
 
-def wait_healthy(base_url: str, proc: subprocess.Popen, timeout_s: float = 90.0) -> None:
-    """Generous: a fresh database is migrated before the port opens, and CI machines are shared."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if proc.poll() is not None:
-            raise RuntimeError(f"server exited with {proc.returncode}")
-        try:
-            if httpx.get(f"{base_url}/api/v1/health", timeout=1.0).status_code == 200:
-                return
-        except httpx.HTTPError:
-            pass
-        time.sleep(0.1)
-    raise TimeoutError("server did not become healthy")
 
 
 def stop_process(proc: subprocess.Popen, timeout_s: float = 15.0) -> None:

@@ -68,3 +68,61 @@ def test_automatic_mode_without_diagnosis_is_refused(s2):
     body = campaign_body(thesis_material_id(client), automatic=True, diagnose=False)
     response = client.post(f"{API}/campaigns", json=body)
     assert response.status_code == 422 and "automatic" in response.text
+
+
+def test_the_design_the_surface_check_proposes_runs_as_the_next_iteration(s2):
+    """Friction from 0.05 to 1: the friction angle saturates inside the box, a two-level surface
+    misses the confirmation, and the check proposes face-centred axial runs; the next iteration runs
+    that central composite design and fits squared terms."""
+    client, app, settings = s2
+    factors = [{"name": "particle_density_kg_m3", "low": 2300.0, "high": 2700.0},
+               {"name": "particle_stiffness_n_per_m", "low": 1.0e6, "high": 3.0e6},
+               {"name": "friction_pp", "low": 0.05, "high": 1.0}]
+    body = campaign_body(thesis_material_id(client), factors=factors, polish_steps=0, diagnose=False)
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    check = client.get(f"{API}/campaigns/{cid}/report").json()["surrogate_check"]
+    assert check["verdict"] == "not confirmed" and check["next_design_kind"] == "augment_ccd"
+
+    both = client.post(f"{API}/campaigns/{cid}/iterations", json={"proposed_design": True, "factors": factors})
+    assert both.status_code == 422 and "proposed_design" in both.text
+    response = client.post(f"{API}/campaigns/{cid}/iterations", json={"proposed_design": True})
+    assert response.status_code == 201, response.text
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    second = client.get(f"{API}/campaigns/{cid}/iterations").json()[1]
+    design_runs = [r for r in second["runs"] if r["kind"] == "design"]
+    assert len(design_runs) == 8 + 3 + 2 * 3  # 2^3, centre runs, two axial runs per factor
+    axial = [r for r in design_runs if sum(abs(v) for v in r["coded"].values()) == 1.0]
+    assert len(axial) == 6
+    terms = client.get(f"{API}/campaigns/{cid}/models").json()["models"]["dst__friction_angle_deg"]["fit"]["terms"]
+    assert any("^2" in t or "**2" in t for t in terms), terms
+
+
+def test_no_design_is_proposed_when_the_surfaces_were_confirmed(s2):
+    client, app, settings = s2
+    cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client), diagnose=False)).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    response = client.post(f"{API}/campaigns/{cid}/iterations", json={"proposed_design": True})
+    assert response.status_code == 409 and "proposes no design" in response.text
+
+
+def test_a_proposed_narrowed_factorial_takes_the_proposed_ranges():
+    """The factors keep their names, units and scales; only the levels become the proposal's."""
+    from types import SimpleNamespace
+
+    from service.campaigns.store import with_proposed_design
+
+    config = {"factors": [{"name": "friction_pp", "low": 0.3, "high": 1.0, "unit": "", "log": False},
+                          {"name": "particle_stiffness_n_per_m", "low": 1e6, "high": 3e6, "unit": "N/m", "log": True}],
+              "design": {"type": "full", "centre_runs": 3}}
+    proposal = {"factors": [{"name": "friction_pp", "low": 0.6, "high": 0.95},
+                            {"name": "particle_stiffness_n_per_m", "low": 1.5e6, "high": 2.5e6}]}
+    report = {"surrogate_check": {"verdict": "not confirmed", "next_design_kind": "narrowed_factorial",
+                                  "next_design": proposal}}
+    campaign = SimpleNamespace(iterations=[SimpleNamespace(number=1, report=report)])
+    out = with_proposed_design(config, campaign)
+    assert [(f["name"], f["low"], f["high"], f["log"]) for f in out["factors"]] == [
+        ("friction_pp", 0.6, 0.95, False), ("particle_stiffness_n_per_m", 1.5e6, 2.5e6, True)]
+    assert out["design"] == config["design"]

@@ -225,3 +225,14 @@ def test_particle_estimate_matches_appendix_a():
 
     below_level = estimated_particles(JobSpec()) / SCREENING.fill_margin
     assert abs(below_level - 840) / 840 < 0.10
+
+
+def test_elongated_clumps_cost_two_spheres_each():
+    """The screening clumps have the sphere's volume (engine/lab/shape.py): as many bodies fill the box,
+    each of two spheres, and a step's cost follows the spheres."""
+    from engine.lab.spec import JobSpec, MicroParameters
+    from service.limits import estimated_particles
+
+    spheres = estimated_particles(JobSpec())
+    clumps = estimated_particles(JobSpec(parameters=MicroParameters(clump_aspect_ratio=1.5)))
+    assert abs(clumps - 2 * spheres) <= 2

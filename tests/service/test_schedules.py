@@ -5,7 +5,7 @@ from datetime import datetime, timedelta, timezone
 
 import pytest
 from conftest_s2 import (API, campaign_body, editable_thesis_copy, error_loc, running_app, s2,  # noqa: F401
-                         s2_settings, thesis_material_id)
+                         run_to_end, s2_settings, thesis_material_id)
 from service.models.campaign import Campaign
 from service.models.schedule import Schedule
 from service.schedules.cron import CronError, parse_cron
@@ -212,3 +212,19 @@ def test_schedule_api_crud_and_errors(s2):
     assert bad_preview.status_code == 422 and error_loc(bad_preview) == ["query", "expr"]
     assert client.delete(f"{API}/schedules/{created['id']}").status_code == 204
     assert client.get(f"{API}/schedules").json() == []
+
+
+def test_a_scheduled_campaign_can_run_the_loop_unattended(s2):
+    """Automatic mode in a schedule's template: the nightly campaign diagnoses, adds the indicated
+    effect and stops with a reason, with nobody at the keyboard."""
+    client, app, settings = s2
+    body = {"name": "nightly", "cron": "0 2 * * *",
+            "template": campaign_body(thesis_material_id(client), targets=None, automatic=True, max_iterations=2)}
+    response = client.post(f"{API}/schedules", json=body)
+    assert response.status_code == 201, response.text
+    _set_next(app, response.json()["id"], datetime(2026, 11, 21, 2, 0))
+    (cid,) = Scheduler(app.state.session_factory, settings).tick(datetime(2026, 11, 21, 2, 0, 1))
+    final = run_to_end(client, app, settings, cid, max_rounds=60)
+    assert final["status"] == "completed" and final["stop_reason"], final
+    history = client.get(f"{API}/campaigns/{cid}/history").json()["iterations"]
+    assert len(history) == 2 and history[0]["effect_added_next"]
