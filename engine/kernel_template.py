@@ -1,7 +1,9 @@
 """Source template of the contact kernels; engine.kernelgen fills the effect hooks and imports it.
 
 Not imported directly: the text between the markers is the generated module. Placeholders:
-{EFFECT_IMPORTS}, {STIFFNESS_HOOKS}, {NORMAL_EXTRA_HOOKS}, {ROLLING_HOOKS} (8-space indented code).
+{EFFECT_IMPORTS}, {STIFFNESS_HOOKS}, {NORMAL_EXTRA_HOOKS}, {ROLLING_HOOKS} (8-space indented code),
+{ROLL_INERTIA} (the pair's rolling inertia where a rolling effect is compiled in, else 0.0),
+{ROOT_KNT} (sqrt(kn_tangent m_eff): the precomputed root, or recomputed where a stiffness effect changes kn).
 Property row: [ks_ratio, damping_ratio_normal, damping_ratio_shear, friction, effect columns...];
 history row: [tangential spring displacement (3), effect slots...].
 """
@@ -14,7 +16,7 @@ from numba import njit, prange
 
 from engine.integrate import drift_body, kick_body
 from engine.springs import onto_plane_keep_length
-from engine.stepping import body_sum, move_walls, needs_rebuild, wall_resultants
+from engine.stepping import body_sum, lists_stale, moved_sq, move_walls, needs_rebuild, wall_resultants
 from engine.wallgeom import MESH, primitive_distance, triangle_distance
 {EFFECT_IMPORTS}
 
@@ -23,9 +25,10 @@ CHUNK = 128  # bodies per parallel task; pairs use twice this
 
 @njit(cache=True, inline='always')
 def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
-            r_i, r_j, m_eff, i_roll, kn, mu, dt, repulsive_only):
+            r_i, r_j, m_eff, i_roll, kn, root_km, mu, dt, repulsive_only):
     """Force on i (n points from i to j, v = v_i - v_j at the contact, w = omega_i - omega_j).
 
+    root_km = sqrt(kn m_eff), precomputed per pair at rebuild (a stiffness effect recomputes it).
     i_roll is the contact's rolling inertia (Ai et al. 2011): 1/i_roll = sum over the two bodies of
     1/(7/5 m r^2), the wall counting as infinite; only the EPSD rolling dashpot reads it."""
     p = props[row]
@@ -35,7 +38,7 @@ def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
     r_eff = r_i if r_j < 0.0 else r_i * r_j / (r_i + r_j)
 {STIFFNESS_HOOKS}
     vn = v0 * n0 + v1 * n1 + v2 * n2
-    cn = 2.0 * p[1] * math.sqrt(knt * m_eff)
+    cn = 2.0 * p[1] * {ROOT_KNT}
     fn = fn_el + cn * vn
     if repulsive_only and fn < 0.0:
         fn = 0.0
@@ -48,7 +51,9 @@ def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
     u0 += t0 * dt
     u1 += t1 * dt
     u2 += t2 * dt
-    cs = 2.0 * p[2] * math.sqrt(ks * m_eff)
+    cs = 0.0
+    if p[2] != 0.0:
+        cs = 2.0 * p[2] * math.sqrt(ks * m_eff)
     f0 = -ks * u0 - cs * t0
     f1 = -ks * u1 - cs * t1
     f2 = -ks * u2 - cs * t2
@@ -67,98 +72,115 @@ def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
     return f0 - fn * n0, f1 - fn * n1, f2 - fn * n2, tr0, tr1, tr2, knt
 
 
+@njit(cache=True, inline='always')
+def pair_rolling_inertia(mi, mj, r_i, r_j):
+    """1 / (1 / (7/5 mi ri^2) + 1 / (7/5 mj rj^2)), the contact's rolling inertia (Ai et al. 2011)."""
+    roll_i = mi * r_i * r_i
+    roll_j = mj * r_j * r_j
+    return 1.4 * roll_i * roll_j / (roll_i + roll_j)
+
+
 @njit(cache=True, parallel=True)
-def pair_forces(pi, pj, hist, out, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
-                b_mass, b_omega, props, n_mat, dt, repulsive_only):
-    # chunks: the loop body is a function of its own (numba's parfor passes are slow on large bodies)
-    # and its per-call cost is paid once per chunk, not per pair
-    n = pi.shape[0]
-    n_chunks = (n + 2 * CHUNK - 1) // (2 * CHUNK)
-    for c in prange(n_chunks):
-        pair_range(c * 2 * CHUNK, min(n, (c + 1) * 2 * CHUNK), pi, pj, hist, out, s_pos, s_vel,
-                   s_rad, s_mat, s_kp, s_body, b_mass, b_omega, props, n_mat, dt, repulsive_only)
+def pair_forces(P, S, B, props, n_mat, dt, repulsive_only):
+    """All particle-particle contacts, added straight into both spheres' accumulators (P.acc).
+
+    Blocks of rows (engine/blocks.py) run even ones in parallel, then odd ones: no two tasks write the
+    same sphere, and each sphere's sum order is fixed by the block layout, whatever the thread count.
+    """
+    row_start, pj, hist, pconst, pk, acc, block_start = P.row_start, P.j, P.hist, P.const, P.k, P.acc, P.block_start
+    s_pos, s_vel, s_rad, s_mat, s_body = S.pos, S.vel, S.radius, S.material, S.body
+    b_omega, b_mass = B.omega, B.mass
+    n_blocks = block_start.shape[0] - 1
+    for colour in range(2):
+        n_c = (n_blocks - colour + 1) // 2
+        for k in prange(n_c):
+            blk = colour + 2 * k
+            pair_block(block_start[blk], block_start[blk + 1], row_start, pj, hist, pconst, pk, acc, s_pos,
+                       s_vel, s_rad, s_mat, s_body, b_omega, b_mass, props, n_mat, dt, repulsive_only)
 
 
 @njit(cache=True)
-def pair_range(p_lo, p_hi, pi, pj, hist, out, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
-               b_mass, b_omega, props, n_mat, dt, repulsive_only):
-    for p in range(p_lo, p_hi):
-        pair_one(p, pi, pj, hist, out, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
-                 b_mass, b_omega, props, n_mat, dt, repulsive_only)
+def pair_block(lo, hi, row_start, pj, hist, pconst, pk, acc, s_pos, s_vel, s_rad, s_mat, s_body, b_omega,
+               b_mass, props, n_mat, dt, repulsive_only):
+    """Rows lo..hi-1: sphere i's own sums stay in registers; partner j's are added in place."""
+    n_hist = hist.shape[1]
+    for i in range(lo, hi):
+        p_lo = row_start[i]
+        p_hi = row_start[i + 1]
+        if p_lo == p_hi:
+            continue
+        x0, x1, x2 = s_pos[i, 0], s_pos[i, 1], s_pos[i, 2]
+        u0, u1, u2 = s_vel[i, 0], s_vel[i, 1], s_vel[i, 2]
+        r_i = s_rad[i]
+        bi = s_body[i]
+        wi0, wi1, wi2 = b_omega[bi, 0], b_omega[bi, 1], b_omega[bi, 2]
+        mat_row = s_mat[i] * n_mat
+        fi0 = fi1 = fi2 = ti0 = ti1 = ti2 = 0.0
+        for p in range(p_lo, p_hi):
+            j = pj[p]
+            d0 = s_pos[j, 0] - x0
+            d1 = s_pos[j, 1] - x1
+            d2 = s_pos[j, 2] - x2
+            r_j = s_rad[j]
+            reach = r_i + r_j
+            d2sum = d0 * d0 + d1 * d1 + d2 * d2
+            if d2sum >= reach * reach:
+                # separated: the spring is gone (write only when there is something to clear)
+                for k in range(n_hist):
+                    if hist[p, k] != 0.0:
+                        hist[p, k] = 0.0
+                pk[p] = 0.0
+                continue
+            dist = math.sqrt(d2sum)
+            inv = 1.0 / dist
+            n0, n1, n2 = d0 * inv, d1 * inv, d2 * inv
+            delta = reach - dist
+            a_i = r_i - 0.5 * delta
+            a_j = r_j - 0.5 * delta
+            bj = s_body[j]
+            wj0, wj1, wj2 = b_omega[bj, 0], b_omega[bj, 1], b_omega[bj, 2]
+            # contact-point velocity of i minus j; lever arms a_i n and -a_j n
+            v0 = u0 - s_vel[j, 0] + a_i * (wi1 * n2 - wi2 * n1) + a_j * (wj1 * n2 - wj2 * n1)
+            v1 = u1 - s_vel[j, 1] + a_i * (wi2 * n0 - wi0 * n2) + a_j * (wj2 * n0 - wj0 * n2)
+            v2 = u2 - s_vel[j, 2] + a_i * (wi0 * n1 - wi1 * n0) + a_j * (wj0 * n1 - wj1 * n0)
+            row = mat_row + s_mat[j]
+            # rolling inertia: only kernels with a rolling effect compute it (ROLL_INERTIA is 0.0 otherwise)
+            i_roll = {ROLL_INERTIA}
+            f0, f1, f2, tr0, tr1, tr2, knt = contact(
+                props, row, hist[p], delta, dist, n0, n1, n2, v0, v1, v2,
+                wi0 - wj0, wi1 - wj1, wi2 - wj2, r_i, r_j, pconst[p, 1], i_roll, pconst[p, 0], pconst[p, 2],
+                props[row, 3], dt, repulsive_only)
+            pk[p] = knt
+            c0 = n1 * f2 - n2 * f1
+            c1 = n2 * f0 - n0 * f2
+            c2 = n0 * f1 - n1 * f0
+            fi0 += f0
+            fi1 += f1
+            fi2 += f2
+            ti0 += a_i * c0 + tr0
+            ti1 += a_i * c1 + tr1
+            ti2 += a_i * c2 + tr2
+            acc[j, 0] -= f0
+            acc[j, 1] -= f1
+            acc[j, 2] -= f2
+            acc[j, 3] += a_j * c0 - tr0
+            acc[j, 4] += a_j * c1 - tr1
+            acc[j, 5] += a_j * c2 - tr2
+        acc[i, 0] += fi0
+        acc[i, 1] += fi1
+        acc[i, 2] += fi2
+        acc[i, 3] += ti0
+        acc[i, 4] += ti1
+        acc[i, 5] += ti2
 
 
 @njit(cache=True, inline='always')
-def pair_one(p, pi, pj, hist, out, s_pos, s_vel, s_rad, s_mat, s_kp, s_body,
-             b_mass, b_omega, props, n_mat, dt, repulsive_only):
-    i = pi[p]
-    j = pj[p]
-    d0 = s_pos[j, 0] - s_pos[i, 0]
-    d1 = s_pos[j, 1] - s_pos[i, 1]
-    d2 = s_pos[j, 2] - s_pos[i, 2]
-    r_i = s_rad[i]
-    r_j = s_rad[j]
-    reach = r_i + r_j
-    d2sum = d0 * d0 + d1 * d1 + d2 * d2
-    h = hist[p]
-    if d2sum >= reach * reach:
-        for k in range(h.shape[0]):
-            h[k] = 0.0
-        for k in range(9):
-            out[p, k] = 0.0
-        return
-    dist = math.sqrt(d2sum)
-    n0, n1, n2 = d0 / dist, d1 / dist, d2 / dist
-    delta = reach - dist
-    a_i = r_i - 0.5 * delta
-    a_j = r_j - 0.5 * delta
-    bi = s_body[i]
-    bj = s_body[j]
-    wi0, wi1, wi2 = b_omega[bi, 0], b_omega[bi, 1], b_omega[bi, 2]
-    wj0, wj1, wj2 = b_omega[bj, 0], b_omega[bj, 1], b_omega[bj, 2]
-    # contact-point velocity of i minus j; lever arms a_i n and -a_j n
-    v0 = s_vel[i, 0] - s_vel[j, 0] + a_i * (wi1 * n2 - wi2 * n1) + a_j * (wj1 * n2 - wj2 * n1)
-    v1 = s_vel[i, 1] - s_vel[j, 1] + a_i * (wi2 * n0 - wi0 * n2) + a_j * (wj2 * n0 - wj0 * n2)
-    v2 = s_vel[i, 2] - s_vel[j, 2] + a_i * (wi0 * n1 - wi1 * n0) + a_j * (wj0 * n1 - wj1 * n0)
-    mi = b_mass[bi]
-    mj = b_mass[bj]
-    kpi = s_kp[i]
-    kpj = s_kp[j]
-    row = s_mat[i] * n_mat + s_mat[j]
-    roll_i = mi * r_i * r_i
-    roll_j = mj * r_j * r_j
-    f0, f1, f2, tr0, tr1, tr2, knt = contact(
-        props, row, h, delta, dist, n0, n1, n2, v0, v1, v2,
-        wi0 - wj0, wi1 - wj1, wi2 - wj2, r_i, r_j, mi * mj / (mi + mj),
-        1.4 * roll_i * roll_j / (roll_i + roll_j), kpi * kpj / (kpi + kpj), props[row, 3], dt, repulsive_only)
-    out[p, 0], out[p, 1], out[p, 2] = f0, f1, f2
-    c0 = n1 * f2 - n2 * f1
-    c1 = n2 * f0 - n0 * f2
-    c2 = n0 * f1 - n1 * f0
-    out[p, 3], out[p, 4], out[p, 5] = a_i * c0 + tr0, a_i * c1 + tr1, a_i * c2 + tr2
-    out[p, 6], out[p, 7], out[p, 8] = a_j * c0 - tr0, a_j * c1 - tr1, a_j * c2 - tr2
-
-
-@njit(cache=True, inline='always')
-def gather_sphere(i, row_start, by_j_start, by_j, pl, s_force, s_torque):
-    """Sum the pair forces of sphere i in a fixed order (race free, deterministic)."""
-    f0 = f1 = f2 = t0 = t1 = t2 = 0.0
-    for p in range(row_start[i], row_start[i + 1]):
-        f0 += pl[p, 0]
-        f1 += pl[p, 1]
-        f2 += pl[p, 2]
-        t0 += pl[p, 3]
-        t1 += pl[p, 4]
-        t2 += pl[p, 5]
-    for k in range(by_j_start[i], by_j_start[i + 1]):
-        p = by_j[k]
-        f0 -= pl[p, 0]
-        f1 -= pl[p, 1]
-        f2 -= pl[p, 2]
-        t0 += pl[p, 6]
-        t1 += pl[p, 7]
-        t2 += pl[p, 8]
-    s_force[i, 0], s_force[i, 1], s_force[i, 2] = f0, f1, f2
-    s_torque[i, 0], s_torque[i, 1], s_torque[i, 2] = t0, t1, t2
+def take_sphere(i, acc, s_force, s_torque):
+    """Move sphere i's accumulated pair force and torque into s_force/s_torque; clear the accumulator."""
+    s_force[i, 0], s_force[i, 1], s_force[i, 2] = acc[i, 0], acc[i, 1], acc[i, 2]
+    s_torque[i, 0], s_torque[i, 1], s_torque[i, 2] = acc[i, 3], acc[i, 4], acc[i, 5]
+    for k in range(6):
+        acc[i, k] = 0.0
 
 
 @njit(cache=True, inline='always')
@@ -217,9 +239,11 @@ def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
         kp = s_kp[i]
         kw = w_kn[w]
         row = n_mat * n_mat + s_mat[i] * n_mat + w_mat[w]
+        kn = kp * kw / (kp + kw)
         f0, f1, f2, tr0, tr1, tr2, knt = contact(
             props, row, h, delta, dist, n0, n1, n2, v0, v1, v2, wi0, wi1, wi2,
-            r_i, -1.0, b_mass[b], 1.4 * b_mass[b] * r_i * r_i, kp * kw / (kp + kw), w_mu[w], dt, repulsive_only)
+            r_i, -1.0, b_mass[b], 1.4 * b_mass[b] * r_i * r_i, kn, math.sqrt(kn * b_mass[b]), w_mu[w], dt,
+            repulsive_only)
         s_force[i, 0] += f0
         s_force[i, 1] += f1
         s_force[i, 2] += f2
@@ -236,15 +260,17 @@ def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
 TEMPLATE += '''
 
 @njit(cache=True, parallel=True)
-def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only, finish, go_on):
-    """One parallel pass per body: gather contact forces, walls, gravity; finish the step's kick and,
-    when go_on, start the next one (half kick + drift). Fusing keeps it to two parallel regions a step.
-    Chunks of bodies keep the per-call cost of the (inlined) body code off every single body."""
+def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only, finish, go_on,
+                  moved):
+    """One parallel pass per body: take the contact forces, walls, gravity; finish the step's kick and,
+    when go_on, start the next one (half kick + drift). Fusing keeps the step to three parallel regions.
+    Chunks of bodies keep the per-call cost of the (inlined) body code off every single body; each chunk
+    writes the largest squared sphere displacement since the last rebuild into moved[chunk]."""
     n = B.pos.shape[0]
     n_chunks = (n + CHUNK - 1) // CHUNK
     for c in prange(n_chunks):
-        body_range(c * CHUNK, min(n, c * CHUNK + CHUNK), B, S, W, P, WC, props, n_mat, dt, dt_contact,
-                   g0, g1, g2, repulsive_only, finish, go_on)
+        moved[c] = body_range(c * CHUNK, min(n, c * CHUNK + CHUNK), B, S, W, P, WC, props, n_mat, dt,
+                              dt_contact, g0, g1, g2, repulsive_only, finish, go_on)
 
 
 @njit(cache=True)
@@ -254,12 +280,14 @@ def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1,
     b_inertia, b_force, b_torque, b_start, b_clump, b_local = (B.inertia, B.force, B.torque, B.sphere_start,
                                                                B.is_clump, B.local_damping)
     s_offset, s_pos, s_vel, s_force, s_torque = S.offset, S.pos, S.vel, S.force, S.torque
-    row_start, by_j_start, by_j, pl = P.row_start, P.by_j_start, P.by_j, P.load
+    acc = P.acc
     c_start = WC.start
+    at_build = S.pos_at_build
     half = 0.5 * dt
+    moved = 0.0
     for b in range(b_lo, b_hi):
         for i in range(b_start[b], b_start[b + 1]):
-            gather_sphere(i, row_start, by_j_start, by_j, pl, s_force, s_torque)
+            take_sphere(i, acc, s_force, s_torque)
             if c_start[i + 1] > c_start[i]:
                 sphere_walls(i, S, B, W, WC, props, n_mat, dt_contact, repulsive_only)
         body_sum(b, b_pos, b_vel, b_omega, b_mass, b_force, b_torque, b_start, b_clump, b_local, s_pos,
@@ -269,6 +297,9 @@ def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1,
         if go_on:
             kick_body(b, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_clump, half)
             drift_body(b, b_pos, b_vel, b_quat, b_omega, b_clump, b_start, s_offset, s_pos, s_vel, dt)
+            for i in range(b_start[b], b_start[b + 1]):
+                moved = max(moved, moved_sq(i, s_pos, at_build))
+    return moved
 
 
 @njit(cache=True, parallel=True)
@@ -293,6 +324,8 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
     dt = scal[0]
     repulsive = scal[6] != 0.0
     done = 0
+    moved = np.zeros((B.pos.shape[0] + CHUNK - 1) // CHUNK)
+    full_check = True  # positions changed outside the body pass: scan every sphere once
     if istate[0] == 0:
         if n_steps == 0:
             return 0, 0
@@ -301,7 +334,11 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
         move_walls(W, scal[1], dt)
         istate[0] = 1
     while True:
-        if needs_rebuild(S.pos, S.pos_at_build, W, scal[5]):
+        if full_check:
+            stale = needs_rebuild(S.pos, S.pos_at_build, W, scal[5])
+        else:
+            stale = lists_stale(moved.max() if moved.shape[0] else 0.0, W, scal[5])
+        if stale:
             return done, 1
         fresh = istate[0] == 2
         go_on = (not fresh) and done + 1 < n_steps
@@ -309,9 +346,10 @@ def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_eve
             go_on = n_steps > 0
         # a fresh state only gets its forces: springs do not advance (dt_contact 0), no kick completes
         dtc = 0.0 if fresh else dt
-        pair_forces(P.i, P.j, P.hist, P.load, S.pos, S.vel, S.radius, S.material, S.kp,
-                    S.body, B.mass, B.omega, props, n_mat, dtc, repulsive)
-        update_bodies(B, S, W, P, WC, props, n_mat, dt, dtc, scal[2], scal[3], scal[4], repulsive, not fresh, go_on)
+        pair_forces(P, S, B, props, n_mat, dtc, repulsive)
+        update_bodies(B, S, W, P, WC, props, n_mat, dt, dtc, scal[2], scal[3], scal[4], repulsive, not fresh, go_on,
+                      moved)
+        full_check = False
         wall_resultants(W.kind.shape[0], WC.wall, WC.force, WC.point, WC.k, W.origin, W.force, W.moment, W.k_sum)
         if not fresh:
             scal[1] += dt

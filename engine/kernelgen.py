@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 
-from . import integrate, neighbors, springs, stepping, wallgeom
+from . import blocks, integrate, neighbors, springs, stepping, wallgeom
 from . import effects as effects_package
 from .effects import get as get_effect
 from .effects.base import Effect
@@ -76,6 +76,8 @@ def _hooks(layout: Layout) -> dict[str, str]:
         "STIFFNESS_HOOKS": "\n".join(hooks["stiffness"]),
         "NORMAL_EXTRA_HOOKS": "\n".join(hooks["normal_extra"]),
         "ROLLING_HOOKS": "\n".join(hooks["rolling"]),
+        "ROOT_KNT": "math.sqrt(knt * m_eff)" if hooks["stiffness"] else "root_km",
+        "ROLL_INERTIA": "pair_rolling_inertia(b_mass[bi], b_mass[bj], r_i, r_j)" if hooks["rolling"] else "0.0",
     }
 
 
@@ -98,7 +100,7 @@ _LOADED: dict[str, ModuleType] = {}
 def load_kernel(layout: Layout, configured_dir: str | None = None) -> ModuleType:
     src = kernel_source(layout)
     digest = hashlib.sha256(src.encode())
-    for mod in (integrate, neighbors, springs, stepping, wallgeom):
+    for mod in (blocks, integrate, neighbors, springs, stepping, wallgeom):
         digest.update(inspect.getsource(mod).encode())
     # every module of the effects package, helpers shared by several effects included: numba's cache
     # of this kernel does not notice when a function it inlined from another module changes

@@ -145,22 +145,6 @@ def build_pairs(pos, radius, body, skin):
 
 
 @njit(cache=True)
-def transpose_index(pair_j, n):
-    """CSR of pair indices grouped by j, in increasing pair order (deterministic accumulation)."""
-    start = np.zeros(n + 1, np.int64)
-    for p in range(pair_j.shape[0]):
-        start[pair_j[p] + 1] += 1
-    for i in range(n):
-        start[i + 1] += start[i]
-    fill = start[:-1].copy()
-    idx = np.empty(pair_j.shape[0], np.int64)
-    for p in range(pair_j.shape[0]):
-        idx[fill[pair_j[p]]] = p
-        fill[pair_j[p]] += 1
-    return start, idx
-
-
-@njit(cache=True)
 def _wall_scan(i, pos, radius, skin, w_type, w_origin, w_frame, w_par, w_tri_start, tri, box_lo, box_hi,
                out_wall, out_tri, write):
     count = 0

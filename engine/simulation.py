@@ -12,7 +12,7 @@ from typing import Callable
 import numba
 import numpy as np
 
-from . import neighbors
+from . import blocks, neighbors
 from .config import MaterialSpec, ServoSpec, SimulationConfig, WallSpec
 from .effects import get as get_effect
 from .history import PendingHistory
@@ -27,7 +27,7 @@ from .walls import build_walls, mesh_bounds, set_motion, set_rotation, set_servo
 
 ProgressCallback = Callable[["Simulation"], "bool | None"]
 _REC = 10  # t, origin(3), force(3), moment(3)
-CHECKPOINT_FORMAT = 2  # 2: pair loads in one (m, 9) array, rotating walls, decoded pending history
+CHECKPOINT_FORMAT = 3  # 3: pair constants, per-sphere accumulators and row blocks (no pair load array)
 
 
 
@@ -374,9 +374,9 @@ class Simulation:
         pi, pj, row_start = neighbors.build_pairs(s.pos, s.radius, s.body, skin)
         old_key, old_hist = pending.pair_lookup(n)
         hist = neighbors.carry_history(old_key, old_hist, neighbors.pair_keys(pi, pj, n), self.layout.n_hist)
-        by_j_start, by_j = neighbors.transpose_index(pj, n)
         m = pi.shape[0]
-        self.pairs = Pairs(pi, pj, row_start, by_j_start, by_j, hist, np.zeros((m, 9)))
+        self.pairs = Pairs(pi, pj, row_start, hist, blocks.pair_constants(pi, pj, s.kp, s.body, self.bodies.mass),
+                           np.zeros(m), np.zeros((n, 6)), blocks.block_partition(pi, pj, n))
         start, wall, tri = neighbors.build_wall_list(s.pos, s.radius, skin, w.kind, w.origin, w.frame, w.par,
                                                      w.tri_start, w.tri, w.box_lo, w.box_hi)
         wkey = neighbors.wall_keys(start, wall, tri, self.n_walls, self._n_elements())
@@ -539,7 +539,7 @@ class Simulation:
 
     def contact_count(self) -> tuple[int, int]:
         """(particle-particle, particle-wall) contacts active at the last force evaluation."""
-        pp = int(np.count_nonzero(np.any(self.pairs.load[:, :3] != 0.0, axis=1)))
+        pp = int(np.count_nonzero(self.pairs.k))
         pw = int(np.count_nonzero(self.wall_contacts.k))
         return pp, pw
 

@@ -16,12 +16,13 @@ def onto_plane_keep_length(x0, x1, x2, n0, n1, n2):
     xn = x0 * n0 + x1 * n1 + x2 * n2
     if xn == 0.0:
         return x0, x1, x2
-    mag_old = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    sq_old = x0 * x0 + x1 * x1 + x2 * x2
     x0 -= xn * n0
     x1 -= xn * n1
     x2 -= xn * n2
-    mag_new = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-    if mag_new > 0.0:
-        s = mag_old / mag_new
+    sq_new = x0 * x0 + x1 * x1 + x2 * x2
+    if sq_new > 0.0:
+        # one root of the ratio instead of two lengths (this runs for every touching contact)
+        s = math.sqrt(sq_old / sq_new)
         return x0 * s, x1 * s, x2 * s
     return x0, x1, x2

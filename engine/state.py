@@ -21,8 +21,11 @@ Walls = namedtuple("Walls", [
     "mode", "servo_axis", "servo_target", "servo_vmax", "servo_gain", "tri", "tri_start", "box_lo", "box_hi",
     "force", "moment", "k_sum", "origin_at_build", "omega", "centre", "reach", "swept",
 ])
-# load row of a pair: force on i (3), torque on i (3), torque on j (3); one row keeps a pair in one cache line pair
-Pairs = namedtuple("Pairs", ["i", "j", "row_start", "by_j_start", "by_j", "hist", "load"])
+# per pair: spheres i < j, history row, constants [kn, m_eff, sqrt(kn m_eff)] (engine/blocks.py) and the
+# contact's normal stiffness at the last force evaluation (0: not touching); per sphere: CSR row starts and
+# the force/torque accumulator [f(3), t(3)] the pair pass adds into (read and cleared by the body pass);
+# block_start: the pair-row blocks of engine/blocks.py
+Pairs = namedtuple("Pairs", ["i", "j", "row_start", "hist", "const", "k", "acc", "block_start"])
 WallContacts = namedtuple("WallContacts", ["start", "wall", "tri", "hist", "force", "point", "k"])
 
 MODE_KINEMATIC, MODE_SERVO = 0, 1
@@ -42,8 +45,8 @@ def empty_spheres() -> Spheres:
 
 def empty_pairs(n_spheres: int, n_hist: int) -> Pairs:
     z = np.zeros(0, np.int64)
-    return Pairs(z, z.copy(), np.zeros(n_spheres + 1, np.int64), np.zeros(n_spheres + 1, np.int64), z.copy(),
-                 np.zeros((0, n_hist)), np.zeros((0, 9)))
+    return Pairs(z, z.copy(), np.zeros(n_spheres + 1, np.int64), np.zeros((0, n_hist)), np.zeros((0, 3)),
+                 np.zeros(0), np.zeros((n_spheres, 6)), np.array([0, n_spheres], np.int64))
 
 
 def empty_wall_contacts(n_spheres: int, n_hist: int) -> WallContacts:

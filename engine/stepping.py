@@ -135,10 +135,23 @@ def needs_rebuild(s_pos, pos_at_build, W, skin):
     """True when a sphere or a wall surface may have moved far enough to make the lists incomplete."""
     ds = 0.0
     for i in range(s_pos.shape[0]):
-        d0 = s_pos[i, 0] - pos_at_build[i, 0]
-        d1 = s_pos[i, 1] - pos_at_build[i, 1]
-        d2 = s_pos[i, 2] - pos_at_build[i, 2]
-        ds = max(ds, d0 * d0 + d1 * d1 + d2 * d2)
+        ds = max(ds, moved_sq(i, s_pos, pos_at_build))
+    return lists_stale(ds, W, skin)
+
+
+@njit(cache=True, inline='always')
+def moved_sq(i, s_pos, pos_at_build):
+    """Squared displacement of sphere i since the last neighbour-list build."""
+    d0 = s_pos[i, 0] - pos_at_build[i, 0]
+    d1 = s_pos[i, 1] - pos_at_build[i, 1]
+    d2 = s_pos[i, 2] - pos_at_build[i, 2]
+    return d0 * d0 + d1 * d1 + d2 * d2
+
+
+@njit(cache=True)
+def lists_stale(ds, W, skin):
+    """Rebuild test from the largest squared sphere displacement ds (the body pass tracks it per chunk
+    as it drifts, so no serial pass over all spheres is needed each step) and the walls' motion."""
     dw = 0.0
     origin, at_build = W.origin, W.origin_at_build
     for w in range(origin.shape[0]):

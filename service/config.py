@@ -27,6 +27,9 @@ class Settings(BaseModel):
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
     workers: int | None = Field(None, ge=0, description="local worker processes; None = one per core")
+    threads_per_job: int | None = Field(
+        None, ge=1, description="numba threads of each local worker's jobs; None = cores // workers (at least 1): "
+        "jobs side by side on one thread each give the most batteries per hour (bench/battery_threads.py)")
     token: str | None = Field(None, description="bearer token for write endpoints (required off loopback)")
     tokens: str | None = Field(
         None, description="named bearer tokens 'alice:s3cret,bob:0ther'; the name is the client's identity "

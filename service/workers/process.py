@@ -86,6 +86,20 @@ def main(argv: list[str] | None = None) -> int:
     return run_worker(settings_from_env(database_url=args.db, dask_scheduler=args.dask_scheduler))
 
 
+def job_threads(settings: Settings, workers: int) -> int:
+    """Numba threads per worker: the configured value, else the cores shared out among the workers.
+
+    Why not every core for every job: workers that each start one thread per core oversubscribe the
+    machine, and OpenMP's barriers (two or three parallel regions per DEM step) then stall whenever a
+    thread is descheduled. And even alone a two-thread job is less than twice as fast as a one-thread
+    job, so on two cores two one-thread jobs side by side finish more batteries per hour
+    (bench/battery_threads.py measures it; docs/engine.md has the figures).
+    """
+    if settings.threads_per_job is not None:
+        return settings.threads_per_job
+    return max(1, (os.cpu_count() or 1) // max(1, workers))
+
+
 class LocalWorkerPool:
     """Starts ``count`` worker processes, restarts any that die, stops them on shutdown."""
 
@@ -96,6 +110,7 @@ class LocalWorkerPool:
 
     def _spawn(self) -> subprocess.Popen:
         env = dict(settings_env(self.settings), DEMCAL_PARENT_PID=str(os.getpid()))
+        env["NUMBA_NUM_THREADS"] = str(job_threads(self.settings, self.count))
         return subprocess.Popen([sys.executable, "-m", "service.workers"], env=env)
 
     def start(self) -> None:
