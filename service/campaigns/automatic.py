@@ -81,8 +81,9 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         {decision["effect"]} if rejected else set())
     options = [name for name in diagnosis.get("indicated", []) if name not in skip]
     if not options:
-        reason = STOP_NOTHING if rejected or decision is not None else (
-            f"diagnosis: {diagnosis.get('verdict', 'not run')}")
+        # a rejected effect with no other candidate left: nothing improves; otherwise the diagnosis
+        # of the model as it stands says why no effect is indicated
+        reason = STOP_NOTHING if rejected else f"diagnosis: {diagnosis.get('verdict', 'not run')}"
         return {**record, "stop_reason": reason}
     name = options[0]
     ranked = next((r for r in diagnosis.get("ranking", []) if r.get("effect") == name), {})
