@@ -34,7 +34,9 @@ from .base import Candidate, Effect
 
 class Params(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    surface_energy_j_m2: float = Field(ge=0, description="Gamma, J/m2: pull-off force 3/2 pi Gamma R*")
+    # at most 50 x the plausible top: beyond it the attraction outweighs any contact's repulsion at the
+    # lab's stresses and the packing collapses into itself
+    surface_energy_j_m2: float = Field(ge=0, le=1.0e4, description="Gamma, J/m2: pull-off force 3/2 pi Gamma R*")
 
 
 def pair_props(params: Params, contact_type: str, mat_i, mat_other) -> list[float]:
