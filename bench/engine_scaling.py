@@ -39,9 +39,9 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-KN_CONTACT = 1.72e6
-RADII_M = (0.010, 0.0125, 0.015)
-DENSITY = 2500.0
+# the workload of engine_throughput.py (and engine_vs_liggghts.py): one definition of its material
+from engine_throughput import KN as KN_CONTACT, RADII as RADII_M, RHO as DENSITY  # noqa: E402
+
 FRICTION = 0.86
 UNIT_N = 5000
 BOX_SIDE_M = 0.52  # square of about the 0.295 m cylinder's area
