@@ -7,11 +7,8 @@ import math
 import pytest
 
 from engine.lab import run_job
-from engine.lab.context import RunContext
-from engine.lab.procedures.fill import run_fill
 from engine.lab.result import QUANTITIES
 from engine.lab.spec import JobSpec
-from engine.simulation import Simulation
 
 pytestmark = pytest.mark.slow
 
@@ -131,11 +128,10 @@ def test_same_seed_same_result():
     assert a.provenance.steps == b.provenance.steps
 
 
-def test_preparation_friction_sets_the_packing_and_the_tests_see_the_calibrated_friction(frictionless_battery):
+def test_preparation_friction_sets_the_packing_and_the_tests_see_the_calibrated_friction(
+        frictionless_battery, rained_frictionless_fill):
     # a packing rained at mu_pp = 0 is the frictionless packing, whatever friction the tests use next
-    ctx = RunContext.from_spec(JobSpec(test="fill", seed=3, parameters={"friction_pp": 0.86},
-                                       options={"fill_friction_pp": 0.0}))
-    fill = run_fill(ctx)
+    fill_properties, friction_after_fill = rained_frictionless_fill
     frictionless = frictionless_battery.value("fill", "bulk_density_kg_m3")
-    assert fill.properties["bulk_density_kg_m3"] == pytest.approx(frictionless, rel=1e-9)
-    assert Simulation.from_checkpoint(fill.checkpoint).config.materials[0].friction == 0.86
+    assert fill_properties["bulk_density_kg_m3"] == pytest.approx(frictionless, rel=1e-9)
+    assert friction_after_fill == 0.86
