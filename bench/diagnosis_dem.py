@@ -186,7 +186,8 @@ def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float,
 
 
 def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: str, seed: int,
-             density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False) -> int:
+             density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False,
+             polish_steps: int | None = None) -> int:
     material = svc.call("POST", "/materials", json={
         "name": f"tier B {sc.name} {evaluator} {int(time.time())}", "measurements": measurements,
         "description": f"hidden effect: {sc.effect or 'none'}"})
@@ -204,6 +205,8 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
     }
     if reduced:
         body.update(fixed_parameters=dict(REDUCED_PARAMETERS), polish_steps=0)
+    if polish_steps is not None:
+        body["polish_steps"] = polish_steps
     c = svc.call("POST", "/campaigns", json=body)
     svc.call("POST", f"/campaigns/{c['id']}/start")
     return c["id"]
@@ -276,7 +279,10 @@ def main(argv=None) -> int:
     ap.add_argument("--density-bias", type=float, default=DENSITY_PRIOR_BIAS,
                     help="relative error of the particle-density prior (the nuisance)")
     ap.add_argument("--reduced", action="store_true",
-                    help="35 mm spheres, two DST loads, no polish: the form CI runs (see the docstring)")
+                    help="35 mm spheres and no polish: the form CI runs (see the docstring)")
+    ap.add_argument("--polish-steps", type=int, default=None,
+                    help="Gauss-Newton rounds on the batteries after each confirmation (default: the service's; "
+                         "0 with --reduced); each costs 3 batteries, plus one per factor for the Jacobian")
     args = ap.parse_args(argv)
     names = [n.strip() for n in args.scenarios.split(",") if n.strip()]
     unknown = set(names) - set(SCENARIOS)
@@ -290,7 +296,8 @@ def main(argv=None) -> int:
             sc = SCENARIOS[name]
             started = time.perf_counter()
             measurements, n_measuring = measure(svc, sc, args.evaluator, poll_s, args.reduced)
-            cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced)
+            cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
+                           args.polish_steps)
             final = _wait_campaign(svc, cid, poll_s)
             if final["status"] != "completed":
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)

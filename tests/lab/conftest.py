@@ -5,10 +5,11 @@ fill and a CCT, the CCT runs the thesis's 4 cycles and E' averages cycles 2..4 a
 2 cycles, cycle 2 alone scattered enough to take the stiff/soft ratio from 1.7 down to 1.4: the
 packing is still compacting).
 
-Screening systems run on one thread (`serial_below_spheres`), so these runs are independent one-core jobs:
-the first fixture asked for starts every run the collected tests need in a pool of one process per core
-(spawned: a forked child would inherit numba's OpenMP state), and each fixture waits for its own. Run one
-after the other they cost the suite's wall clock about twice as much on two cores.
+Screening systems run on one thread (`serial_below_spheres`), so these runs are independent one-core jobs
+(tests/lab/lab_runs.py names them). When collection ends, every run the selected tests need starts in a
+pool of one process per core (spawned: a forked child would inherit numba's OpenMP state), and the tests
+that use them are moved to the end of the session: the runs go on while the rest of the suite, much of
+which waits on servers and browsers, runs beside them. Each fixture then waits for its own result.
 """
 from __future__ import annotations
 
@@ -18,39 +19,64 @@ from concurrent.futures import Future, ProcessPoolExecutor
 
 import pytest
 
-from lab_runs import RUNS, call
+from lab_runs import GROUPS, RUNS, call
+
+_FUTURES = pytest.StashKey[dict]()
+_POOL = pytest.StashKey[ProcessPoolExecutor]()
 
 
+def _runs_of(item) -> list[str]:
+    names = []
+    for fixture in getattr(item, "fixturenames", ()):
+        if fixture in RUNS:
+            names.append(fixture)
+        names.extend(GROUPS.get(fixture, ()))
+    return names
+
+
+@pytest.hookimpl(trylast=True)  # after -m / -k have deselected
 def pytest_collection_modifyitems(session, config, items):
-    """Remember which runs the collected tests use, so the pool starts those and no others."""
-    needed = set()
-    for item in items:
-        needed.update(name for name in getattr(item, "fixturenames", ()) if name in RUNS)
-    config.stash[_NEEDED] = needed
-
-
-_NEEDED = pytest.StashKey[set]()
-
-
-@pytest.fixture(scope="session")
-def lab_runs(request) -> dict[str, Future]:
-    needed = [name for name in RUNS if name in request.config.stash.get(_NEEDED, set(RUNS))]
+    needed = {name for item in items for name in _runs_of(item)}
+    config.stash[_FUTURES] = {}
+    if not needed or config.option.collectonly:
+        return
+    items.sort(key=lambda item: bool(_runs_of(item)))  # stable: the pool's users last, in their order
     pool = ProcessPoolExecutor(max_workers=max(1, min(len(needed), os.cpu_count() or 1)),
                                mp_context=multiprocessing.get_context("spawn"))
-    futures = {name: pool.submit(call, name) for name in needed}
-    yield futures
-    pool.shutdown(wait=True, cancel_futures=True)
+    config.stash[_POOL] = pool
+    # RUNS is longest first, so the last run to start is short
+    config.stash[_FUTURES] = {name: pool.submit(call, name) for name in RUNS if name in needed}
+
+
+def pytest_sessionfinish(session):
+    pool = session.config.stash.get(_POOL, None)
+    if pool is not None:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _result(config, name: str):
+    future: Future | None = config.stash.get(_FUTURES, {}).get(name)
+    # a run no collected test named (asked for through getfixturevalue) runs here
+    return call(name) if future is None else future.result()
 
 
 def _fixture(name: str):
     @pytest.fixture(scope="session", name=name)
-    def _get(lab_runs):
-        if name not in lab_runs:  # asked for by a test the collection did not see (e.g. getfixturevalue)
-            return call(name)
-        return lab_runs[name].result()
-    _get.__doc__ = f"The shared run {name!r} (see RUNS)."
+    def _get(request):
+        return _result(request.config, name)
+    _get.__doc__ = f"The shared run {name!r} (lab_runs.RUNS)."
+    return _get
+
+
+def _group_fixture(group: str):
+    @pytest.fixture(scope="session", name=group)
+    def _get(request):
+        return [_result(request.config, name) for name in GROUPS[group]]
+    _get.__doc__ = f"The runs of lab_runs.GROUPS[{group!r}], in order."
     return _get
 
 
 for _name in RUNS:
     globals()[_name] = _fixture(_name)
+for _group in GROUPS:
+    globals()[_group] = _group_fixture(_group)

@@ -1,4 +1,5 @@
-"""The shared DEM runs of the slow lab tests, by name (tests/lab/conftest.py turns each into a fixture).
+"""The slow lab tests' DEM runs, by name (tests/lab/conftest.py runs them in a pool and turns each into a
+fixture; GROUPS name lists of runs one fixture returns together).
 
 A module of its own, not the conftest, so that a spawned pool process can import `call` by a unique name.
 """
@@ -77,6 +78,23 @@ RUNS = {
     # mu_pp = 0.3, four loads: the middle point of the phi(mu_pp) trend
     "mid_friction_dst": (_run, (dict(test="dst", seed=3, parameters={"friction_pp": 0.3}),)),
 }
+
+
+# Seeds of the angle-of-repose trend (test_trends.test_angle_of_repose_rises_with_friction says why six).
+AOR_SEEDS = (3, 4, 5, 6, 7, 8)
+AOR_FRICTIONS = (0.1, 0.86)
+for _mu in AOR_FRICTIONS:
+    for _seed in AOR_SEEDS:
+        RUNS[f"aor_pile_mu{_mu}_seed{_seed}"] = (_run, (dict(test="aor", seed=_seed, parameters={"friction_pp": _mu}),))
+RUNS["anchor_pull"] = (_run, (dict(test="anchor", seed=3, options={"anchor_packing_height_m": 0.17,
+                                                                   "anchor_pull_distance_m": 0.03}),))
+# a real screening CCT, 2 cycles, E' asked at three stresses
+CCT_WINDOW_STRESSES_PA = (7.5e3, 21.3e3, 44.4e3)
+RUNS["cct_at_three_stresses"] = (_run, (dict(test="cct", seed=3, options={
+    "cct_cycles": 2, "cct_window_stresses_pa": list(CCT_WINDOW_STRESSES_PA)}),))
+
+# fixture name -> the runs it returns as a list, in this order
+GROUPS = {"aor_piles": [f"aor_pile_mu{mu}_seed{seed}" for mu in AOR_FRICTIONS for seed in AOR_SEEDS]}
 
 
 def call(name: str):

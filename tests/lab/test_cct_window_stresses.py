@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from engine.lab import battery, run_job
+from engine.lab import battery
 from engine.lab.context import RunContext
 from engine.lab.presets import SCREENING
 from engine.lab.procedures import cct as cct_procedure
@@ -182,10 +182,12 @@ def test_battery_without_the_option_keeps_five_equal_windows(monkeypatch):
 
 
 @pytest.mark.slow
-def test_screening_cct_reports_modulus_at_the_requested_stresses():
+def test_screening_cct_reports_modulus_at_the_requested_stresses(cct_at_three_stresses):
     # a real DEM CCT (screening, 2 cycles): every requested stress is a key, with a positive modulus
-    requested = [7.5e3, 21.3e3, 44.4e3]
-    result = run_job(JobSpec(test="cct", seed=3, options={"cct_cycles": 2, "cct_window_stresses_pa": requested}))
+    from lab_runs import CCT_WINDOW_STRESSES_PA
+
+    requested = list(CCT_WINDOW_STRESSES_PA)
+    result = cct_at_three_stresses
     got = [p for p in result.properties if p.test == "cct" and p.quantity == "confined_modulus_pa" and p.condition]
     assert [p.condition for p in got] == [{"normal_stress_pa": s} for s in requested]
     # the tangent at each stress is the same stiffness as the central-band E' within what a packing's

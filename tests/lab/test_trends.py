@@ -9,6 +9,7 @@ import pytest
 from engine.lab import run_job
 from engine.lab.result import QUANTITIES
 from engine.lab.spec import JobSpec
+from lab_runs import AOR_FRICTIONS, AOR_SEEDS
 
 pytestmark = pytest.mark.slow
 
@@ -71,52 +72,40 @@ def test_mohr_coulomb_fit_of_a_well_behaved_run(low_friction_dst):
     assert low_friction_dst.value("dst", "mohr_coulomb_r2") > 0.95
 
 
-# Seeds of the angle-of-repose trend. One screening pile is ~120 pyramid clumps, 2-4 clumps high, and
-# its angle is chaotic in the trajectory: moving every inserted body by one ulp (a round-off change, as
-# a new summation order in the engine is) moved seed 3's angle at mu_pp 0.1 from 19.0 to 13.7 deg and
-# at 0.86 from 29.1 to 21.4 deg. So one pile is one draw: over 8-9 such draws per friction
-# (docs/lab.md) the pile angle has a standard deviation of 5.0 deg at 0.1 and 6.0 deg at 0.86 about a
-# mean rise of 10.3 deg, and one seed alone fell short of a 5 deg rise about one time in four. With six
-# piles per friction the rise has a standard error of 3.2 deg: the model as measured fails the 5 deg bar
-# about one time in twenty, and a model without the trend (rise 0) would pass it about one time in
-# eighteen. Fewer seeds make the test a coin toss on round-off; more cost ~1 min of a core per pile.
-AOR_SEEDS = (3, 4, 5, 6, 7, 8)
+# The angle-of-repose trend's piles (lab_runs.AOR_SEEDS at each of lab_runs.AOR_FRICTIONS). One screening
+# pile is ~120 pyramid clumps, 2-4 clumps high, and its angle is chaotic in the trajectory: moving every
+# inserted body by one ulp (a round-off change, as a new summation order in the engine is) moved seed 3's
+# angle at mu_pp 0.1 from 19.0 to 13.7 deg and at 0.86 from 29.1 to 21.4 deg. So one pile is one draw: over
+# 8-9 such draws per friction (docs/lab.md) the pile angle has a standard deviation of 5.0 deg at 0.1 and
+# 6.0 deg at 0.86 about a mean rise of 10.3 deg, and one seed alone fell short of a 5 deg rise about one
+# time in four. With six piles per friction the rise has a standard error of 3.2 deg: the model as
+# measured fails the 5 deg bar about one time in twenty, and a model without the trend (rise 0) would pass
+# it about one time in eighteen. Fewer seeds make the test a coin toss on round-off; more cost ~1 min of a
+# core per pile.
 
 
-def test_angle_of_repose_rises_with_friction():
+def test_angle_of_repose_rises_with_friction(aor_piles):
     # Table 5.3: 12 deg at mu_pp 0.1, 38 deg at 0.86, a rise of 26 deg. Asked: a rise of the mean
-    # angle over AOR_SEEDS piles of at least 5 deg, 1.5 x the spread of the thesis's own readings of
-    # one pile (Table 5.2: 43, 36, 38, 36 deg, standard deviation 3.3 deg). The piles are independent
-    # jobs: they run side by side, one per core.
-    import multiprocessing
-    import os
-    from concurrent.futures import ProcessPoolExecutor
-
-    specs = [JobSpec(test="aor", seed=seed, parameters={"friction_pp": mu})
-             for mu in (0.1, 0.86) for seed in AOR_SEEDS]
-    # spawn: a forked child would inherit numba's OpenMP state
-    with ProcessPoolExecutor(max_workers=min(len(specs), os.cpu_count() or 1),
-                             mp_context=multiprocessing.get_context("spawn")) as pool:
-        results = list(pool.map(run_job, specs))
-    angles = [r.value("aor", "angle_of_repose_deg") for r in results]
+    # angle over the piles of at least 5 deg, 1.5 x the spread of the thesis's own readings of one pile
+    # (Table 5.2: 43, 36, 38, 36 deg, standard deviation 3.3 deg).
+    angles = [r.value("aor", "angle_of_repose_deg") for r in aor_piles]
     n = len(AOR_SEEDS)
+    assert len(angles) == n * len(AOR_FRICTIONS) and AOR_FRICTIONS == (0.1, 0.86)
     low, high = angles[:n], angles[n:]
     rise = sum(high) / n - sum(low) / n
     assert rise > 5.0, (rise, low, high)
-    for r in results:
+    for r in aor_piles:
         assert len([p for p in r.properties if "sector" in p.condition]) >= 6
         assert not [w for w in r.provenance.warnings if "aor" in w], r.provenance.warnings
 
 
-def test_anchor_peak_exceeds_the_weight_it_lifts():
+def test_anchor_peak_exceeds_the_weight_it_lifts(anchor_pull):
     # statics: before the packing fails, the plate carries at least the column of grains above it
     # (plate area less the tube's, times rho_b g L); Table 5.5 (A) measured 175.6 N for L = 170 mm
-    r = run_job(JobSpec(test="anchor", seed=3,
-                        options={"anchor_packing_height_m": 0.17, "anchor_pull_distance_m": 0.03}))
-    peak = r.value("anchor", "peak_pull_force_n", packing_height_m=0.17, pull_speed_m_s=0.027)
+    peak = anchor_pull.value("anchor", "peak_pull_force_n", packing_height_m=0.17, pull_speed_m_s=0.027)
     column_weight = 1200.0 * 9.81 * 0.17 * (0.110**2 - 0.050**2)  # rho_b of a loose sphere packing
     assert peak > column_weight
-    curve = r.curves["anchor"]
+    curve = anchor_pull.curves["anchor"]
     assert max(curve["displacement_m"]) >= 0.03
 
 

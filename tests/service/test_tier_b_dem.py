@@ -30,7 +30,7 @@ def test_hidden_rolling_resistance_is_found_on_the_dem_engine(tmp_path):
     out = subprocess.run(
         [sys.executable, str(ROOT / "bench" / "diagnosis_dem.py"), "--reduced", "--scenarios", "rolling",
          "--workers", "2"],
-        capture_output=True, text=True, timeout=1500, cwd=tmp_path)
+        capture_output=True, text=True, timeout=2400, cwd=tmp_path)
     print(out.stdout)
     assert out.returncode == 0, out.stderr[-2000:]
     lines = out.stdout.strip().splitlines()
