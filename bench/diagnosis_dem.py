@@ -9,8 +9,8 @@ The measurements are batteries run by the service's own workers with the effect 
 seeds the calibration never uses, plus laboratory scatter (calibration.testbed.MEASUREMENT_SD) and
 a nuisance: the pycnometer prior on particle density is 2 % off the truth. Each scenario then runs
 one automatic campaign through the queue and workers: the 2^(4-1) design with 3 centre runs, the
-confirmation, the diagnosis, the top effect added as a fifth factor and its confirmation
-(max_iterations 2). Printed per scenario: whether the lack of fit rejects, the truth's rank in the
+confirmation, the diagnosis, the top effect added as a fifth factor and its confirmation, and,
+when that effect is rejected, the diagnosis's next candidate (max_iterations 3). Printed per scenario: whether the lack of fit rejects, the truth's rank in the
 diagnosis, the error before and after, chi2/dof after, the particle density found, the batteries
 and the wall time; then the pass criteria of the issue and a machine-readable last line.
 
@@ -19,6 +19,12 @@ and the wall time; then the pass criteria of the issue and a machine-readable la
     python3 bench/diagnosis_dem.py --evaluator analytic         # the plumbing, in seconds
     python3 bench/diagnosis_dem.py --url http://host:8000       # an existing service
     python3 bench/diagnosis_dem.py --reduced --scenarios rolling  # minutes: CI's DEM scenario
+    python3 bench/diagnosis_dem.py --data-dir ~/tierb --scenarios rolling  # resumable across stops
+
+With --data-dir the local service keeps its database there. Measuring jobs and campaigns are named by a
+digest of what they measure and how they calibrate, so rerunning the same command against the same
+folder picks up the jobs and campaigns already there (a campaign resumes where its runner stopped):
+the full screening table, hours of both cores, can be run a few scenarios at a time.
 
 --reduced is the form CI can afford (tests/service/test_tier_b_dem.py): the same path, design and loads,
 on 35 mm spheres instead of 20 mm (about 130 bodies instead of 840 in Appendix A's container) and with no
@@ -66,6 +72,8 @@ OPTIONS = {"dst_normal_stresses_pa": [10.5e3, 24.0e3, 38.3e3, 52.4e3],
 # --reduced: coarser grains and no polish rounds
 REDUCED_PARAMETERS = {"particle_radius_m": 0.035}
 MEASURING_SEEDS = (910001, 910002, 910003)
+# one effect tried, and when it is rejected the diagnosis's next candidate
+MAX_ITERATIONS = 3
 DENSITY_PRIOR_BIAS = 0.02
 
 
@@ -102,21 +110,30 @@ SCENARIOS = {
 class Service:
     """A running demcal service: the one at ``url``, or a fresh local one in a temporary folder."""
 
-    def __init__(self, url: str | None, workers: int):
+    def __init__(self, url: str | None, workers: int, data_dir: str | None = None):
         self.process = None
         self.folder = None
+        self._log = subprocess.DEVNULL
         if url is None:
-            self.folder = tempfile.TemporaryDirectory(prefix="demcal-tierb-")
+            if data_dir is None:
+                self.folder = tempfile.TemporaryDirectory(prefix="demcal-tierb-")
+                folder = self.folder.name
+            else:
+                folder = os.path.abspath(os.path.expanduser(data_dir))
+                os.makedirs(folder, exist_ok=True)
+            self._log = subprocess.DEVNULL if data_dir is None else open(os.path.join(folder, "serve.log"), "ab")
             with socket.socket() as sock:
                 sock.bind(("127.0.0.1", 0))
                 port = sock.getsockname()[1]
             url = f"http://127.0.0.1:{port}"
-            env = {**os.environ, "PYTHONPATH": os.path.abspath(ROOT), "DEMCAL_DATABASE_URL": f"sqlite:///{self.folder.name}/demcal.db",
-                   "DEMCAL_MAX_QUEUED_JOBS_PER_CLIENT": "1000", "DEMCAL_KERNEL_DIR": os.environ.get(
+            env = {**os.environ, "PYTHONPATH": os.path.abspath(ROOT), "DEMCAL_DATABASE_URL": f"sqlite:///{folder}/demcal.db",
+                   "DEMCAL_MAX_QUEUED_JOBS_PER_CLIENT": "1000",
+                   # a run spread over several stops: a job cut off by each stop must not fail for it
+                   "DEMCAL_MAX_ATTEMPTS": "3" if data_dir is None else "20", "DEMCAL_KERNEL_DIR": os.environ.get(
                        "DEMCAL_KERNEL_DIR", os.path.join(os.path.expanduser("~"), ".cache", "demcal", "kernels"))}
             self.process = subprocess.Popen(
                 [sys.executable, "-m", "service.cli", "serve", "--port", str(port), "--workers", str(workers)],
-                cwd=self.folder.name, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                cwd=folder, env=env, stdout=self._log, stderr=subprocess.STDOUT)
         self.client = httpx.Client(base_url=url + API, timeout=60.0, headers={"X-Client-Id": "tier-b"})
         deadline = time.monotonic() + 120
         while True:
@@ -140,6 +157,8 @@ class Service:
         if self.process is not None:
             self.process.terminate()
             self.process.wait(30)
+        if self._log is not subprocess.DEVNULL:
+            self._log.close()
         if self.folder is not None:
             self.folder.cleanup()
 
@@ -156,7 +175,7 @@ def _wait_jobs(svc: Service, ids: list[int], poll_s: float) -> list[dict]:
 
 
 def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float,
-            reduced: bool = False) -> tuple[list[dict], int]:
+            reduced: bool = False) -> tuple[list[dict], list[int]]:
     """The measuring world's replicates: one battery per measuring seed, plus laboratory scatter."""
     truth = {**sc.parameters(), **(REDUCED_PARAMETERS if reduced else {})}
     # the key names what is measured, so a rerun against the same service reuses exactly those jobs
@@ -182,43 +201,57 @@ def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float,
         values = [r["value"] + measurement_sd(r) * float(rng.standard_normal()) for r in records]
         measurements.append({"test": first["test"], "quantity": first["quantity"], "condition": first["condition"],
                              "values": values, "source": f"tier B {sc.name}: engine runs + laboratory scatter"})
-    return measurements, len(ids)
+    return measurements, ids
 
 
 def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: str, seed: int,
              density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False,
              polish_steps: int | None = None) -> int:
-    material = svc.call("POST", "/materials", json={
-        "name": f"tier B {sc.name} {evaluator} {int(time.time())}", "measurements": measurements,
-        "description": f"hidden effect: {sc.effect or 'none'}"})
+    """The scenario's automatic campaign: an existing one calibrating exactly this (same measurements,
+    priors, design and options; its name carries their digest) is reused, so a rerun resumes it."""
     rho = sc.parameters()["particle_density_kg_m3"]
     truth = sc.parameters()
     body = {
-        "name": f"tier B {sc.name}", "material_id": material["id"], "evaluator": evaluator,
+        "evaluator": evaluator,
         "fidelity": "screening", "factors": FACTORS, "design": {"type": "fractional", "generators": ["D=ABC"], "centre_runs": 3},
         "priors": [
             {"parameter": "particle_density_kg_m3", "value": rho * (1.0 + density_bias),
              "uncertainty": PYCNOMETER_RELATIVE_SD * rho, "source": "pycnometer, 2 % off"},
             {"parameter": "friction_pw", "value": truth["friction_pw"], "uncertainty": TILT_TEST_SD,
              "source": "tilt test"}],
-        "automatic": True, "max_iterations": 2, "seed": seed,
+        "automatic": True, "max_iterations": MAX_ITERATIONS, "seed": seed,
     }
     if reduced:
         body.update(fixed_parameters=dict(REDUCED_PARAMETERS), polish_steps=0)
     if polish_steps is not None:
         body["polish_steps"] = polish_steps
-    c = svc.call("POST", "/campaigns", json=body)
+    digest = hashlib.sha256(json.dumps([body, measurements], sort_keys=True).encode()).hexdigest()[:12]
+    name = f"tier B {sc.name} {digest}"
+    existing = [c for c in svc.call("GET", "/campaigns") if c["name"] == name and c["status"] != "failed"]
+    if existing:
+        c = existing[0]
+        print(f"{sc.name}: resuming campaign {c['id']} ({c['status']})", flush=True)
+        if c["status"] == "paused":
+            svc.call("POST", f"/campaigns/{c['id']}/resume")
+        return c["id"]
+    material = svc.call("POST", "/materials", json={
+        "name": f"{name} {evaluator}", "measurements": measurements,
+        "description": f"hidden effect: {sc.effect or 'none'}"})
+    c = svc.call("POST", "/campaigns", json={**body, "name": name, "material_id": material["id"]})
     svc.call("POST", f"/campaigns/{c['id']}/start")
     return c["id"]
 
 
 def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
+    """The scenario's row. "added" and the error after are those of the model the loop kept: the last
+    iteration whose added effect was accepted (an effect the automatic mode rejected does not count);
+    when none was, the last iteration tried, so a rejected effect's error still shows."""
     history = svc.call("GET", f"/campaigns/{cid}/history")["iterations"]
     first = history[0]
     out: dict[str, Any] = {"scenario": sc.name, "effect": sc.effect, "lof_rejects": None, "rank": None,
-                           "ranking": [], "added": None, "error_ratio": None, "chi2_per_dof_after": None,
-                           "density_error": None, "verdicts": [h["verdict"] for h in history],
-                           "stop_reason": history[-1].get("stop_reason")}
+                           "ranking": [], "added": None, "tried": [], "error_ratio": None,
+                           "chi2_per_dof_after": None, "density_error": None,
+                           "verdicts": [h["verdict"] for h in history], "stop_reason": history[-1].get("stop_reason")}
     out["lof_rejects"] = first["lack_of_fit_p"] is not None and first["lack_of_fit_p"] < 0.05
     try:
         diagnosis = svc.call("GET", f"/campaigns/{cid}/diagnosis", params={"number": 1})
@@ -228,12 +261,16 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
         pass  # no diagnosis ran (the lack of fit passed)
     if sc.effect in out["ranking"]:
         out["rank"] = out["ranking"].index(sc.effect) + 1
-    final = history[-1]
-    if len(history) > 1:
-        out["added"] = (history[1].get("added_effect") or [None])[0]
+    later = history[1:]
+    out["tried"] = [(h.get("added_effect") or [None])[0] for h in later]
+    accepted = [h for h in later if (h.get("decision") or {}).get("accepted")]
+    final = accepted[-1] if accepted else (later[-1] if later else first)
+    if later:
+        out["added"] = (final.get("added_effect") or [None])[0] if accepted else None
         out["error_ratio"] = final["chi2"] / first["chi2"] if first["chi2"] else None
         out["chi2_per_dof_after"] = final["chi2_per_dof"]
-    rho = (final.get("optimum") or {}).get("particle_density_kg_m3")
+    kept = accepted[-1] if accepted else first
+    rho = (kept.get("optimum") or {}).get("particle_density_kg_m3")
     if rho is not None:
         out["density_error"] = rho / sc.parameters()["particle_density_kg_m3"] - 1.0
     return out
@@ -249,6 +286,14 @@ def _wait_campaign(svc: Service, cid: int, poll_s: float) -> dict:
 
 def _batteries(svc: Service, cid: int) -> int:
     return sum(len(it["runs"]) for it in svc.call("GET", f"/campaigns/{cid}/iterations"))
+
+
+def _battery_seconds(svc: Service, cid: int, measuring_ids: list[int]) -> float:
+    """Summed wall time of the scenario's batteries as the workers ran them: unlike the script's own
+    wall time it does not depend on how many stops a resumed run took or how many workers ran."""
+    jobs = svc.call("GET", "/jobs", params={"campaign_id": cid, "limit": 1000})["items"]
+    jobs += [svc.call("GET", f"/jobs/{i}") for i in measuring_ids]
+    return float(sum(j["wall_time_s"] or 0.0 for j in jobs))
 
 
 def criteria(outs: list[dict]) -> dict[str, Any]:
@@ -274,6 +319,8 @@ def main(argv=None) -> int:
     ap.add_argument("--scenarios", default=",".join(SCENARIOS), help="comma-separated: " + ", ".join(SCENARIOS))
     ap.add_argument("--evaluator", choices=["dem", "analytic"], default="dem")
     ap.add_argument("--url", help="an existing service (default: start one in a temporary folder)")
+    ap.add_argument("--data-dir", help="keep the local service's database (and serve.log) in this folder, so "
+                                       "rerunning the same command resumes the jobs and campaigns there")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--seed", type=int, default=41)
     ap.add_argument("--density-bias", type=float, default=DENSITY_PRIOR_BIAS,
@@ -289,13 +336,15 @@ def main(argv=None) -> int:
     if unknown:
         ap.error(f"unknown scenarios {sorted(unknown)}; choose from {', '.join(SCENARIOS)}")
     poll_s = 0.2 if args.evaluator == "analytic" else 5.0
-    svc = Service(args.url, args.workers)
+    if args.url and args.data_dir:
+        ap.error("--data-dir applies to the local service; not with --url")
+    svc = Service(args.url, args.workers, args.data_dir)
     outs = []
     try:
         for name in names:
             sc = SCENARIOS[name]
             started = time.perf_counter()
-            measurements, n_measuring = measure(svc, sc, args.evaluator, poll_s, args.reduced)
+            measurements, measuring_ids = measure(svc, sc, args.evaluator, poll_s, args.reduced)
             cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
                            args.polish_steps)
             final = _wait_campaign(svc, cid, poll_s)
@@ -303,14 +352,15 @@ def main(argv=None) -> int:
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)
                 continue
             o = outcome(svc, sc, cid)
-            o["batteries"] = n_measuring + _batteries(svc, cid)
+            o["batteries"] = len(measuring_ids) + _batteries(svc, cid)
+            o["battery_s"] = _battery_seconds(svc, cid, measuring_ids)
             o["wall_s"] = time.perf_counter() - started
             outs.append(o)
             print(f"{name:<9} hidden={sc.effect or '-':<18} lof={'rejects' if o['lof_rejects'] else 'passes'} "
-                  f"ranking={o['ranking'][:3]} rank={o['rank']} added={o['added']} "
+                  f"ranking={o['ranking'][:3]} rank={o['rank']} tried={o['tried']} added={o['added']} "
                   f"error_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
                   f"density_error={_f(o['density_error'])} stop='{o['stop_reason']}' "
-                  f"batteries={o['batteries']} wall={o['wall_s']:.0f}s", flush=True)
+                  f"batteries={o['batteries']} battery_time={o['battery_s']:.0f}s wall={o['wall_s']:.0f}s", flush=True)
     finally:
         svc.close()
     res = criteria(outs)
