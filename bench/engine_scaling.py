@@ -40,9 +40,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 # the workload of engine_throughput.py (and engine_vs_liggghts.py): one definition of its material
-from engine_throughput import KN as KN_CONTACT, RADII as RADII_M, RHO as DENSITY  # noqa: E402
+from engine_throughput import FRICTION, KN as KN_CONTACT, RADII as RADII_M, RHO as DENSITY  # noqa: E402
 
-FRICTION = 0.86
 UNIT_N = 5000
 BOX_SIDE_M = 0.52  # square of about the 0.295 m cylinder's area
 GAP_M = 0.001

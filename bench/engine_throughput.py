@@ -26,6 +26,7 @@ sys.path.insert(0, ROOT)
 KN = 1.72e6
 RADII = (0.010, 0.0125, 0.015)
 RHO = 2500.0
+FRICTION = 0.86  # the LIGGGHTS input's coefficientFriction (particle-particle and wall)
 N = 5000
 CYL_R = 0.295
 
@@ -36,7 +37,7 @@ def build_and_settle(path: str, settle_s: float) -> None:
 
     m_min = RHO * 4 / 3 * math.pi * RADII[0] ** 3
     cfg = SimulationConfig(
-        materials=[MaterialSpec(density_kg_m3=RHO, normal_stiffness_n_per_m=2 * KN, friction=0.86,
+        materials=[MaterialSpec(density_kg_m3=RHO, normal_stiffness_n_per_m=2 * KN, friction=FRICTION,
                                 damping_ratio_normal=0.8, damping_ratio_shear=0.0)],
         timestep_s=0.2 * math.sqrt(m_min / KN), skin_m=0.005)
     sim = Simulation(cfg)
@@ -49,7 +50,7 @@ def build_and_settle(path: str, settle_s: float) -> None:
     pos[:, :2] += rng.uniform(-0.002, 0.002, (N, 2))
     radii = rng.permutation(np.repeat(RADII, N // 3 + 1))[:N]
     sim.add_spheres(pos, radii)
-    wall = dict(normal_stiffness_n_per_m=2 * KN, friction=0.86)
+    wall = dict(normal_stiffness_n_per_m=2 * KN, friction=FRICTION)
     sim.add_wall(WallSpec(name="floor", geometry=PlaneGeom(), **wall))
     sim.add_wall(WallSpec(name="cylinder", geometry=CylinderGeom(base_m=(0, 0, -0.01), radius_m=CYL_R,
                                                                    height_m=1.5), **wall))

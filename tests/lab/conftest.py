@@ -9,7 +9,9 @@ Screening systems run on one thread (`serial_below_spheres`), so these runs are 
 (tests/lab/lab_runs.py names them). When collection ends, every run the selected tests need starts in a
 pool of one process per core (spawned: a forked child would inherit numba's OpenMP state), and the tests
 that use them are moved to the end of the session: the runs go on while the rest of the suite, much of
-which waits on servers and browsers, runs beside them. Each fixture then waits for its own result.
+which waits on servers and browsers, runs beside them. Each fixture then waits for its own result. A run
+wanted only when an earlier result asks for it (a sequential test's second stage) goes through the
+`lab_run` fixture, which submits it to the same pool then.
 """
 from __future__ import annotations
 
@@ -58,6 +60,23 @@ def _result(config, name: str):
     future: Future | None = config.stash.get(_FUTURES, {}).get(name)
     # a run no collected test named (asked for through getfixturevalue) runs here
     return call(name) if future is None else future.result()
+
+
+@pytest.fixture(scope="session")
+def lab_run(request):
+    """``lab_run(names)`` -> their results, in order: runs not started yet go to the pool side by side
+    (here, one after another, when the session started none)."""
+    config = request.config
+
+    def get(names: list[str]) -> list:
+        futures = config.stash.get(_FUTURES, {})
+        pool = config.stash.get(_POOL, None)
+        if pool is not None:
+            for name in names:
+                if name not in futures:
+                    futures[name] = pool.submit(call, name)
+        return [_result(config, name) for name in names]
+    return get
 
 
 def _fixture(name: str):
