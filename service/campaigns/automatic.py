@@ -84,6 +84,11 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         # a rejected effect with no other candidate left: nothing improves; otherwise the diagnosis
         # of the model as it stands says why no effect is indicated
         reason = STOP_NOTHING if rejected else f"diagnosis: {diagnosis.get('verdict', 'not run')}"
+        pooled = (diagnosis.get("lack_of_fit") or {}).get("p_value")
+        if not rejected and diagnosis.get("verdict") == "no misfit" and pooled is not None:
+            # the iteration's report saw a misfit on one confirmation battery; say why the loop still stops
+            reason += (f" (the confirmation and the diagnosis's baseline battery together: lack of fit "
+                       f"p {pooled:.2g})")
         return {**record, "stop_reason": reason}
     name = options[0]
     ranked = next((r for r in diagnosis.get("ranking", []) if r.get("effect") == name), {})

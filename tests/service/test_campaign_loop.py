@@ -126,3 +126,18 @@ def test_a_proposed_narrowed_factorial_takes_the_proposed_ranges():
     assert [(f["name"], f["low"], f["high"], f["log"]) for f in out["factors"]] == [
         ("friction_pp", 0.6, 0.95, False), ("particle_stiffness_n_per_m", 1.5e6, 2.5e6, True)]
     assert out["design"] == config["design"]
+
+
+def test_a_diagnosis_that_finds_no_misfit_stops_the_loop_and_says_on_what_evidence():
+    # one confirmation battery saw a misfit (p 0.01); the diagnosis pooled it with its baseline battery
+    # at the next seed and found none (p 0.26): the loop stops, and its reason carries both
+    from types import SimpleNamespace
+
+    from service.campaigns.automatic import next_step
+
+    it = SimpleNamespace(number=1, report=None, parameters={"factors": [], "fixed": {}})
+    report = {"lack_of_fit": {"p_value": 0.01}, "verdict": "model misses the measurements",
+              "diagnosis": {"verdict": "no misfit", "indicated": [], "lack_of_fit": {"p_value": 0.26}}}
+    record = next_step(SimpleNamespace(max_iterations=3), {}, [it], it, report)
+    assert record["next_effect"] is None
+    assert record["stop_reason"].startswith("diagnosis: no misfit") and "p 0.26" in record["stop_reason"]
