@@ -10,9 +10,10 @@ seeds the calibration never uses, plus laboratory scatter (calibration.testbed.M
 a nuisance: the pycnometer prior on particle density is 2 % off the truth. Each scenario then runs
 one automatic campaign through the queue and workers: the 2^(4-1) design with 3 centre runs, the
 confirmation, the diagnosis, the top effect added as a fifth factor and its confirmation, and,
-when that effect is rejected, the diagnosis's next candidate (max_iterations 3). Printed per scenario: whether the lack of fit rejects, the truth's rank in the
-diagnosis, the error before and after, chi2/dof after, the particle density found, the batteries
-and the wall time; then the pass criteria of the issue and a machine-readable last line.
+when that effect is rejected, the diagnosis's next candidate (max_iterations 3). Printed per
+scenario: whether the lack of fit rejects, the truth's rank in the diagnosis, the effects tried and
+the one kept, the error before and after, chi2/dof after, the particle density found, the batteries,
+their summed run time and the wall time; then the pass criteria of the issue and a machine-readable last line.
 
     python3 bench/diagnosis_dem.py                               # all five, DEM, a local service
     python3 bench/diagnosis_dem.py --scenarios rolling,null --workers 2
@@ -231,8 +232,8 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
     if existing:
         c = existing[0]
         print(f"{sc.name}: resuming campaign {c['id']} ({c['status']})", flush=True)
-        if c["status"] == "paused":
-            svc.call("POST", f"/campaigns/{c['id']}/resume")
+        if c["status"] in ("draft", "paused"):
+            svc.call("POST", f"/campaigns/{c['id']}/{'start' if c['status'] == 'draft' else 'resume'}")
         return c["id"]
     material = svc.call("POST", "/materials", json={
         "name": f"{name} {evaluator}", "measurements": measurements,
