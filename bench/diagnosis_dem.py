@@ -39,6 +39,7 @@ import argparse
 import hashlib
 import json
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -339,6 +340,8 @@ def main(argv=None) -> int:
     poll_s = 0.2 if args.evaluator == "analytic" else 5.0
     if args.url and args.data_dir:
         ap.error("--data-dir applies to the local service; not with --url")
+    # `kill` (SIGTERM) unwinds like Ctrl-C, so the local service and its workers stop with the script
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     svc = Service(args.url, args.workers, args.data_dir)
     outs = []
     try:
