@@ -24,21 +24,20 @@ CHUNK = 128  # bodies per parallel task; pairs use twice this
 
 
 @njit(cache=True, inline='always')
-def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
+def contact(props, row, hist, hp, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
             r_i, r_j, m_eff, i_roll, kn, root_km, mu, dt, repulsive_only):
     """Force on i (n points from i to j, v = v_i - v_j at the contact, w = omega_i - omega_j).
 
     root_km = sqrt(kn m_eff), precomputed per pair at rebuild (a stiffness effect recomputes it).
     i_roll is the contact's rolling inertia (Ai et al. 2011): 1/i_roll = sum over the two bodies of
     1/(7/5 m r^2), the wall counting as infinite; only the EPSD rolling dashpot reads it."""
-    p = props[row]
-    ks = p[0] * kn
+    ks = props[row, 0] * kn
     fn_el = kn * delta
     knt = kn
     r_eff = r_i if r_j < 0.0 else r_i * r_j / (r_i + r_j)
 {STIFFNESS_HOOKS}
     vn = v0 * n0 + v1 * n1 + v2 * n2
-    cn = 2.0 * p[1] * {ROOT_KNT}
+    cn = 2.0 * props[row, 1] * {ROOT_KNT}
     fn = fn_el + cn * vn
     if repulsive_only and fn < 0.0:
         fn = 0.0
@@ -47,13 +46,14 @@ def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
     t0 = v0 - vn * n0
     t1 = v1 - vn * n1
     t2 = v2 - vn * n2
-    u0, u1, u2 = onto_plane_keep_length(hist[0], hist[1], hist[2], n0, n1, n2)
+    u0, u1, u2 = onto_plane_keep_length(hist[hp, 0], hist[hp, 1], hist[hp, 2], n0, n1, n2)
     u0 += t0 * dt
     u1 += t1 * dt
     u2 += t2 * dt
     cs = 0.0
-    if p[2] != 0.0:
-        cs = 2.0 * p[2] * math.sqrt(ks * m_eff)
+    zeta_t = props[row, 2]
+    if zeta_t != 0.0:
+        cs = 2.0 * zeta_t * math.sqrt(ks * m_eff)
     f0 = -ks * u0 - cs * t0
     f1 = -ks * u1 - cs * t1
     f2 = -ks * u2 - cs * t2
@@ -66,7 +66,7 @@ def contact(props, row, hist, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
         f2 *= s
         if ks > 0.0:
             u0, u1, u2 = -f0 / ks, -f1 / ks, -f2 / ks
-    hist[0], hist[1], hist[2] = u0, u1, u2
+    hist[hp, 0], hist[hp, 1], hist[hp, 2] = u0, u1, u2
     tr0, tr1, tr2 = 0.0, 0.0, 0.0
 {ROLLING_HOOKS}
     return f0 - fn * n0, f1 - fn * n1, f2 - fn * n2, tr0, tr1, tr2, knt
@@ -147,7 +147,7 @@ def pair_block(lo, hi, row_start, pj, hist, pconst, pk, acc, s_pos, s_vel, s_rad
             # rolling inertia: only kernels with a rolling effect compute it (ROLL_INERTIA is 0.0 otherwise)
             i_roll = {ROLL_INERTIA}
             f0, f1, f2, tr0, tr1, tr2, knt = contact(
-                props, row, hist[p], delta, dist, n0, n1, n2, v0, v1, v2,
+                props, row, hist, p, delta, dist, n0, n1, n2, v0, v1, v2,
                 wi0 - wj0, wi1 - wj1, wi2 - wj2, r_i, r_j, pconst[p, 1], i_roll, pconst[p, 0], pconst[p, 2],
                 props[row, 3], dt, repulsive_only)
             pk[p] = knt
@@ -215,10 +215,9 @@ def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
                                         and abs(q0 - m0) + abs(q1 - m1) + abs(q2 - m2) < 1e-9)):
                     touching = False
                     break
-        h = hist[e]
         if not touching:
-            for k in range(h.shape[0]):
-                h[k] = 0.0
+            for k in range(hist.shape[1]):
+                hist[e, k] = 0.0
             for k in range(3):
                 out_f[e, k] = 0.0
                 out_pt[e, k] = 0.0
@@ -241,7 +240,7 @@ def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
         row = n_mat * n_mat + s_mat[i] * n_mat + w_mat[w]
         kn = kp * kw / (kp + kw)
         f0, f1, f2, tr0, tr1, tr2, knt = contact(
-            props, row, h, delta, dist, n0, n1, n2, v0, v1, v2, wi0, wi1, wi2,
+            props, row, hist, e, delta, dist, n0, n1, n2, v0, v1, v2, wi0, wi1, wi2,
             r_i, -1.0, b_mass[b], 1.4 * b_mass[b] * r_i * r_i, kn, math.sqrt(kn * b_mass[b]), w_mu[w], dt,
             repulsive_only)
         s_force[i, 0] += f0

@@ -61,13 +61,13 @@ def _hooks(layout: Layout) -> dict[str, str]:
     for eff, po, ho in zip(layout.effects, layout.prop_offsets, layout.hist_offsets):
         fn = f"_fx_{eff.name}"
         imports.append(f"from {eff.module} import {eff.function} as {fn}")
-        sl = f"pe = p[{po}:{po + 1 + eff.n_props}]"
+        sl = f"pe = props[row, {po}:{po + 1 + eff.n_props}]"
         if eff.stage == "stiffness":
             body = f"fn_el, knt, ks = {fn}(pe, delta, r_eff, kn, ks)"
         elif eff.stage == "normal_extra":
             body = f"fn += {fn}(pe, delta, r_i, r_j, dist, fn_el)"
         else:
-            body = (f"a0, a1, a2 = {fn}(pe, hist, {ho}, n0, n1, n2, w0, w1, w2, fn_el, r_eff, knt, ks, i_roll, dt)\n"
+            body = (f"a0, a1, a2 = {fn}(pe, hist[hp], {ho}, n0, n1, n2, w0, w1, w2, fn_el, r_eff, knt, ks, i_roll, dt)\n"
                     f"{ind * 2}tr0 += a0\n{ind * 2}tr1 += a1\n{ind * 2}tr2 += a2")
         hooks[eff.stage].append(f"{ind}{sl}\n{ind}if pe[0] != 0.0:\n{ind * 2}{body}")
     return {
