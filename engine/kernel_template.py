@@ -16,7 +16,7 @@ from numba import njit, prange
 
 from engine.integrate import drift_body, kick_body
 from engine.springs import onto_plane_keep_length
-from engine.stepping import body_sum, lists_stale, moved_sq, move_walls, needs_rebuild, wall_resultants
+from engine.stepping import body_sum, lists_stale, sign, moved_sq, move_walls, needs_rebuild, wall_resultants
 from engine.wallgeom import MESH, primitive_distance, triangle_distance
 {EFFECT_IMPORTS}
 
@@ -187,8 +187,8 @@ def take_sphere(i, acc, s_force, s_torque):
 def _wall_geom(e, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri, s_pos):
     w = w_ids[e]
     if t_ids[e] >= 0:
-        return triangle_distance(tri[t_ids[e]], w_origin[w], s_pos[i, 0], s_pos[i, 1], s_pos[i, 2])
-    return primitive_distance(w_kind[w], w_origin[w], w_frame[w], w_par[w], s_pos[i, 0], s_pos[i, 1], s_pos[i, 2])
+        return triangle_distance(tri, t_ids[e], w_origin, w, s_pos[i, 0], s_pos[i, 1], s_pos[i, 2])
+    return primitive_distance(w_kind[w], w_origin, w_frame, w_par, w, s_pos[i, 0], s_pos[i, 1], s_pos[i, 2])
 
 
 @njit(cache=True, inline='always')
@@ -285,6 +285,62 @@ def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1,
     half = 0.5 * dt
     moved = 0.0
     for b in range(b_lo, b_hi):
+        i = b_start[b]
+        if not b_clump[b] and c_start[i + 1] == c_start[i]:
+            # a single sphere with no wall contact, the common case: the general path below written out
+            # with the same operations in the same order (bitwise the same), without its inlined helpers,
+            # whose array arguments cost numba reference counting per body
+            t0 = 0.0 + acc[i, 3]
+            t1 = 0.0 + acc[i, 4]
+            t2 = 0.0 + acc[i, 5]
+            m = b_mass[b]
+            f0 = m * g0 + acc[i, 0]
+            f1 = m * g1 + acc[i, 1]
+            f2 = m * g2 + acc[i, 2]
+            s_force[i, 0], s_force[i, 1], s_force[i, 2] = acc[i, 0], acc[i, 1], acc[i, 2]
+            s_torque[i, 0], s_torque[i, 1], s_torque[i, 2] = acc[i, 3], acc[i, 4], acc[i, 5]
+            for k in range(6):
+                acc[i, k] = 0.0
+            a = b_local[b]
+            f0 -= a * abs(f0) * sign(b_vel[b, 0])
+            f1 -= a * abs(f1) * sign(b_vel[b, 1])
+            f2 -= a * abs(f2) * sign(b_vel[b, 2])
+            t0 -= a * abs(t0) * sign(b_omega[b, 0])
+            t1 -= a * abs(t1) * sign(b_omega[b, 1])
+            t2 -= a * abs(t2) * sign(b_omega[b, 2])
+            b_force[b, 0], b_force[b, 1], b_force[b, 2] = f0, f1, f2
+            b_torque[b, 0], b_torque[b, 1], b_torque[b, 2] = t0, t1, t2
+            sv = half / m
+            sw = half / b_inertia[b, 0]
+            v0, v1, v2 = b_vel[b, 0], b_vel[b, 1], b_vel[b, 2]
+            w0, w1, w2 = b_omega[b, 0], b_omega[b, 1], b_omega[b, 2]
+            if finish:
+                v0 += sv * f0
+                v1 += sv * f1
+                v2 += sv * f2
+                w0 += sw * t0
+                w1 += sw * t1
+                w2 += sw * t2
+            if go_on:
+                v0 += sv * f0
+                v1 += sv * f1
+                v2 += sv * f2
+                w0 += sw * t0
+                w1 += sw * t1
+                w2 += sw * t2
+                x0 = b_pos[b, 0] + dt * v0
+                x1 = b_pos[b, 1] + dt * v1
+                x2 = b_pos[b, 2] + dt * v2
+                b_pos[b, 0], b_pos[b, 1], b_pos[b, 2] = x0, x1, x2
+                s_pos[i, 0], s_pos[i, 1], s_pos[i, 2] = x0, x1, x2
+                s_vel[i, 0], s_vel[i, 1], s_vel[i, 2] = v0, v1, v2
+                d0 = x0 - at_build[i, 0]
+                d1 = x1 - at_build[i, 1]
+                d2 = x2 - at_build[i, 2]
+                moved = max(moved, d0 * d0 + d1 * d1 + d2 * d2)
+            b_vel[b, 0], b_vel[b, 1], b_vel[b, 2] = v0, v1, v2
+            b_omega[b, 0], b_omega[b, 1], b_omega[b, 2] = w0, w1, w2
+            continue
         for i in range(b_start[b], b_start[b + 1]):
             take_sphere(i, acc, s_force, s_torque)
             if c_start[i + 1] > c_start[i]:
