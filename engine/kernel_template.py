@@ -191,69 +191,78 @@ def _wall_geom(e, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri, s_pos)
     return primitive_distance(w_kind[w], w_origin, w_frame, w_par, w, s_pos[i, 0], s_pos[i, 1], s_pos[i, 2])
 
 
-@njit(cache=True, inline='always')
-def sphere_walls(i, S, B, W, WC, props, n_mat, dt, repulsive_only):
-    """Add the wall contacts of sphere i to its force and torque; store per-contact wall loads."""
+@njit(cache=True)
+def wall_block(s_lo, s_hi, S, B, W, WC, acc, props, n_mat, dt, repulsive_only):
+    """Add the wall contacts of spheres s_lo..s_hi-1 to their pair sums in acc; store per-contact wall loads.
+
+    Called once per chunk of bodies, before the body pass takes the sums: the state tuples are unpacked
+    once per chunk, not per sphere (numba reference-counts every array taken from a tuple), and a sphere
+    at a wall then takes the body pass's common path like any other. Each wall force is added after
+    the pair sum, in contact order, as when the walls were added to the taken sum."""
     start, w_ids, t_ids, hist, out_f, out_pt, out_k = WC.start, WC.wall, WC.tri, WC.hist, WC.force, WC.point, WC.k
     s_pos, s_vel, s_rad, s_mat, s_kp, s_body = S.pos, S.vel, S.radius, S.material, S.kp, S.body
-    s_force, s_torque, b_mass, b_omega = S.force, S.torque, B.mass, B.omega
+    b_mass, b_omega = B.mass, B.omega
     w_kind, w_origin, w_frame, w_par, tri = W.kind, W.origin, W.frame, W.par, W.tri
     w_kn, w_mu, w_mat, w_vel, w_omega, w_centre = W.kn, W.mu, W.material, W.vel, W.omega, W.centre
-    r_i = s_rad[i]
-    b = s_body[i]
-    for e in range(start[i], start[i + 1]):
-        w = w_ids[e]
-        dist, m0, m1, m2, face = _wall_geom(e, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri, s_pos)
-        touching = dist < r_i
-        if touching and t_ids[e] >= 0 and not face:
-            # edge/vertex contact of a mesh: skip if a face (or an earlier identical edge) carries it
-            for e2 in range(start[i], start[i + 1]):
-                if e2 == e or w_ids[e2] != w:
-                    continue
-                dd, q0, q1, q2, f2 = _wall_geom(e2, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri, s_pos)
-                if dd < r_i and (f2 or (e2 < e and abs(dd - dist) < 1e-12 * r_i
-                                        and abs(q0 - m0) + abs(q1 - m1) + abs(q2 - m2) < 1e-9)):
-                    touching = False
-                    break
-        if not touching:
-            for k in range(hist.shape[1]):
-                hist[e, k] = 0.0
-            for k in range(3):
-                out_f[e, k] = 0.0
-                out_pt[e, k] = 0.0
-            out_k[e] = 0.0
+    for i in range(s_lo, s_hi):
+        if start[i + 1] == start[i]:
             continue
-        n0, n1, n2 = -m0, -m1, -m2
-        delta = r_i - dist
-        a_i = r_i - 0.5 * delta
-        wi0, wi1, wi2 = b_omega[b, 0], b_omega[b, 1], b_omega[b, 2]
-        # wall surface velocity at the contact point: translation + omega_w x (point - centre)
-        r0 = s_pos[i, 0] + a_i * n0 - w_centre[w, 0]
-        r1 = s_pos[i, 1] + a_i * n1 - w_centre[w, 1]
-        r2 = s_pos[i, 2] + a_i * n2 - w_centre[w, 2]
-        ww0, ww1, ww2 = w_omega[w, 0], w_omega[w, 1], w_omega[w, 2]
-        v0 = s_vel[i, 0] - w_vel[w, 0] - (ww1 * r2 - ww2 * r1) + a_i * (wi1 * n2 - wi2 * n1)
-        v1 = s_vel[i, 1] - w_vel[w, 1] - (ww2 * r0 - ww0 * r2) + a_i * (wi2 * n0 - wi0 * n2)
-        v2 = s_vel[i, 2] - w_vel[w, 2] - (ww0 * r1 - ww1 * r0) + a_i * (wi0 * n1 - wi1 * n0)
-        kp = s_kp[i]
-        kw = w_kn[w]
-        row = n_mat * n_mat + s_mat[i] * n_mat + w_mat[w]
-        kn = kp * kw / (kp + kw)
-        f0, f1, f2, tr0, tr1, tr2, knt = contact(
-            props, row, hist, e, delta, dist, n0, n1, n2, v0, v1, v2, wi0, wi1, wi2,
-            r_i, -1.0, b_mass[b], 1.4 * b_mass[b] * r_i * r_i, kn, math.sqrt(kn * b_mass[b]), w_mu[w], dt,
-            repulsive_only)
-        s_force[i, 0] += f0
-        s_force[i, 1] += f1
-        s_force[i, 2] += f2
-        s_torque[i, 0] += a_i * (n1 * f2 - n2 * f1) + tr0
-        s_torque[i, 1] += a_i * (n2 * f0 - n0 * f2) + tr1
-        s_torque[i, 2] += a_i * (n0 * f1 - n1 * f0) + tr2
-        out_f[e, 0], out_f[e, 1], out_f[e, 2] = -f0, -f1, -f2
-        out_pt[e, 0] = s_pos[i, 0] + a_i * n0
-        out_pt[e, 1] = s_pos[i, 1] + a_i * n1
-        out_pt[e, 2] = s_pos[i, 2] + a_i * n2
-        out_k[e] = knt
+        r_i = s_rad[i]
+        b = s_body[i]
+        for e in range(start[i], start[i + 1]):
+            w = w_ids[e]
+            dist, m0, m1, m2, face = _wall_geom(e, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri, s_pos)
+            touching = dist < r_i
+            if touching and t_ids[e] >= 0 and not face:
+                # edge/vertex contact of a mesh: skip if a face (or an earlier identical edge) carries it
+                for e2 in range(start[i], start[i + 1]):
+                    if e2 == e or w_ids[e2] != w:
+                        continue
+                    dd, q0, q1, q2, f2 = _wall_geom(e2, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri,
+                                                    s_pos)
+                    if dd < r_i and (f2 or (e2 < e and abs(dd - dist) < 1e-12 * r_i
+                                            and abs(q0 - m0) + abs(q1 - m1) + abs(q2 - m2) < 1e-9)):
+                        touching = False
+                        break
+            if not touching:
+                for k in range(hist.shape[1]):
+                    hist[e, k] = 0.0
+                for k in range(3):
+                    out_f[e, k] = 0.0
+                    out_pt[e, k] = 0.0
+                out_k[e] = 0.0
+                continue
+            n0, n1, n2 = -m0, -m1, -m2
+            delta = r_i - dist
+            a_i = r_i - 0.5 * delta
+            wi0, wi1, wi2 = b_omega[b, 0], b_omega[b, 1], b_omega[b, 2]
+            # wall surface velocity at the contact point: translation + omega_w x (point - centre)
+            r0 = s_pos[i, 0] + a_i * n0 - w_centre[w, 0]
+            r1 = s_pos[i, 1] + a_i * n1 - w_centre[w, 1]
+            r2 = s_pos[i, 2] + a_i * n2 - w_centre[w, 2]
+            ww0, ww1, ww2 = w_omega[w, 0], w_omega[w, 1], w_omega[w, 2]
+            v0 = s_vel[i, 0] - w_vel[w, 0] - (ww1 * r2 - ww2 * r1) + a_i * (wi1 * n2 - wi2 * n1)
+            v1 = s_vel[i, 1] - w_vel[w, 1] - (ww2 * r0 - ww0 * r2) + a_i * (wi2 * n0 - wi0 * n2)
+            v2 = s_vel[i, 2] - w_vel[w, 2] - (ww0 * r1 - ww1 * r0) + a_i * (wi0 * n1 - wi1 * n0)
+            kp = s_kp[i]
+            kw = w_kn[w]
+            row = n_mat * n_mat + s_mat[i] * n_mat + w_mat[w]
+            kn = kp * kw / (kp + kw)
+            f0, f1, f2, tr0, tr1, tr2, knt = contact(
+                props, row, hist, e, delta, dist, n0, n1, n2, v0, v1, v2, wi0, wi1, wi2,
+                r_i, -1.0, b_mass[b], 1.4 * b_mass[b] * r_i * r_i, kn, math.sqrt(kn * b_mass[b]), w_mu[w], dt,
+                repulsive_only)
+            acc[i, 0] += f0
+            acc[i, 1] += f1
+            acc[i, 2] += f2
+            acc[i, 3] += a_i * (n1 * f2 - n2 * f1) + tr0
+            acc[i, 4] += a_i * (n2 * f0 - n0 * f2) + tr1
+            acc[i, 5] += a_i * (n0 * f1 - n1 * f0) + tr2
+            out_f[e, 0], out_f[e, 1], out_f[e, 2] = -f0, -f1, -f2
+            out_pt[e, 0] = s_pos[i, 0] + a_i * n0
+            out_pt[e, 1] = s_pos[i, 1] + a_i * n1
+            out_pt[e, 2] = s_pos[i, 2] + a_i * n2
+            out_k[e] = knt
 '''
 
 TEMPLATE += '''
@@ -280,16 +289,17 @@ def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1,
                                                                B.is_clump, B.local_damping)
     s_offset, s_pos, s_vel, s_force, s_torque = S.offset, S.pos, S.vel, S.force, S.torque
     acc = P.acc
-    c_start = WC.start
     at_build = S.pos_at_build
     half = 0.5 * dt
     moved = 0.0
+    if b_hi > b_lo:
+        wall_block(b_start[b_lo], b_start[b_hi], S, B, W, WC, acc, props, n_mat, dt_contact, repulsive_only)
     for b in range(b_lo, b_hi):
         i = b_start[b]
-        if not b_clump[b] and c_start[i + 1] == c_start[i]:
-            # a single sphere with no wall contact, the common case: the general path below written out
-            # with the same operations in the same order (bitwise the same), without its inlined helpers,
-            # whose array arguments cost numba reference counting per body
+        if not b_clump[b]:
+            # a single sphere, the common case: the general path below written out with the same
+            # operations in the same order (bitwise the same), without its inlined helpers, whose array
+            # arguments cost numba reference counting per body
             t0 = 0.0 + acc[i, 3]
             t1 = 0.0 + acc[i, 4]
             t2 = 0.0 + acc[i, 5]
@@ -343,8 +353,6 @@ def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1,
             continue
         for i in range(b_start[b], b_start[b + 1]):
             take_sphere(i, acc, s_force, s_torque)
-            if c_start[i + 1] > c_start[i]:
-                sphere_walls(i, S, B, W, WC, props, n_mat, dt_contact, repulsive_only)
         body_sum(b, b_pos, b_vel, b_omega, b_mass, b_force, b_torque, b_start, b_clump, b_local, s_pos,
                  s_force, s_torque, g0, g1, g2)
         if finish:
