@@ -17,7 +17,7 @@ from numba import njit, prange
 from engine.integrate import drift_body, kick_body
 from engine.springs import onto_plane_keep_length
 from engine.stepping import body_sum, lists_stale, sign, moved_sq, move_walls, needs_rebuild, wall_resultants
-from engine.wallgeom import MESH, primitive_distance, triangle_distance
+from engine.wallgeom import MESH, primitive_distance, triangle_distance, triangle_row, wall_row
 {EFFECT_IMPORTS}
 
 CHUNK = 128  # bodies per parallel task; pairs use twice this
@@ -183,14 +183,6 @@ def take_sphere(i, acc, s_force, s_torque):
         acc[i, k] = 0.0
 
 
-@njit(cache=True, inline='always')
-def _wall_geom(e, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri, s_pos):
-    w = w_ids[e]
-    if t_ids[e] >= 0:
-        return triangle_distance(tri, t_ids[e], w_origin, w, s_pos[i, 0], s_pos[i, 1], s_pos[i, 2])
-    return primitive_distance(w_kind[w], w_origin, w_frame, w_par, w, s_pos[i, 0], s_pos[i, 1], s_pos[i, 2])
-
-
 @njit(cache=True)
 def wall_block(s_lo, s_hi, S, B, W, WC, acc, props, n_mat, dt, repulsive_only):
     """Add the wall contacts of spheres s_lo..s_hi-1 to their pair sums in acc; store per-contact wall loads.
@@ -209,17 +201,22 @@ def wall_block(s_lo, s_hi, S, B, W, WC, acc, props, n_mat, dt, repulsive_only):
             continue
         r_i = s_rad[i]
         b = s_body[i]
+        x0, x1, x2 = s_pos[i, 0], s_pos[i, 1], s_pos[i, 2]
         for e in range(start[i], start[i + 1]):
             w = w_ids[e]
-            dist, m0, m1, m2, face = _wall_geom(e, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri, s_pos)
+            if t_ids[e] >= 0:
+                dist, m0, m1, m2, face = triangle_distance(triangle_row(tri, t_ids[e], w_origin, w), x0, x1, x2)
+            else:
+                dist, m0, m1, m2, face = primitive_distance(w_kind[w], wall_row(w_origin, w_frame, w_par, w),
+                                                            x0, x1, x2)
             touching = dist < r_i
             if touching and t_ids[e] >= 0 and not face:
-                # edge/vertex contact of a mesh: skip if a face (or an earlier identical edge) carries it
+                # edge/vertex contact of a mesh: skip if a face (or an earlier identical edge) carries it;
+                # the other entries of the same wall are triangles of the same mesh
                 for e2 in range(start[i], start[i + 1]):
                     if e2 == e or w_ids[e2] != w:
                         continue
-                    dd, q0, q1, q2, f2 = _wall_geom(e2, i, w_ids, t_ids, w_kind, w_origin, w_frame, w_par, tri,
-                                                    s_pos)
+                    dd, q0, q1, q2, f2 = triangle_distance(triangle_row(tri, t_ids[e2], w_origin, w), x0, x1, x2)
                     if dd < r_i and (f2 or (e2 < e and abs(dd - dist) < 1e-12 * r_i
                                             and abs(q0 - m0) + abs(q1 - m1) + abs(q2 - m2) < 1e-9)):
                         touching = False

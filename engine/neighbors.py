@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .wallgeom import MESH, primitive_distance, triangle_distance
+from .wallgeom import MESH, primitive_distance, triangle_distance, triangle_row, wall_row
 
 
 @njit(cache=True)
@@ -153,7 +153,7 @@ def _wall_scan(i, pos, radius, skin, w_type, w_origin, w_frame, w_par, w_tri_sta
     for w in range(w_type.shape[0]):
         if w_type[w] == MESH:
             continue
-        dist, n0, n1, n2, face = primitive_distance(w_type[w], w_origin, w_frame, w_par, w, x0, x1, x2)
+        dist, n0, n1, n2, face = primitive_distance(w_type[w], wall_row(w_origin, w_frame, w_par, w), x0, x1, x2)
         if dist < reach:
             if write:
                 out_wall[count] = w
@@ -167,7 +167,7 @@ def _wall_scan(i, pos, radius, skin, w_type, w_origin, w_frame, w_par, w_tri_sta
                 or x2 < box_lo[w, 2] + w_origin[w, 2] - reach or x2 > box_hi[w, 2] + w_origin[w, 2] + reach):
             continue
         for t in range(w_tri_start[w], w_tri_start[w + 1]):
-            dist, n0, n1, n2, face = triangle_distance(tri, t, w_origin, w, x0, x1, x2)
+            dist, n0, n1, n2, face = triangle_distance(triangle_row(tri, t, w_origin, w), x0, x1, x2)
             if dist < reach:
                 if write:
                     out_wall[count] = w

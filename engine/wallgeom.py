@@ -4,8 +4,10 @@ Every function returns (dist, n0, n1, n2, on_face): the distance of a sphere cen
 surface along the unit normal n that points from the surface to the centre (negative inside a
 solid box or behind a one-sided plane), and whether the closest point lies inside a face (used to
 drop duplicate edge contacts on meshes). Local frames: rows of `frame[w]` are the axes u, v, w.
-The functions take the walls' whole arrays and the row to read (w, t), not per-wall views: numba
-reference-counts every view it makes, which cost more than the geometry in the per-step wall pass.
+The distance functions take a wall's (or triangle's) row as tuples of floats, read by `wall_row` /
+`triangle_row`: tuples are plain values to numba, while every array handed to an inlined function
+with branches costs a reference-count increment and decrement per call, which cost more than the
+geometry itself in the per-step wall pass.
 """
 from __future__ import annotations
 
@@ -16,54 +18,73 @@ from numba import njit
 PLANE, DISK, RECTANGLE, FRUSTUM, BOX, MESH = 0, 1, 2, 3, 4, 5
 
 
-@njit(cache=True)
-def _to_local(frame, w, d0, d1, d2):
+@njit(cache=True, inline='always')
+def wall_row(origin, frame, par, w):
+    """Wall w's origin (3), frame rows u, v, w (9, row-major) and parameters (3), as float tuples."""
+    return ((origin[w, 0], origin[w, 1], origin[w, 2]),
+            (frame[w, 0, 0], frame[w, 0, 1], frame[w, 0, 2], frame[w, 1, 0], frame[w, 1, 1], frame[w, 1, 2],
+             frame[w, 2, 0], frame[w, 2, 1], frame[w, 2, 2]),
+            (par[w, 0], par[w, 1], par[w, 2]))
+
+
+@njit(cache=True, inline='always')
+def triangle_row(tri, t, origin, w):
+    """Triangle t of mesh wall w: its vertices (3 x 3, relative to the wall origin) and the origin."""
+    return ((tri[t, 0, 0], tri[t, 0, 1], tri[t, 0, 2], tri[t, 1, 0], tri[t, 1, 1], tri[t, 1, 2],
+             tri[t, 2, 0], tri[t, 2, 1], tri[t, 2, 2]),
+            (origin[w, 0], origin[w, 1], origin[w, 2]))
+
+
+@njit(cache=True, inline='always')
+def _to_local(fr, d0, d1, d2):
     return (
-        frame[w, 0, 0] * d0 + frame[w, 0, 1] * d1 + frame[w, 0, 2] * d2,
-        frame[w, 1, 0] * d0 + frame[w, 1, 1] * d1 + frame[w, 1, 2] * d2,
-        frame[w, 2, 0] * d0 + frame[w, 2, 1] * d1 + frame[w, 2, 2] * d2,
+        fr[0] * d0 + fr[1] * d1 + fr[2] * d2,
+        fr[3] * d0 + fr[4] * d1 + fr[5] * d2,
+        fr[6] * d0 + fr[7] * d1 + fr[8] * d2,
     )
 
 
-@njit(cache=True)
-def _to_world(frame, w, l0, l1, l2):
+@njit(cache=True, inline='always')
+def _to_world(fr, l0, l1, l2):
     return (
-        frame[w, 0, 0] * l0 + frame[w, 1, 0] * l1 + frame[w, 2, 0] * l2,
-        frame[w, 0, 1] * l0 + frame[w, 1, 1] * l1 + frame[w, 2, 1] * l2,
-        frame[w, 0, 2] * l0 + frame[w, 1, 2] * l1 + frame[w, 2, 2] * l2,
+        fr[0] * l0 + fr[3] * l1 + fr[6] * l2,
+        fr[1] * l0 + fr[4] * l1 + fr[7] * l2,
+        fr[2] * l0 + fr[5] * l1 + fr[8] * l2,
     )
 
 
-@njit(cache=True)
-def _from_local_diff(frame, w, l0, l1, l2, fallback_w):
+@njit(cache=True, inline='always')
+def _from_local_diff(fr, l0, l1, l2, fallback_w):
     dist = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2)
     if dist > 0.0:
-        n0, n1, n2 = _to_world(frame, w, l0 / dist, l1 / dist, l2 / dist)
+        n0, n1, n2 = _to_world(fr, l0 / dist, l1 / dist, l2 / dist)
     else:
-        n0, n1, n2 = _to_world(frame, w, 0.0, 0.0, fallback_w)
+        n0, n1, n2 = _to_world(fr, 0.0, 0.0, fallback_w)
     return dist, n0, n1, n2
 
 
-@njit(cache=True)
-def primitive_distance(kind, origin, frame, par, w, x0, x1, x2):
-    l0, l1, l2 = _to_local(frame, w, x0 - origin[w, 0], x1 - origin[w, 1], x2 - origin[w, 2])
+@njit(cache=True, inline='always')
+def primitive_distance(kind, row, x0, x1, x2):
+    """Distance of the centre x from a primitive wall whose `wall_row` is row."""
+    o, fr, par = row
+    l0, l1, l2 = _to_local(fr, x0 - o[0], x1 - o[1], x2 - o[2])
     if kind == PLANE:
-        return l2, frame[w, 2, 0], frame[w, 2, 1], frame[w, 2, 2], True
+        return l2, fr[6], fr[7], fr[8], True
     if kind == DISK:
         rho = math.sqrt(l0 * l0 + l1 * l1)
-        if rho <= par[w, 0]:
-            dist, n0, n1, n2 = _from_local_diff(frame, w, 0.0, 0.0, l2, 1.0)
+        if rho <= par[0]:
+            dist, n0, n1, n2 = _from_local_diff(fr, 0.0, 0.0, l2, 1.0)
             return dist, n0, n1, n2, True
-        s = par[w, 0] / rho
-        dist, n0, n1, n2 = _from_local_diff(frame, w, l0 - s * l0, l1 - s * l1, l2, 1.0)
+        s = par[0] / rho
+        dist, n0, n1, n2 = _from_local_diff(fr, l0 - s * l0, l1 - s * l1, l2, 1.0)
         return dist, n0, n1, n2, False
     if kind == RECTANGLE:
-        c0 = min(max(l0, -par[w, 0]), par[w, 0])
-        c1 = min(max(l1, -par[w, 1]), par[w, 1])
-        dist, n0, n1, n2 = _from_local_diff(frame, w, l0 - c0, l1 - c1, l2, 1.0)
+        c0 = min(max(l0, -par[0]), par[0])
+        c1 = min(max(l1, -par[1]), par[1])
+        dist, n0, n1, n2 = _from_local_diff(fr, l0 - c0, l1 - c1, l2, 1.0)
         return dist, n0, n1, n2, c0 == l0 and c1 == l1
     if kind == FRUSTUM:
-        r0, r1, h = par[w, 0], par[w, 1], par[w, 2]
+        r0, r1, h = par[0], par[1], par[2]
         rho = math.sqrt(l0 * l0 + l1 * l1)
         if rho > 0.0:
             e0, e1 = l0 / rho, l1 / rho
@@ -76,36 +97,38 @@ def primitive_distance(kind, origin, frame, par, w, x0, x1, x2):
         dq = rho - (r0 + t * dr)
         dz = l2 - t * h
         # radial sign: the normal points to the side the centre is on (inside for a bucket)
-        dist, n0, n1, n2 = _from_local_diff(frame, w, dq * e0, dq * e1, dz, 1.0)
+        dist, n0, n1, n2 = _from_local_diff(fr, dq * e0, dq * e1, dz, 1.0)
         return dist, n0, n1, n2, on_face
     if kind == BOX:
-        q0 = abs(l0) - par[w, 0]
-        q1 = abs(l1) - par[w, 1]
-        q2 = abs(l2) - par[w, 2]
+        q0 = abs(l0) - par[0]
+        q1 = abs(l1) - par[1]
+        q2 = abs(l2) - par[2]
         if q0 > 0.0 or q1 > 0.0 or q2 > 0.0:
-            c0 = min(max(l0, -par[w, 0]), par[w, 0])
-            c1 = min(max(l1, -par[w, 1]), par[w, 1])
-            c2 = min(max(l2, -par[w, 2]), par[w, 2])
-            dist, n0, n1, n2 = _from_local_diff(frame, w, l0 - c0, l1 - c1, l2 - c2, 1.0)
+            c0 = min(max(l0, -par[0]), par[0])
+            c1 = min(max(l1, -par[1]), par[1])
+            c2 = min(max(l2, -par[2]), par[2])
+            dist, n0, n1, n2 = _from_local_diff(fr, l0 - c0, l1 - c1, l2 - c2, 1.0)
             return dist, n0, n1, n2, True
         # centre inside the box: push out through the nearest face
         if q0 >= q1 and q0 >= q2:
-            n0, n1, n2 = _to_world(frame, w, 1.0 if l0 >= 0 else -1.0, 0.0, 0.0)
+            n0, n1, n2 = _to_world(fr, 1.0 if l0 >= 0 else -1.0, 0.0, 0.0)
             return q0, n0, n1, n2, True
         if q1 >= q2:
-            n0, n1, n2 = _to_world(frame, w, 0.0, 1.0 if l1 >= 0 else -1.0, 0.0)
+            n0, n1, n2 = _to_world(fr, 0.0, 1.0 if l1 >= 0 else -1.0, 0.0)
             return q1, n0, n1, n2, True
-        n0, n1, n2 = _to_world(frame, w, 0.0, 0.0, 1.0 if l2 >= 0 else -1.0)
+        n0, n1, n2 = _to_world(fr, 0.0, 0.0, 1.0 if l2 >= 0 else -1.0)
         return q2, n0, n1, n2, True
     return 1e300, 0.0, 0.0, 1.0, True
 
 
-@njit(cache=True)
-def triangle_distance(tri, t, origin, w, x0, x1, x2):
-    """Closest point on a triangle (Ericson, Real-Time Collision Detection 5.1.5)."""
-    a0, a1, a2 = tri[t, 0, 0] + origin[w, 0], tri[t, 0, 1] + origin[w, 1], tri[t, 0, 2] + origin[w, 2]
-    ab0, ab1, ab2 = tri[t, 1, 0] - tri[t, 0, 0], tri[t, 1, 1] - tri[t, 0, 1], tri[t, 1, 2] - tri[t, 0, 2]
-    ac0, ac1, ac2 = tri[t, 2, 0] - tri[t, 0, 0], tri[t, 2, 1] - tri[t, 0, 1], tri[t, 2, 2] - tri[t, 0, 2]
+@njit(cache=True, inline='always')
+def triangle_distance(row, x0, x1, x2):
+    """Closest point on the triangle whose `triangle_row` is row (Ericson, Real-Time Collision Detection
+    5.1.5)."""
+    vt, o = row
+    a0, a1, a2 = vt[0] + o[0], vt[1] + o[1], vt[2] + o[2]
+    ab0, ab1, ab2 = vt[3] - vt[0], vt[4] - vt[1], vt[5] - vt[2]
+    ac0, ac1, ac2 = vt[6] - vt[0], vt[7] - vt[1], vt[8] - vt[2]
     ap0, ap1, ap2 = x0 - a0, x1 - a1, x2 - a2
     d1 = ab0 * ap0 + ab1 * ap1 + ab2 * ap2
     d2 = ac0 * ap0 + ac1 * ap1 + ac2 * ap2
