@@ -273,24 +273,28 @@ def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repu
     writes the largest squared sphere displacement since the last rebuild into moved[chunk]."""
     n = B.pos.shape[0]
     n_chunks = (n + CHUNK - 1) // CHUNK
+    b_start, c_start, acc = B.sphere_start, WC.start, P.acc
     for c in prange(n_chunks):
-        moved[c] = body_range(c * CHUNK, min(n, c * CHUNK + CHUNK), B, S, W, P, WC, props, n_mat, dt,
-                              dt_contact, g0, g1, g2, repulsive_only, finish, go_on)
+        b_lo = c * CHUNK
+        b_hi = min(n, b_lo + CHUNK)
+        s_lo, s_hi = b_start[b_lo], b_start[b_hi]
+        if c_start[s_hi] > c_start[s_lo]:
+            wall_block(s_lo, s_hi, S, B, W, WC, acc, props, n_mat, dt_contact, repulsive_only)
+        moved[c] = body_range(b_lo, b_hi, B, S, acc, dt, g0, g1, g2, finish, go_on)
 
 
 @njit(cache=True)
-def body_range(b_lo, b_hi, B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only, finish,
-               go_on):
+def body_range(b_lo, b_hi, B, S, acc, dt, g0, g1, g2, finish, go_on):
+    """Bodies b_lo..b_hi-1 (their spheres' wall contacts already added to acc): take the sums, add
+    gravity and local damping, kick and drift. Takes only the state it reads: numba reference-counts
+    every array of every state tuple handed to a call, once per chunk."""
     b_pos, b_vel, b_quat, b_omega, b_mass = B.pos, B.vel, B.quat, B.omega, B.mass
     b_inertia, b_force, b_torque, b_start, b_clump, b_local = (B.inertia, B.force, B.torque, B.sphere_start,
                                                                B.is_clump, B.local_damping)
     s_offset, s_pos, s_vel, s_force, s_torque = S.offset, S.pos, S.vel, S.force, S.torque
-    acc = P.acc
     at_build = S.pos_at_build
     half = 0.5 * dt
     moved = 0.0
-    if b_hi > b_lo:
-        wall_block(b_start[b_lo], b_start[b_hi], S, B, W, WC, acc, props, n_mat, dt_contact, repulsive_only)
     for b in range(b_lo, b_hi):
         i = b_start[b]
         if not b_clump[b]:
