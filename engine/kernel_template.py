@@ -184,18 +184,16 @@ def take_sphere(i, acc, s_force, s_torque):
 
 
 @njit(cache=True)
-def wall_block(s_lo, s_hi, S, B, W, WC, acc, props, n_mat, dt, repulsive_only):
+def wall_block(s_lo, s_hi, start, w_ids, t_ids, hist, out_f, out_pt, out_k, s_pos, s_vel, s_rad, s_mat, s_kp,
+               s_body, b_mass, b_omega, w_kind, w_origin, w_frame, w_par, tri, w_kn, w_mu, w_mat, w_vel, w_omega,
+               w_centre, acc, props, n_mat, dt, repulsive_only):
     """Add the wall contacts of spheres s_lo..s_hi-1 to their pair sums in acc; store per-contact wall loads.
 
-    Called once per chunk of bodies, before the body pass takes the sums: the state tuples are unpacked
-    once per chunk, not per sphere (numba reference-counts every array taken from a tuple), and a sphere
-    at a wall then takes the body pass's common path like any other. Each wall force is added after
-    the pair sum, in contact order, as when the walls were added to the taken sum."""
-    start, w_ids, t_ids, hist, out_f, out_pt, out_k = WC.start, WC.wall, WC.tri, WC.hist, WC.force, WC.point, WC.k
-    s_pos, s_vel, s_rad, s_mat, s_kp, s_body = S.pos, S.vel, S.radius, S.material, S.kp, S.body
-    b_mass, b_omega = B.mass, B.omega
-    w_kind, w_origin, w_frame, w_par, tri = W.kind, W.origin, W.frame, W.par, W.tri
-    w_kn, w_mu, w_mat, w_vel, w_omega, w_centre = W.kn, W.mu, W.material, W.vel, W.omega, W.centre
+    Called once per chunk of bodies that has wall candidates, before the body pass takes the sums, with
+    the arrays it reads rather than the state tuples (numba reference-counts each array handed to a
+    call, and per sphere when taken from a tuple inside the loop); a sphere at a wall then takes the body
+    pass's common path like any other. Each wall force is added after the pair sum, in contact order, as
+    when the walls were added to the taken sum."""
     for i in range(s_lo, s_hi):
         if start[i + 1] == start[i]:
             continue
@@ -273,13 +271,20 @@ def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repu
     writes the largest squared sphere displacement since the last rebuild into moved[chunk]."""
     n = B.pos.shape[0]
     n_chunks = (n + CHUNK - 1) // CHUNK
-    b_start, c_start, acc = B.sphere_start, WC.start, P.acc
+    b_start, acc = B.sphere_start, P.acc
+    c_start, w_ids, t_ids, c_hist, c_f, c_pt, c_k = WC.start, WC.wall, WC.tri, WC.hist, WC.force, WC.point, WC.k
+    s_pos, s_vel, s_rad, s_mat, s_kp, s_body = S.pos, S.vel, S.radius, S.material, S.kp, S.body
+    b_mass, b_omega = B.mass, B.omega
+    w_kind, w_origin, w_frame, w_par, tri = W.kind, W.origin, W.frame, W.par, W.tri
+    w_kn, w_mu, w_mat, w_vel, w_omega, w_centre = W.kn, W.mu, W.material, W.vel, W.omega, W.centre
     for c in prange(n_chunks):
         b_lo = c * CHUNK
         b_hi = min(n, b_lo + CHUNK)
         s_lo, s_hi = b_start[b_lo], b_start[b_hi]
         if c_start[s_hi] > c_start[s_lo]:
-            wall_block(s_lo, s_hi, S, B, W, WC, acc, props, n_mat, dt_contact, repulsive_only)
+            wall_block(s_lo, s_hi, c_start, w_ids, t_ids, c_hist, c_f, c_pt, c_k, s_pos, s_vel, s_rad, s_mat,
+                       s_kp, s_body, b_mass, b_omega, w_kind, w_origin, w_frame, w_par, tri, w_kn, w_mu, w_mat,
+                       w_vel, w_omega, w_centre, acc, props, n_mat, dt_contact, repulsive_only)
         moved[c] = body_range(b_lo, b_hi, B, S, acc, dt, g0, g1, g2, finish, go_on)
 
 
