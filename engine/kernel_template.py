@@ -3,7 +3,10 @@
 Not imported directly: the text between the markers is the generated module. Placeholders:
 {EFFECT_IMPORTS}, {STIFFNESS_HOOKS}, {NORMAL_EXTRA_HOOKS}, {ROLLING_HOOKS} (8-space indented code),
 {ROLL_INERTIA} (the pair's rolling inertia where a rolling effect is compiled in, else 0.0),
-{ROOT_KNT} (sqrt(kn_tangent m_eff): the precomputed root, or recomputed where a stiffness effect changes kn).
+{ROOT_KNT} (sqrt(kn_tangent m_eff): the precomputed root, or recomputed where a stiffness effect changes kn),
+{N_HIST} (the history row's width, a literal so the clearing loops unroll).
+Every kernel uses numpy's error model: a division by zero gives inf or nan, which the rebuild's
+finiteness check reports naming the body, rather than a per-division test and exception path.
 Property row: [ks_ratio, damping_ratio_normal, damping_ratio_shear, friction, effect columns...];
 history row: [tangential spring displacement (3), effect slots...].
 """
@@ -16,14 +19,15 @@ from numba import njit, prange
 
 from engine.integrate import drift_body, kick_body
 from engine.springs import onto_plane_keep_length
-from engine.stepping import body_sum, damped, lists_stale, moved_sq, move_walls, needs_rebuild, wall_resultants
-from engine.wallgeom import MESH, primitive_distance, triangle_distance, triangle_row, wall_row
+from engine.stepping import (body_sum, damped, farther, lists_stale, moved_sq, move_walls, needs_rebuild,
+                             wall_resultants)
+from engine.wallgeom import primitive_distance, triangle_distance, triangle_row, wall_row
 {EFFECT_IMPORTS}
 
 CHUNK = 128  # bodies per parallel task; pairs use twice this
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', error_model='numpy')
 def contact(props, row, hist, hp, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w2,
             r_i, r_j, m_eff, i_roll, kn, root_km, mu, dt, repulsive_only):
     """Force on i (n points from i to j, v = v_i - v_j at the contact, w = omega_i - omega_j).
@@ -72,7 +76,7 @@ def contact(props, row, hist, hp, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w
     return f0 - fn * n0, f1 - fn * n1, f2 - fn * n2, tr0, tr1, tr2, knt
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', error_model='numpy')
 def pair_rolling_inertia(mi, mj, r_i, r_j):
     """1 / (1 / (7/5 mi ri^2) + 1 / (7/5 mj rj^2)), the contact's rolling inertia (Ai et al. 2011)."""
     roll_i = mi * r_i * r_i
@@ -80,7 +84,7 @@ def pair_rolling_inertia(mi, mj, r_i, r_j):
     return 1.4 * roll_i * roll_j / (roll_i + roll_j)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, error_model='numpy')
 def pair_forces(P, S, B, props, n_mat, dt, repulsive_only):
     """All particle-particle contacts, added straight into both spheres' accumulators (P.acc).
 
@@ -99,25 +103,47 @@ def pair_forces(P, S, B, props, n_mat, dt, repulsive_only):
                        s_vel, s_rad, s_mat, s_body, b_omega, b_mass, props, n_mat, dt, repulsive_only)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def pair_block(lo, hi, row_start, pj, hist, pconst, pk, acc, s_pos, s_vel, s_rad, s_mat, s_body, b_omega,
                b_mass, props, n_mat, dt, repulsive_only):
-    """Rows lo..hi-1: sphere i's own sums stay in registers; partner j's are added in place."""
-    n_hist = hist.shape[1]
-    for i in range(lo, hi):
-        p_lo = row_start[i]
-        p_hi = row_start[i + 1]
+    """Rows lo..hi-1: sphere i's own sums stay in registers; partner j's are added in place.
+
+    A row is taken in two sweeps. The first tests every candidate and lists, without branching on the
+    test, those touching and those whose history may need clearing (pk[p] nonzero: the stiffness at
+    the last evaluation, or a rebuild's mark on carried history). About half the candidates of a dense
+    packing touch, so a branch on the test is mispredicted half the time; the listing costs a store.
+    The second sweep computes the listed pairs in pair order, so the sums are bitwise those of one
+    sweep. Indices are unsigned: numba then skips the negative-index wraparound on every access."""
+    longest = 0
+    for ii in range(lo, hi):
+        longest = max(longest, row_start[ii + 1] - row_start[ii])
+    listed = np.empty(longest, np.uint64)
+    for ii in range(lo, hi):
+        i = np.uint64(ii)
+        p_lo = np.uint64(row_start[ii])
+        p_hi = np.uint64(row_start[ii + 1])
         if p_lo == p_hi:
             continue
         x0, x1, x2 = s_pos[i, 0], s_pos[i, 1], s_pos[i, 2]
-        u0, u1, u2 = s_vel[i, 0], s_vel[i, 1], s_vel[i, 2]
         r_i = s_rad[i]
-        bi = s_body[i]
+        n_listed = 0
+        for p in range(p_lo, p_hi):
+            j = np.uint64(pj[p])
+            d0 = s_pos[j, 0] - x0
+            d1 = s_pos[j, 1] - x1
+            d2 = s_pos[j, 2] - x2
+            reach = r_i + s_rad[j]
+            listed[n_listed] = p
+            # `not >=` (not `<`) so that a NaN distance counts as touching, as in the second sweep
+            n_listed += (not (d0 * d0 + d1 * d1 + d2 * d2 >= reach * reach)) | (pk[p] != 0.0)
+        u0, u1, u2 = s_vel[i, 0], s_vel[i, 1], s_vel[i, 2]
+        bi = np.uint64(s_body[i])
         wi0, wi1, wi2 = b_omega[bi, 0], b_omega[bi, 1], b_omega[bi, 2]
         mat_row = s_mat[i] * n_mat
         fi0 = fi1 = fi2 = ti0 = ti1 = ti2 = 0.0
-        for p in range(p_lo, p_hi):
-            j = pj[p]
+        for q in range(n_listed):
+            p = listed[q]
+            j = np.uint64(pj[p])
             d0 = s_pos[j, 0] - x0
             d1 = s_pos[j, 1] - x1
             d2 = s_pos[j, 2] - x2
@@ -125,10 +151,9 @@ def pair_block(lo, hi, row_start, pj, hist, pconst, pk, acc, s_pos, s_vel, s_rad
             reach = r_i + r_j
             d2sum = d0 * d0 + d1 * d1 + d2 * d2
             if d2sum >= reach * reach:
-                # separated: the spring is gone (write only when there is something to clear)
-                for k in range(n_hist):
-                    if hist[p, k] != 0.0:
-                        hist[p, k] = 0.0
+                # listed for its history only: separated since the last evaluation, the spring is gone
+                for k in range({N_HIST}):
+                    hist[p, k] = 0.0
                 pk[p] = 0.0
                 continue
             dist = math.sqrt(d2sum)
@@ -137,13 +162,13 @@ def pair_block(lo, hi, row_start, pj, hist, pconst, pk, acc, s_pos, s_vel, s_rad
             delta = reach - dist
             a_i = r_i - 0.5 * delta
             a_j = r_j - 0.5 * delta
-            bj = s_body[j]
+            bj = np.uint64(s_body[j])
             wj0, wj1, wj2 = b_omega[bj, 0], b_omega[bj, 1], b_omega[bj, 2]
             # contact-point velocity of i minus j; lever arms a_i n and -a_j n
             v0 = u0 - s_vel[j, 0] + a_i * (wi1 * n2 - wi2 * n1) + a_j * (wj1 * n2 - wj2 * n1)
             v1 = u1 - s_vel[j, 1] + a_i * (wi2 * n0 - wi0 * n2) + a_j * (wj2 * n0 - wj0 * n2)
             v2 = u2 - s_vel[j, 2] + a_i * (wi0 * n1 - wi1 * n0) + a_j * (wj0 * n1 - wj1 * n0)
-            row = mat_row + s_mat[j]
+            row = np.uint64(mat_row + s_mat[j])
             # rolling inertia: only kernels with a rolling effect compute it (ROLL_INERTIA is 0.0 otherwise)
             i_roll = {ROLL_INERTIA}
             f0, f1, f2, tr0, tr1, tr2, knt = contact(
@@ -174,7 +199,7 @@ def pair_block(lo, hi, row_start, pj, hist, pconst, pk, acc, s_pos, s_vel, s_rad
         acc[i, 5] += ti2
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', error_model='numpy')
 def take_sphere(i, acc, s_force, s_torque):
     """Move sphere i's accumulated pair force and torque into s_force/s_torque; clear the accumulator."""
     s_force[i, 0], s_force[i, 1], s_force[i, 2] = acc[i, 0], acc[i, 1], acc[i, 2]
@@ -183,7 +208,7 @@ def take_sphere(i, acc, s_force, s_torque):
         acc[i, k] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def wall_block(s_lo, s_hi, start, w_ids, t_ids, hist, out_f, out_pt, out_k, s_pos, s_vel, s_rad, s_mat, s_kp,
                s_body, b_mass, b_omega, w_kind, w_origin, w_frame, w_par, tri, w_kn, w_mu, w_mat, w_vel, w_omega,
                w_centre, acc, props, n_mat, dt, repulsive_only):
@@ -220,7 +245,7 @@ def wall_block(s_lo, s_hi, start, w_ids, t_ids, hist, out_f, out_pt, out_k, s_po
                         touching = False
                         break
             if not touching:
-                for k in range(hist.shape[1]):
+                for k in range({N_HIST}):
                     hist[e, k] = 0.0
                 for k in range(3):
                     out_f[e, k] = 0.0
@@ -262,7 +287,7 @@ def wall_block(s_lo, s_hi, start, w_ids, t_ids, hist, out_f, out_pt, out_k, s_po
 
 TEMPLATE += '''
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, error_model='numpy')
 def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repulsive_only, finish, go_on,
                   moved):
     """One parallel pass per body: take the contact forces, walls, gravity; finish the step's kick and,
@@ -288,7 +313,7 @@ def update_bodies(B, S, W, P, WC, props, n_mat, dt, dt_contact, g0, g1, g2, repu
         moved[c] = body_range(b_lo, b_hi, B, S, acc, dt, g0, g1, g2, finish, go_on)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def body_range(b_lo, b_hi, B, S, acc, dt, g0, g1, g2, finish, go_on):
     """Bodies b_lo..b_hi-1 (their spheres' wall contacts already added to acc): take the sums, add
     gravity and local damping, kick and drift. Takes only the state it reads: numba reference-counts
@@ -313,15 +338,19 @@ def body_range(b_lo, b_hi, B, S, acc, dt, g0, g1, g2, finish, go_on):
             f0 = m * g0 + acc[i, 0]
             f1 = m * g1 + acc[i, 1]
             f2 = m * g2 + acc[i, 2]
-            s_force[i, 0], s_force[i, 1], s_force[i, 2] = acc[i, 0], acc[i, 1], acc[i, 2]
-            s_torque[i, 0], s_torque[i, 1], s_torque[i, 2] = acc[i, 3], acc[i, 4], acc[i, 5]
+            if not go_on:
+                # a sphere's and a body's stored loads are read only from a synchronised state (the
+                # next call's first half kick, callers between runs): steps that go on keep them local
+                s_force[i, 0], s_force[i, 1], s_force[i, 2] = acc[i, 0], acc[i, 1], acc[i, 2]
+                s_torque[i, 0], s_torque[i, 1], s_torque[i, 2] = acc[i, 3], acc[i, 4], acc[i, 5]
             for k in range(6):
                 acc[i, k] = 0.0
             a = b_local[b]
             f0, f1, f2 = damped(f0, a, b_vel[b, 0]), damped(f1, a, b_vel[b, 1]), damped(f2, a, b_vel[b, 2])
             t0, t1, t2 = damped(t0, a, b_omega[b, 0]), damped(t1, a, b_omega[b, 1]), damped(t2, a, b_omega[b, 2])
-            b_force[b, 0], b_force[b, 1], b_force[b, 2] = f0, f1, f2
-            b_torque[b, 0], b_torque[b, 1], b_torque[b, 2] = t0, t1, t2
+            if not go_on:
+                b_force[b, 0], b_force[b, 1], b_force[b, 2] = f0, f1, f2
+                b_torque[b, 0], b_torque[b, 1], b_torque[b, 2] = t0, t1, t2
             sv = half / m
             sw = half / b_inertia[b, 0]
             v0, v1, v2 = b_vel[b, 0], b_vel[b, 1], b_vel[b, 2]
@@ -345,7 +374,7 @@ def body_range(b_lo, b_hi, B, S, acc, dt, g0, g1, g2, finish, go_on):
                 d0 = x0 - at_build[i, 0]
                 d1 = x1 - at_build[i, 1]
                 d2 = x2 - at_build[i, 2]
-                moved = max(moved, d0 * d0 + d1 * d1 + d2 * d2)
+                moved = farther(moved, d0 * d0 + d1 * d1 + d2 * d2)
             b_vel[b, 0], b_vel[b, 1], b_vel[b, 2] = v0, v1, v2
             b_omega[b, 0], b_omega[b, 1], b_omega[b, 2] = w0, w1, w2
             continue
@@ -359,11 +388,11 @@ def body_range(b_lo, b_hi, B, S, acc, dt, g0, g1, g2, finish, go_on):
             kick_body(b, b_vel, b_quat, b_omega, b_mass, b_inertia, b_force, b_torque, b_clump, half)
             drift_body(b, b_pos, b_vel, b_quat, b_omega, b_clump, b_start, s_offset, s_pos, s_vel, dt)
             for i in range(b_start[b], b_start[b + 1]):
-                moved = max(moved, moved_sq(i, s_pos, at_build))
+                moved = farther(moved, moved_sq(i, s_pos, at_build))
     return moved
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, error_model='numpy')
 def start_step(B, S, dt):
     """Half kick and drift of every body from a synchronised state."""
     b_pos, b_vel, b_quat, b_omega, b_mass = B.pos, B.vel, B.quat, B.omega, B.mass
@@ -374,7 +403,7 @@ def start_step(B, S, dt):
         drift_body(b, b_pos, b_vel, b_quat, b_omega, b_clump, b_start, s_offset, s_pos, s_vel, dt)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def advance(B, S, W, P, WC, props, n_mat, scal, istate, n_steps, rec, record_every):
     """Run up to n_steps velocity-Verlet steps; return early (flag 1) when the neighbour lists are stale.
 

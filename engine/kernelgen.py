@@ -71,6 +71,7 @@ def _hooks(layout: Layout) -> dict[str, str]:
                     f"{ind * 2}tr0 += a0\n{ind * 2}tr1 += a1\n{ind * 2}tr2 += a2")
         hooks[eff.stage].append(f"{ind}{sl}\n{ind}if pe[0] != 0.0:\n{ind * 2}{body}")
     return {
+        "N_HIST": str(layout.n_hist),
         "EFFECT_NAMES": ", ".join(e.name for e in layout.effects) or "none",
         "EFFECT_IMPORTS": "\n".join(imports),
         "STIFFNESS_HOOKS": "\n".join(hooks["stiffness"]),

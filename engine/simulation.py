@@ -358,7 +358,8 @@ class Simulation:
             bad = int(self._body_user[s.body[np.nonzero(~np.isfinite(s.pos).all(axis=1))[0][0]]])
             raise FloatingPointError(
                 f"body {bad} has a non-finite position at t = {self.time_s:.6g} s: the run became unstable "
-                "(time step too large for the stiffness or damping, or a wall moved through particles)")
+                "(time step too large for the stiffness or damping, a wall moved through particles, or two "
+                "spheres of different bodies placed at the same centre)")
         every = self.config.reorder_every_rebuilds
         if every and self._rebuilds_since_order % every == 0:
             self._reorder(skin)
@@ -375,8 +376,11 @@ class Simulation:
         old_key, old_hist = pending.pair_lookup(n)
         hist = neighbors.carry_history(old_key, old_hist, neighbors.pair_keys(pi, pj, n), self.layout.n_hist)
         m = pi.shape[0]
+        # k marks carried history (nonzero wherever a history row is) until the next force evaluation
+        # writes the contact stiffness: the pair pass clears a separated pair only where k is nonzero
+        mark = np.any(hist != 0.0, axis=1).astype(np.float64)
         self.pairs = Pairs(pi, pj, row_start, hist, blocks.pair_constants(pi, pj, s.kp, s.body, self.bodies.mass),
-                           np.zeros(m), np.zeros((n, 6)), blocks.block_partition(pi, pj, n))
+                           mark, np.zeros((n, 6)), blocks.block_partition(pi, pj, n))
         start, wall, tri = neighbors.build_wall_list(s.pos, s.radius, skin, w.kind, w.origin, w.frame, w.par,
                                                      w.tri_start, w.tri, w.box_lo, w.box_hi)
         wkey = neighbors.wall_keys(start, wall, tri, self.n_walls, self._n_elements())

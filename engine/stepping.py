@@ -145,8 +145,18 @@ def needs_rebuild(s_pos, pos_at_build, W, skin):
     """True when a sphere or a wall surface may have moved far enough to make the lists incomplete."""
     ds = 0.0
     for i in range(s_pos.shape[0]):
-        ds = max(ds, moved_sq(i, s_pos, pos_at_build))
+        ds = farther(ds, moved_sq(i, s_pos, pos_at_build))
     return lists_stale(ds, W, skin)
+
+
+@njit(cache=True, inline='always')
+def farther(largest, d):
+    """max(largest, d) that keeps a nan: a non-finite position must reach the rebuild, whose
+    finiteness check stops the run naming the body (with numpy's error model a coincident pair's
+    division by zero is a nan, not an exception)."""
+    if largest != largest:
+        return largest
+    return largest if largest >= d else d
 
 
 @njit(cache=True, inline='always')
@@ -171,4 +181,5 @@ def lists_stale(ds, W, skin):
         # a rotating wall's surface near the spheres moves at most |omega| dt x reach per step
         dw = max(dw, math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + W.swept[w])
     ds = math.sqrt(ds)
-    return 2.0 * ds > skin or ds + dw > skin
+    # written so that a nan displacement counts as stale (see farther)
+    return not (2.0 * ds <= skin and ds + dw <= skin)

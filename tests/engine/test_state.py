@@ -130,3 +130,46 @@ def test_removing_bodies_keeps_the_others_contact_history():
         assert np.allclose(moved, h[:3], rtol=0.15, atol=0.0)
         exact += np.array_equal(moved, h[:3])
     assert exact >= 1
+
+
+def _moved(state: dict, dx_m: float) -> dict:
+    """The checkpoint with sphere 1 moved by dx along x, everything at rest, lists to be rebuilt."""
+    state = {k: np.array(v, copy=True) for k, v in state.items()}
+    for key in ("b_pos", "s_pos"):
+        state[key][1, 0] += dx_m
+    for key in ("b_vel", "s_vel", "b_omega"):
+        state[key][:] = 0.0
+    state["stale"] = np.array(True)
+    return state
+
+
+def test_spring_is_gone_when_a_pair_separates_right_after_a_rebuild():
+    """Cundall & Strack's tangential spring lives only while the spheres touch. A rebuild carries the
+    springs of candidate pairs; a pair that is apart at the first evaluation after it must lose its
+    spring, so that touching again starts from an unloaded spring (no tangential force at rest)."""
+    skin = 0.2 * R
+    sim = Simulation(config(mat_normal_stiffness_n_per_m=KP, mat_friction=0.5, gravity_m_s2=(0.0, 0.0, 0.0),
+                            skin_m=skin))
+    sim.add_spheres([[0.0, 0.0, 0.0], [2.0 * R - 0.01 * R, 0.0, 0.0]], [R, R],
+                    velocities_m_s=[[0.02, 0.0, 0.05], [-0.02, 0.0, -0.05]])
+    sim.run(steps=5)
+    assert np.abs(sim.pairs.hist).max() > 0.0  # sliding loaded the spring
+    # apart by half the skin: still a candidate pair after the rebuild, no longer touching
+    apart = Simulation.from_checkpoint(_moved(sim.checkpoint(), 0.01 * R + 0.5 * skin))
+    apart.run(steps=1)
+    assert apart.contact_count() == (0, 0)
+    assert apart.pairs.i.shape[0] == 1 and not np.any(apart.pairs.hist)
+    # back in contact, at rest: the spring starts unloaded, so there is no tangential force
+    touching = Simulation.from_checkpoint(_moved(apart.checkpoint(), -0.5 * skin - 0.01 * R))
+    touching.run(steps=1)
+    assert touching.contact_count() == (1, 0)
+    assert not np.any(touching.pairs.hist)
+
+
+def test_spheres_at_the_same_centre_stop_the_run_naming_a_body():
+    """Two bodies' spheres at one centre have no contact normal: the run stops with a message naming
+    one of them rather than carrying nan positions on."""
+    sim = Simulation(config())
+    sim.add_spheres([[0.0, 0.0, 0.05], [0.0, 0.0, 0.05], [0.1, 0.0, 0.05]], [R, R, R])
+    with pytest.raises(FloatingPointError, match=r"body [01] has a non-finite position"):
+        sim.run(steps=50)
