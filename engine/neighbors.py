@@ -129,11 +129,11 @@ def build_pairs(pos, radius, body, skin):
         c_body[k] = body[j]
     counts = np.zeros(n, np.int64)
     cap = 16
-    buf = np.empty((n, cap), np.int64)
+    buf = np.empty((n, cap), np.int32)  # a temporary at the rebuild's memory peak: half the bytes of int64
     _scan_all(pos, radius, body, skin, lo, cell, dims, start, order, c_pos, c_rad, c_body, buf, counts)
     widest = counts.max() if n else 0
     if widest > cap:
-        buf = np.empty((n, widest), np.int64)
+        buf = np.empty((n, widest), np.int32)
         _scan_all(pos, radius, body, skin, lo, cell, dims, start, order, c_pos, c_rad, c_body, buf, counts)
     row_start = np.zeros(n + 1, np.int64)
     for i in range(n):

@@ -366,6 +366,9 @@ class Simulation:
             s = self.spheres
         self._rebuilds_since_order += 1
         pending = self._pending or PendingHistory.from_lists(self.pairs, self.wall_contacts)
+        # the old lists live on only through `pending`: let their other arrays go before the new
+        # lists are built, which lowers the rebuild's memory peak
+        self.pairs = self.wall_contacts = None
         for k in np.nonzero(np.any(w.omega != 0.0, axis=1))[0]:
             # how far from its axis a rotating wall can meet a sphere: bounds the surface's sweep per step
             w.reach[k] = float(np.sqrt(((s.pos - w.centre[k]) ** 2).sum(axis=1).max())) + skin if n else 0.0
