@@ -8,8 +8,10 @@ Workload: the material of bench/engine_vs_liggghts.py (r = 10 / 12.5 / 15 mm in 
 rho = 2,500 kg/m3, contact kn = 1.72 MN/m, mu = 0.86, normal damping ratio 0.8, no tangential
 dashpot, dt = 0.2 sqrt(m_min / kn), skin 5 mm). A unit of 5,000 spheres is poured from a loose grid
 into a square box (0.52 m side, about the bench cylinder's cross-section) and settled once; larger
-packings are copies of that unit side by side (1 mm apart) in one box sized to hold them, so every
-size is the same dense, static packing (density, contacts per particle) and only N changes.
+packings are copies of that unit side by side, face to face where the unit had its side walls, in
+one box sized to hold them, so every size is the same dense, static packing (density, contacts per
+particle) and only N changes. (With a gap between copies, each copy slumped sideways into it once its
+walls were gone: the 50,000 and 200,000 packings had 2.3-2.5 contacts per particle, the unit 4.0.)
 
 Each (size, threads) runs in a fresh process (peak RSS is per run, NUMBA_NUM_THREADS set before
 numba starts). Throughput = particles x steps / wall seconds, best of the repeats, after a warm-up
@@ -44,7 +46,7 @@ from engine_throughput import FRICTION, KN as KN_CONTACT, RADII as RADII_M, RHO 
 
 UNIT_N = 5000
 BOX_SIDE_M = 0.52  # square of about the 0.295 m cylinder's area
-GAP_M = 0.001
+GAP_M = 0.0  # copies face to face: each one's neighbours hold it where its side walls did
 SETTLE_S = 0.6
 
 
