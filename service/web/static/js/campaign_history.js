@@ -55,16 +55,17 @@ function parameterTraces(history, iterations, priors) {
 export function historySection(history, iterations, priors) {
   const its = history.iterations;
   if (!its.length) return "";
+  // the table takes the card's width (eight columns do not fit beside the chart); the chart sits under it
   return h("section", { className: "card history" }, h("h3", {}, "Across iterations"),
-    h("div", { className: "side-by-side" }, h("div", {}, errorChart(its)),
-      h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (lack of fit)", "Verdict", "Next", "Automatic"],
+    h("div", {}, h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (lack of fit)", "Verdict", "Next", "Automatic"],
         its.map((it) => [String(it.number), it.effects.length ? it.effects.join(", ") : "none",
           h("span", { className: "chi2dof", "data-iteration": String(it.number) }, fmt(it.chi2_per_dof, 4)),
           it.noise_band ? `${fmt(Math.max(0, it.noise_band[0]), 2)} – ${fmt(it.noise_band[1], 2)}` : "–",
           it.lack_of_fit_p, it.verdict || "–",
           it.effect_added_next ? `+ ${it.effect_added_next.join(", ")}` : "–",
           // automatic mode: whether the effect this iteration added was kept (calibration.decisions)
-          it.decision ? h("span", { className: it.decision.accepted ? "good" : "bad" }, `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`) : "–"])))),
+          it.decision ? h("span", { className: it.decision.accepted ? "good" : "bad" }, `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`) : "–"]))),
+      h("div", { className: "panels" }, errorChart(its))),
     h("h4", {}, "Parameters: optimum ±2 sd against the design box (dashed) and priors"),
     h("div", { className: "panels small" }, parameterTraces(history, iterations, priors)));
 }
