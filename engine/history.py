@@ -29,9 +29,9 @@ class PendingHistory:
 
     @classmethod
     def from_lists(cls, pairs, wall_contacts) -> "PendingHistory":
-        """The lists' history by reference, not copied (at 200,000 spheres a copy is tens of MB at the
-        rebuild's memory peak): every caller consumes it, or remaps it into new arrays, before the
-        kernels touch the lists again."""
+        """The lists' history by reference, not copied (tens of MB per rebuild at 200,000 spheres):
+        every caller consumes it, or remaps it into new arrays, before the kernels touch the lists
+        again."""
         wc = wall_contacts
         sphere = np.repeat(np.arange(wc.start.shape[0] - 1, dtype=np.int64), np.diff(wc.start))
         return cls(pairs.i, pairs.j, pairs.hist, sphere, wc.wall, wc.tri, wc.hist)

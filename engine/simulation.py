@@ -367,7 +367,7 @@ class Simulation:
         self._rebuilds_since_order += 1
         pending = self._pending or PendingHistory.from_lists(self.pairs, self.wall_contacts)
         # the old lists live on only through `pending`: let their other arrays go before the new
-        # lists are built, which lowers the rebuild's memory peak
+        # lists are built, so the rebuild holds less at once
         self.pairs = self.wall_contacts = None
         for k in np.nonzero(np.any(w.omega != 0.0, axis=1))[0]:
             # how far from its axis a rotating wall can meet a sphere: bounds the surface's sweep per step
