@@ -141,12 +141,11 @@ class Simulation:
             raise ValueError("radii_m must be positive, one per position")
         if not 0 <= material_id < self.n_materials:
             raise ValueError(f"material_id {material_id} out of range ({self.n_materials} materials)")
-        # what a one-sphere template per radius would give, built as arrays at once: a Python object and
-        # small arrays per sphere made add_spheres the memory peak of a run (1,185 bytes per sphere at
-        # 200,000); volume and inertia in the template's order of operations
+        # What a one-sphere template per radius would give, built as arrays at once (a Python object and
+        # small arrays per sphere made this the memory peak of a run: 1,185 bytes per sphere at 200,000).
+        # np.power with an array exponent calls pow() as the templates' float ** does; `radii ** 2` would
+        # square, which differs in the last bit for about 1 radius in 1,200.
         n = radii.shape[0]
-        # np.power with an array exponent calls pow() like Python's float ** does; `radii ** 2` would
-        # square, which differs from this pow() in the last bit for about 1 radius in 1,200
         volume = 4.0 / 3.0 * math.pi * np.power(radii, np.full_like(radii, 3.0))
         rho = self.config.materials[material_id].density_kg_m3
         inertia = rho * np.repeat((0.4 * volume * np.power(radii, np.full_like(radii, 2.0)))[:, None], 3, axis=1)
