@@ -208,7 +208,7 @@ def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float,
 
 def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: str, seed: int,
              density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False,
-             polish_steps: int | None = None) -> int:
+             polish_steps: int | None = None, confirmation_seeds: int | None = None) -> int:
     """The scenario's automatic campaign: an existing one calibrating exactly this (same measurements,
     priors, design and options; its name carries their digest) is reused, so a rerun resumes it."""
     rho = sc.parameters()["particle_density_kg_m3"]
@@ -227,6 +227,8 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         body.update(fixed_parameters=dict(REDUCED_PARAMETERS), polish_steps=0)
     if polish_steps is not None:
         body["polish_steps"] = polish_steps
+    if confirmation_seeds is not None:
+        body["confirmation_seeds"] = confirmation_seeds
     digest = hashlib.sha256(json.dumps([body, measurements], sort_keys=True).encode()).hexdigest()[:12]
     name = f"tier B {sc.name} {digest}"
     existing = [c for c in svc.call("GET", "/campaigns") if c["name"] == name and c["status"] != "failed"]
@@ -331,7 +333,12 @@ def main(argv=None) -> int:
                     help="35 mm spheres and no polish: the form CI runs (see the docstring)")
     ap.add_argument("--polish-steps", type=int, default=None,
                     help="Gauss-Newton rounds on the batteries after each confirmation (default: the service's; "
-                         "0 with --reduced); each costs 3 batteries, plus one per factor for the Jacobian")
+                         "0 with --reduced); each costs 3 batteries, plus one per factor for the Jacobian, "
+                         "times the confirmation seeds")
+    ap.add_argument("--confirmation-seeds", type=int, default=None,
+                    help="batteries at each optimum, one per seed (default: the service's, 2); the lack of fit "
+                         "compares their mean, so the simulator's scatter counts divided by this number, and "
+                         "the diagnosis runs each candidate at the same seeds")
     args = ap.parse_args(argv)
     names = [n.strip() for n in args.scenarios.split(",") if n.strip()]
     unknown = set(names) - set(SCENARIOS)
@@ -350,7 +357,7 @@ def main(argv=None) -> int:
             started = time.perf_counter()
             measurements, measuring_ids = measure(svc, sc, args.evaluator, poll_s, args.reduced)
             cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
-                           args.polish_steps)
+                           args.polish_steps, args.confirmation_seeds)
             final = _wait_campaign(svc, cid, poll_s)
             if final["status"] != "completed":
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)

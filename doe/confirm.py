@@ -66,8 +66,9 @@ def narrowed_factorial(design: Design, centre: dict[str, float], shrink: float =
 
 
 def confirm(models, parameters: dict[str, float], observed: dict[str, float], *, alpha: float = 0.05,
-            shrink: float = 0.5, center_runs: int = 3, seed: int = 0) -> ConfirmationResult:
-    """Compare confirmation-run responses with the models' prediction intervals at `parameters`."""
+            shrink: float = 0.5, center_runs: int = 3, seed: int = 0, n_observations: int = 1) -> ConfirmationResult:
+    """Compare confirmation-run responses (each the mean of ``n_observations`` runs at `parameters`)
+    with the models' prediction intervals for such a mean."""
     if isinstance(models, (list, tuple)):
         models = {m.response: m for m in models}
     if not observed:
@@ -76,7 +77,7 @@ def confirm(models, parameters: dict[str, float], observed: dict[str, float], *,
     for name, value in observed.items():
         if name not in models:
             raise DoeError(f"observed response {name!r} has no fitted model")
-        pred = models[name].predict([parameters], alpha)[0]
+        pred = models[name].predict([parameters], alpha, n_future=n_observations)[0]
         inside = None
         if pred["pi_low"] is not None:
             inside = bool(pred["pi_low"] <= float(value) <= pred["pi_high"])

@@ -259,8 +259,14 @@ class ResponseFit:
     def predict_coded(self, coded: np.ndarray) -> np.ndarray:
         return model_matrix(coded, self.terms) @ self.params
 
-    def predict(self, points, alpha: float | None = None) -> list[dict]:
-        """Mean prediction with confidence and prediction intervals at natural-unit points."""
+    def predict(self, points, alpha: float | None = None, n_future: int = 1) -> list[dict]:
+        """Mean prediction with confidence and prediction intervals at natural-unit points.
+
+        The prediction interval is for the mean of ``n_future`` new runs at a point (variance
+        se^2 + MSE / n_future; Montgomery, Design and Analysis of Experiments, eq. 10-41 with m runs):
+        a confirmation averaged over several seeds is judged against the interval of an average."""
+        if n_future < 1:
+            raise DoeError("n_future must be at least 1")
         alpha = self.alpha if alpha is None else alpha
         Xp = model_matrix(self._rows_coded(points), self.terms)
         mean = Xp @ self.params
@@ -271,7 +277,7 @@ class ResponseFit:
                  "ci_high": None, "pi_low": None, "pi_high": None, "alpha": alpha}
             if self.has_error:
                 se = float(np.sqrt(Xp[i] @ self.cov @ Xp[i]))
-                sp = math.sqrt(se**2 + self.mse)
+                sp = math.sqrt(se**2 + self.mse / n_future)
                 d.update(se_mean=se, ci_low=mean[i] - t_crit * se, ci_high=mean[i] + t_crit * se,
                          pi_low=mean[i] - t_crit * sp, pi_high=mean[i] + t_crit * sp)
             out.append({k: _clean(v) for k, v in d.items()})

@@ -106,19 +106,26 @@ def optimum(campaign_id: CampaignId, number: int | None = IterationQ, session: S
     return {"iteration": it.number, **value}
 
 
-@router.get("/{campaign_id}/confirmation", summary="The battery at the optimum (after polishing on the batteries)",
-            responses=_NOT_YET)
+@router.get("/{campaign_id}/confirmation",
+            summary="The batteries at the optimum, one per seed (after polishing on the batteries); the top level is "
+                    "the first seed's", responses=_NOT_YET)
 def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
-    from service.campaigns.polish import final_run
+    from service.campaigns.polish import final_runs
 
     campaign = get_campaign(session, campaign_id)
     it = iteration(session, campaign, number)
-    run = final_run(it)
-    if run is None:
+    runs = final_runs(it)
+    if not runs:
         raise Conflict(f"campaign {campaign_id} iteration {it.number} has no confirmation run yet "
                        f"(phase {it.phase})", ["path", "campaign_id"])
-    return {"iteration": it.number, "job_id": run.job_id, "status": run.status, "seed": run.seed,
-            "parameters": run.natural, "coded": run.coded, "responses": run.responses, "error": run.error}
+
+    def view(run) -> dict:
+        return {"job_id": run.job_id, "status": run.status, "seed": run.seed, "responses": run.responses,
+                "error": run.error}
+
+    first = runs[0]
+    return {"iteration": it.number, **view(first), "parameters": first.natural, "coded": first.coded,
+            "runs": [view(r) for r in runs]}
 
 
 @router.get("/{campaign_id}/report",

@@ -94,15 +94,15 @@ def analyse(config, design_dict: dict, runs, targets) -> dict[str, Any]:
     return {"models": _json_safe(_models_json(models)), "optimum": _json_safe(optimum)}
 
 
-def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[dict],
-           confirmation_seed: int) -> dict[str, Any]:
+def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[list[dict]],
+           confirmation_seeds: list[int]) -> dict[str, Any]:
     """The report step, on one fit: the surface check (doe.confirm), the localisation of the
-    confirmation battery against the measurements, and the one verdict."""
+    confirmation batteries' mean (one record list per seed) against the measurements, and the one verdict."""
     from service.campaigns.design import design_view
 
     design, models = fit(design_dict, runs, targets)
     modelled = [m for m in models if m.fit is not None]
-    conf = cal.confirm(modelled, [confirmation_records], [confirmation_seed])
+    conf = cal.confirm(modelled, confirmation_records, confirmation_seeds)
     observed = {m.key.name: conf.mean[m.key] for m in modelled
                 if m.key in conf.mean and m.key.name in optimum["predictions"]}
     surrogate: dict[str, Any]
@@ -110,9 +110,10 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
         surrogate = {"verdict": "not testable", "reason": "no modelled response in the confirmation run"}
     else:
         result = confirm({m.key.name: m.fit for m in modelled if m.key.name in observed}, optimum["parameters"],
-                         observed, seed=config.seed + 1)
+                         observed, seed=config.seed + 1, n_observations=len(confirmation_seeds))
         surrogate = {"verdict": result.verdict, "confirmed": result.confirmed, "reason": result.reason,
-                     "next_design_kind": result.next_design_kind,
+                     "next_design_kind": result.next_design_kind, "responses": result.responses,
+                     "n_observations": len(confirmation_seeds),
                      "about": "the fitted response surfaces against the battery at the optimum; this checks the "
                               "surrogate, not the model against the measurements"}
         if result.next_design is not None:
@@ -170,23 +171,28 @@ def candidate_points(config, optimum: dict, iteration_parameters: dict) -> list[
 BASELINE = "baseline"
 
 
-def diagnosis_plan(config, optimum: dict, iteration_parameters: dict, confirmation_seed: int) -> list[tuple]:
-    """(name, factor values, seed) of every diagnosis battery, in a fixed order: a second baseline
-    battery at the optimum (so the optimum has two seeds), then each candidate at both seeds."""
-    seeds = [confirmation_seed, confirmation_seed + 1]
-    plan = [(BASELINE, dict(optimum["parameters"]), seeds[1])]
+def diagnosis_plan(config, optimum: dict, iteration_parameters: dict, confirmation_seeds: list[int]) -> list[tuple]:
+    """(name, factor values, seed) of every diagnosis battery, in a fixed order: each candidate at every
+    seed the optimum has batteries at (common random numbers), after a second baseline battery at the
+    optimum when it has only one (a signature needs the optimum at the candidates' seeds, and the
+    simulator's scatter there needs two)."""
+    seeds = list(confirmation_seeds)
+    plan = []
+    if len(seeds) < 2:
+        plan.append((BASELINE, dict(optimum["parameters"]), seeds[0] + 1))
+        seeds.append(seeds[0] + 1)
     for name, values in candidate_points(config, optimum, iteration_parameters):
         plan += [(name, values, seed) for seed in seeds]
     return plan
 
 
-def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[dict],
-             confirmation_seed: int, planned: list[tuple[str, int, list[dict]]]) -> dict[str, Any]:
+def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[list[dict]],
+             confirmation_seeds: list[int], planned: list[tuple[str, int, list[dict]]]) -> dict[str, Any]:
     """Rank the candidate effects (calibration.attribute) from their batteries at the optimum.
 
     ``planned``: (name, seed, records) of the diagnosis batteries (``diagnosis_plan`` order). The
-    optimum's two seeds give the baseline; each candidate's signature is its mean over the same two
-    seeds minus the baseline's (common random numbers)."""
+    optimum's batteries (the confirmation's, and a planned baseline) give the baseline; each
+    candidate's signature is its mean over the same seeds minus the baseline's (common random numbers)."""
     from calibration.attribute import Signature, attribute
     from calibration.fitting import run_values
     from calibration.keys import find
@@ -195,8 +201,8 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
     design, models = fit(design_dict, runs, targets)
     modelled = [m for m in models if m.fit is not None]
     baseline = [(seed, records) for name, seed, records in planned if name == BASELINE]
-    conf = cal.confirm(modelled, [confirmation_records] + [r for _, r in baseline],
-                       [confirmation_seed] + [s for s, _ in baseline])
+    conf = cal.confirm(modelled, list(confirmation_records) + [r for _, r in baseline],
+                       list(confirmation_seeds) + [s for s, _ in baseline])
     theta = dict(optimum["parameters"])
     priors = [p.model_dump() for p in config.priors]
     res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty)
@@ -221,7 +227,8 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
         signatures.append(Signature(c, vector, step, reference))
     att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys])
     return _json_safe({**att.to_dict(), "lack_of_fit": loc.lack_of_fit.to_dict(),
-                       "seeds": sorted({confirmation_seed} | {s for _, s, _ in planned}), "batteries": len(planned)})
+                       "seeds": sorted(set(confirmation_seeds) | {s for _, s, _ in planned}),
+                       "batteries": len(planned)})
 
 
 def report_verdict(unreachable: list, assessment: dict) -> dict[str, Any]:

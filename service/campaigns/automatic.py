@@ -86,9 +86,9 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         reason = STOP_NOTHING if rejected else f"diagnosis: {diagnosis.get('verdict', 'not run')}"
         pooled = (diagnosis.get("lack_of_fit") or {}).get("p_value")
         if not rejected and diagnosis.get("verdict") == "no misfit" and pooled is not None:
-            # the iteration's report saw a misfit on one confirmation battery; say why the loop still stops
-            reason += (f" (the confirmation and the diagnosis's baseline battery together: lack of fit "
-                       f"p {pooled:.2g})")
+            # the iteration's report saw a misfit (on one confirmation battery, or a target out of reach);
+            # say why the loop still stops
+            reason += f" (every battery at the optimum together: lack of fit p {pooled:.2g})"
         return {**record, "stop_reason": reason}
     name = options[0]
     ranked = next((r for r in diagnosis.get("ranking", []) if r.get("effect") == name), {})

@@ -6,15 +6,16 @@ not the simulator's, and an added effect that would fit the measurements can loo
 not. The library loop polishes (``calibration.loop.CalibrationLoop._polish``); this is the same
 method cut into rounds the campaign runner can queue and resume:
 
-* round 0, the Jacobian: one battery per free factor, a coded step of 0.1 from the optimum (inward
-  at a bound), at the confirmation's seed (common random numbers); the targets' rows of J are these
-  forward differences, the priors' rows stay analytic;
+* round 0, the Jacobian: one point per free factor, a coded step of 0.1 from the optimum (inward
+  at a bound), each point run at every confirmation seed (common random numbers) and averaged over
+  them, as the confirmation is; the targets' rows of J are these forward differences, the priors'
+  rows stay analytic;
 * rounds 1..polish_steps: the bounded Gauss-Newton step minimising |r + J du| in the box, tried at
   full, half and quarter length side by side; the longest that lowers the batteries' misfit is
   taken and J is updated by Broyden's rule; no improvement (or a step below 1e-3) ends it.
 
 The state is a JSON dict kept in the iteration's optimum, so every round survives a restart. Costs
-(free factors + 3 x steps) batteries, all of a round queued at once.
+(free factors + 3 x steps) x confirmation seeds batteries, all of a round queued at once.
 """
 from __future__ import annotations
 
@@ -31,8 +32,9 @@ MIN_STEP = 1e-3
 ROUND = 1000  # std_order of a polish run = round x ROUND + index + 1
 
 
-def _residuals(config, design, modelled, theta: dict, records: list[dict], seed: int):
-    conf = cal.confirm(modelled, [records], [seed])
+def _residuals(config, design, modelled, theta: dict, records: list[list[dict]], seeds: list[int]):
+    """Residuals of one point from its batteries at ``seeds`` (one record list per seed)."""
+    conf = cal.confirm(modelled, records, seeds)
     return cal.residuals_at(design, modelled, theta, conf, [p.model_dump() for p in config.priors],
                             config.default_relative_uncertainty)
 
@@ -53,11 +55,17 @@ def _step_points(design, state: dict) -> list[tuple[dict, dict]]:
     return [_point(design, cal.move(design, state["theta"], state["free"], s * step)) for s in SHRINKS]
 
 
-def start(config, design, modelled, theta: dict, run_id: int, records: list[dict], seed: int
+def seeds_of(state: dict) -> list[int]:
+    """The seeds every polishing point runs at (a state stored before there were several: its one seed)."""
+    return list(state.get("seeds") or [state["seed"]])
+
+
+def start(config, design, modelled, theta: dict, run_ids: list[int], records: list[list[dict]], seeds: list[int]
           ) -> tuple[dict, list[tuple[dict, dict]]]:
-    """State at the surfaces' optimum and the Jacobian round's points (natural, coded)."""
-    res = _residuals(config, design, modelled, theta, records, seed)
-    state = {"round": 0, "stage": "jacobian", "theta": dict(theta), "run_id": run_id, "seed": seed,
+    """State at the surfaces' optimum (its confirmation runs ``run_ids``, their ``records`` at ``seeds``)
+    and the Jacobian round's points (natural, coded); each point is queued once per seed."""
+    res = _residuals(config, design, modelled, theta, records, seeds)
+    state = {"round": 0, "stage": "jacobian", "theta": dict(theta), "run_ids": list(run_ids), "seeds": list(seeds),
              "chi2_start": res.chi2(), "chi2": res.chi2(), "r": res.r.tolist(), "J": res.J.tolist(),
              "free": list(res.free), "n_targets": len(res.keys), "steps": 0, "batteries": 0, "h": []}
     points = []
@@ -69,39 +77,49 @@ def start(config, design, modelled, theta: dict, run_id: int, records: list[dict
     return state, points
 
 
+def std_order(state: dict, point: int, seed_index: int) -> int:
+    """std_order of the run of ``point`` (0-based, in the round) at the ``seed_index``-th seed."""
+    return state["round"] * ROUND + point * len(seeds_of(state)) + seed_index + 1
+
+
 def advance(config, design, modelled, state: dict, round_runs: list, max_steps: int
             ) -> tuple[dict, list[tuple[dict, dict]]]:
-    """Evaluate a finished round (its runs in std_order); the new state and the next round's points
-    ([] when polishing is over: ``state["stage"] == "done"``)."""
+    """Evaluate a finished round (its runs in std_order: each point's runs at every seed in turn); the
+    new state and the next round's points ([] when polishing is over: ``state["stage"] == "done"``)."""
     state = dict(state)
     state["batteries"] += len(round_runs)
     n_t = state["n_targets"]
-    records = [list((run.responses or {}).values()) for run in round_runs]
+    seeds = seeds_of(state)
+    m = len(seeds)
+    points = [round_runs[i:i + m] for i in range(0, len(round_runs), m)]
+    records = [[list((run.responses or {}).values()) for run in runs] for runs in points]
     if state["stage"] == "jacobian":
         J = np.array(state["J"])
         r0 = np.array(state["r"])
-        for j, (run, recs) in enumerate(zip(round_runs, records)):
-            res_j = _residuals(config, design, modelled, run.natural, recs, state["seed"])
+        for j, (runs, recs) in enumerate(zip(points, records)):
+            res_j = _residuals(config, design, modelled, runs[0].natural, recs, seeds)
             if len(res_j.keys) == n_t:
                 J[:n_t, j] = (res_j.r[:n_t] - r0[:n_t]) / state["h"][j]
         state["J"] = J.tolist()
     else:
         taken = None
-        for run, recs in zip(round_runs, records):
-            res_k = _residuals(config, design, modelled, run.natural, recs, state["seed"])
+        for runs, recs in zip(points, records):
+            res_k = _residuals(config, design, modelled, runs[0].natural, recs, seeds)
             if len(res_k.keys) == n_t and res_k.chi2() < state["chi2"]:
-                taken = (run, res_k)
+                taken = (runs, res_k)
                 break
         if taken is None:
             return _done(state), []
-        run, res_k = taken
-        du = np.array([float(design.factor(n).to_coded(run.natural[n]) - design.factor(n).to_coded(state["theta"][n]))
+        runs, res_k = taken
+        natural = runs[0].natural
+        du = np.array([float(design.factor(n).to_coded(natural[n]) - design.factor(n).to_coded(state["theta"][n]))
                        for n in state["free"]])
         J = np.array(state["J"])
         dr = res_k.r - np.array(state["r"])
         J = J + np.outer(dr - J @ du, du) / float(du @ du)  # Broyden's good update
-        state.update(theta={n: float(v) for n, v in run.natural.items()}, run_id=run.id, chi2=res_k.chi2(),
-                     r=res_k.r.tolist(), J=J.tolist(), steps=state["steps"] + 1)
+        state.pop("run_id", None)
+        state.update(theta={n: float(v) for n, v in natural.items()}, run_ids=[r.id for r in runs],
+                     chi2=res_k.chi2(), r=res_k.r.tolist(), J=J.tolist(), steps=state["steps"] + 1)
     if state["steps"] >= max_steps:
         return _done(state), []
     points = _step_points(design, state)
@@ -117,11 +135,16 @@ def _done(state: dict) -> dict:
     return state
 
 
-def final_run(it):
-    """The battery at the iteration's final optimum: the best polishing run, else the confirmation."""
-    run_id = ((it.optimum or {}).get("polish") or {}).get("run_id")
-    return next((r for r in it.runs if r.id == run_id), None) or next(
-        (r for r in it.runs if r.kind == "confirmation"), None)
+def final_runs(it) -> list:
+    """The batteries at the iteration's final optimum, one per seed: the best polishing point's, else
+    the confirmation's ([] before the confirmation is queued)."""
+    state = (it.optimum or {}).get("polish") or {}
+    ids = state.get("run_ids") or ([state["run_id"]] if state.get("run_id") is not None else [])
+    by_id = {r.id: r for r in it.runs}
+    runs = [by_id[i] for i in ids if i in by_id]
+    if runs and runs[0].kind == "polish":
+        return runs
+    return sorted((r for r in it.runs if r.kind == "confirmation"), key=lambda r: r.std_order)
 
 
 def summary(state: dict | None) -> dict[str, Any] | None:

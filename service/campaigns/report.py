@@ -1,7 +1,8 @@
 """Per-target model-vs-measurement report of one iteration, with one verdict.
 
 For every target: measured (mean, standard uncertainty), predicted at the optimum (with prediction
-interval), confirmed (the confirmation battery), standardised residual of the confirmation, and
+interval), confirmed (the mean of the confirmation batteries, one per seed), standardised residual of
+that mean (the simulator's scatter divided by the number of seeds, as in the lack of fit), and
 reachability (the smallest standardised misfit any parameter set in the design box can reach;
 > 3 means the model, as parameterised, cannot reproduce the measurement). Then where the model
 fails (calibration.localise: lack of fit against the noise floor, shares per test, trends with
@@ -14,16 +15,23 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
 from calibration.keys import ResponseKey, find_response
 from service.campaigns.analysis import report_verdict
 
 REACHABLE_LIMIT = 3.0
 
 
-def build_report(config, models: dict, optimum: dict, confirmation, targets, assessment: dict) -> dict[str, Any]:
-    confirmed_responses = confirmation.responses or {}
+def build_report(config, models: dict, optimum: dict, confirmations: list, targets, assessment: dict) -> dict[str, Any]:
+    """``confirmations``: the stored runs at the final optimum, one per seed."""
+    confirmed_responses = confirmations[0].responses or {}
+    m = len(confirmations)
     by_target = {t["measurement_id"]: t for t in optimum.get("targets", [])}
     sim_sd = assessment.get("simulator_sd") or {}
+    # the surfaces' prediction intervals for the mean of the m confirmation batteries (doe.confirm)
+    interval_of_mean = {r["response"]: (r["pi_low"], r["pi_high"])
+                        for r in (assessment.get("surrogate_check") or {}).get("responses", [])}
     rows = []
     for meas in targets:
         key = ResponseKey.from_record(meas)
@@ -39,8 +47,9 @@ def build_report(config, models: dict, optimum: dict, confirmation, targets, ass
                        note="the battery produced no value for this test, quantity and condition")
             rows.append(row)
             continue
-        confirmed = confirmed_responses[name]["value"]
-        row.update(response=name, confirmed=confirmed)
+        per_seed = [(r.responses or {}).get(name, {}).get("value") for r in confirmations]
+        confirmed = float(np.mean([v for v in per_seed if v is not None]))
+        row.update(response=name, confirmed=confirmed, confirmed_per_seed=per_seed)
         if opt_target is None:
             model = models.get(name) or {}
             row.update(status="not_modelled", note=model.get("error") or "no fitted model for this response")
@@ -48,9 +57,9 @@ def build_report(config, models: dict, optimum: dict, confirmation, targets, ass
             continue
         u_meas = opt_target["uncertainty"]
         sd = sim_sd.get(opt_target["response"])
-        u_total = math.sqrt(u_meas**2 + (sd or 0.0) ** 2)
+        u_total = math.sqrt(u_meas**2 + (sd or 0.0) ** 2 / m)
         pred = optimum["predictions"].get(name, {})
-        lo, hi = pred.get("pi_low"), pred.get("pi_high")
+        lo, hi = interval_of_mean.get(name, (pred.get("pi_low"), pred.get("pi_high")))
         row.update(
             status="modelled",
             measured_uncertainty=u_meas,
@@ -71,8 +80,10 @@ def build_report(config, models: dict, optimum: dict, confirmation, targets, ass
     return {
         "optimum": optimum.get("parameters"),
         "fixed_parameters": dict(config.fixed_parameters),
-        "confirmation_seed": confirmation.seed,
-        "confirmation_job_id": confirmation.job_id,
+        "confirmation_seed": confirmations[0].seed,
+        "confirmation_job_id": confirmations[0].job_id,
+        "confirmation_seeds": [r.seed for r in confirmations],
+        "confirmation_job_ids": [r.job_id for r in confirmations],
         "targets": rows,
         **report_verdict(unreachable, assessment),
         "unreachable": unreachable,

@@ -7,12 +7,13 @@ between two steps) resumes where the database says: nothing lives in memory.
 Job submission uses an idempotency key per run, so a step repeated after a
 crash finds the job it already queued instead of queuing a twin.
 
-Phases of an iteration: design -> batteries -> analysis -> confirmation -> polish (Gauss-Newton on the
-batteries, service.campaigns.polish) -> report -> done, and when
-the report finds misfit (lack of fit, or a target out of reach): report -> diagnosis (a second baseline battery at the optimum,
-then each candidate effect at the optimum's two seeds) -> diagnosed -> done, the ranking stored in the
-report. In automatic mode (service.campaigns.automatic) a done iteration either configures the next
-one, with the indicated effect as a factor, or records why the loop stopped.
+Phases of an iteration: design -> batteries -> analysis -> confirmation (``confirmation_seeds`` batteries
+at the optimum) -> polish (Gauss-Newton on the batteries, service.campaigns.polish, at the same seeds) ->
+report -> done, and when the report finds misfit (lack of fit, or a target out of reach): report ->
+diagnosis (each candidate effect at the optimum's seeds, plus a second baseline seed when the confirmation
+has one) -> diagnosed -> done, the ranking stored in the report. In automatic mode
+(service.campaigns.automatic) a done iteration either configures the next one, with the indicated
+effect as a factor, or records why the loop stopped.
 Paused campaigns are skipped; their queued batteries keep running in the queue
 and are picked up on resume.
 """
@@ -40,6 +41,11 @@ log = logging.getLogger(__name__)
 
 MAX_STEPS_PER_TICK = 8
 _SEED_MAX = 2**31 - 1
+
+
+def _records(runs) -> list[list[dict]]:
+    """Each stored run's response records (one list per battery)."""
+    return [list((r.responses or {}).values()) for r in runs]
 
 
 class CampaignFailed(Exception):
@@ -230,9 +236,10 @@ class CampaignRunner:
         design, models = analysis.fit(it.design["doe"], [r for r in it.runs if r.kind == "design"], targets)
         modelled = [m for m in models if m.fit is not None]
         if state is None:
-            confirmation = next(r for r in it.runs if r.kind == "confirmation")
-            state, points = polish.start(config, design, modelled, dict(it.optimum["parameters"]), confirmation.id,
-                                         list((confirmation.responses or {}).values()), confirmation.seed)
+            confirmations = polish.final_runs(it)
+            state, points = polish.start(config, design, modelled, dict(it.optimum["parameters"]),
+                                         [r.id for r in confirmations], _records(confirmations),
+                                         [r.seed for r in confirmations])
             self._add_polish_runs(session, it, state, points)
             return self._set_phase(session, it, "polish", "polish", optimum={**it.optimum, "polish": state})
         round_runs = sorted((r for r in it.runs if r.kind == "polish" and r.std_order // polish.ROUND == state["round"]),
@@ -252,10 +259,11 @@ class CampaignRunner:
     @staticmethod
     def _add_polish_runs(session, it, state: dict, points) -> None:
         for k, (natural, coded) in enumerate(points):
-            order = state["round"] * polish.ROUND + k + 1
-            session.add(CampaignRun(iteration_id=it.id, kind="polish", std_order=order, run_order=order,
-                                    is_centre=False, coded=coded, natural=natural, seed=state["seed"],
-                                    status="pending"))
+            for j, seed in enumerate(polish.seeds_of(state)):
+                order = polish.std_order(state, k, j)
+                session.add(CampaignRun(iteration_id=it.id, kind="polish", std_order=order, run_order=order,
+                                        is_centre=False, coded=coded, natural=natural, seed=seed,
+                                        status="pending"))
 
     # -- analysis and report -----------------------------------------------------------------
     def _targets(self, session, campaign, config):
@@ -276,25 +284,29 @@ class CampaignRunner:
         opt = result["optimum"]
         taken = {r.seed for r in it.runs}
         seed = (config.seed + 1_000_003 * it.number) % _SEED_MAX
-        while seed in taken:
-            seed = (seed + 1) % _SEED_MAX
-        session.add(CampaignRun(iteration_id=it.id, kind="confirmation", std_order=0, run_order=0,
-                                is_centre=False, coded=opt["coded"], natural=opt["parameters"],
-                                seed=seed, status="pending"))
+        for k in range(config.confirmation_seeds):
+            while seed in taken:
+                seed = (seed + 1) % _SEED_MAX
+            taken.add(seed)
+            session.add(CampaignRun(iteration_id=it.id, kind="confirmation", std_order=k, run_order=k,
+                                    is_centre=False, coded=opt["coded"], natural=opt["parameters"],
+                                    seed=seed, status="pending"))
         return self._set_phase(session, it, "analysis", "confirmation", models=result["models"], optimum=opt)
 
     def _report(self, session, campaign, config, it) -> bool:
         targets = self._targets(session, campaign, config)
-        confirmation = polish.final_run(it)
+        confirmations = polish.final_runs(it)
+        seeds = [r.seed for r in confirmations]
         design_runs = [r for r in it.runs if r.kind == "design"]
         assessment = analysis.assess(config, it.design["doe"], design_runs, targets, it.optimum,
-                                     list((confirmation.responses or {}).values()), confirmation.seed)
+                                     _records(confirmations), seeds)
         polished = polish.summary((it.optimum or {}).get("polish"))
         assessment["polished"] = bool(polished and polished["steps"] > 0)
-        report = build_report(config, it.models, it.optimum, confirmation, targets, assessment)
+        report = build_report(config, it.models, it.optimum, confirmations, targets, assessment)
         report["polish"] = polished
-        stored = {"job_id": confirmation.job_id, "seed": confirmation.seed, "parameters": confirmation.natural,
-                  "responses": confirmation.responses}
+        first = confirmations[0]
+        stored = {"job_id": first.job_id, "seed": first.seed, "parameters": first.natural,
+                  "responses": first.responses, "job_ids": [r.job_id for r in confirmations], "seeds": seeds}
         # a diagnosis needs misfit the parameters cannot absorb: more measured values than free parameters
         diagnosable = ((report.get("lack_of_fit") or {}).get("dof") or 0) > 0
         # in automatic mode an added effect that did not earn its place needs no diagnosis of its own:
@@ -306,7 +318,7 @@ class CampaignRunner:
         # a diagnosis attributes misfit: none to attribute when the lack of fit passes and every target
         # is reachable (whatever the surfaces' check says)
         misfit = report["verdict"] in ("targets out of reach", "model misses the measurements")
-        plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed) if (
+        plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, seeds) if (
             config.diagnose and diagnosable and misfit and not rejected) else []
         if plan:
             for k, (name, natural, seed) in enumerate(plan):
@@ -317,12 +329,13 @@ class CampaignRunner:
 
     def _diagnosed(self, session, campaign, config, it) -> bool:
         targets = self._targets(session, campaign, config)
-        confirmation = polish.final_run(it)
+        confirmations = polish.final_runs(it)
+        seeds = [r.seed for r in confirmations]
         design_runs = [r for r in it.runs if r.kind == "design"]
         runs = sorted((r for r in it.runs if r.kind == "diagnosis"), key=lambda r: r.std_order)
-        plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, confirmation.seed)
+        plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, seeds)
         diagnosis = analysis.diagnose(config, it.design["doe"], design_runs, targets, it.optimum,
-                                      list((confirmation.responses or {}).values()), confirmation.seed,
+                                      _records(confirmations), seeds,
                                       [(name, seed, list((r.responses or {}).values()))
                                        for (name, _, seed), r in zip(plan, runs)])
         report = {**(it.report or {}), "diagnosis": diagnosis}

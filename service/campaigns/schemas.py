@@ -147,10 +147,16 @@ class CampaignCreate(BaseModel):
         True, description="after a report that is not 'calibrated', run one battery per candidate effect at the "
         "optimum and rank the missing effects (docs/diagnosis.md)",
     )
+    confirmation_seeds: int = Field(
+        2, ge=1, le=8, description="batteries at the optimum, each with its own seed; the report compares their "
+        "mean with the measurements, so the simulator's seed-to-seed scatter enters the lack of fit divided by "
+        "this number, and the polishing steps and the diagnosis run at the same seeds (common random numbers). "
+        "1 is cheapest; the diagnosis then adds a second seed at the optimum",
+    )
     polish_steps: int = Field(
         3, ge=0, le=6, description="Gauss-Newton steps on the batteries after the confirmation (0: none); each "
-        "costs 3 batteries, plus one per factor for the Jacobian: the surfaces' optimum is biased inside the box "
-        "for saturating responses",
+        "costs 3 batteries per confirmation seed, plus one per factor and seed for the Jacobian: the surfaces' "
+        "optimum is biased inside the box for saturating responses",
     )
     automatic: bool = Field(
         False, description="after each iteration, add the effect the diagnosis indicates and run the next "

@@ -15,29 +15,30 @@ def test_analytic_campaign_from_creation_to_report(s2):
     final = run_to_end(client, app, settings, cid)
     assert final["status"] == "completed", final["error"]
 
-    # 2^3 factorial + 3 centre replicates, one battery each, plus one confirmation battery
+    # 2^3 factorial + 3 centre replicates, one battery each, plus a confirmation battery per seed (2 by default)
     (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()
     runs = iteration["runs"]
     design_runs = [r for r in runs if r["kind"] == "design"]
     assert len(design_runs) == 11 and sum(r["is_centre"] for r in design_runs) == 3
     own = [r for r in runs if r["kind"] in ("design", "confirmation")]
     assert len({r["seed"] for r in own}) == len(own)  # centre replicates (and confirmation) use distinct seeds
-    # the diagnosis batteries run at the optimum with the confirmation's seed and one more (two seeds, common
-    # random numbers): a second baseline, then every candidate effect at both
-    confirmation_seed = next(r["seed"] for r in runs if r["kind"] == "confirmation")
-    # polishing on the batteries: one Jacobian run per factor, then three trial lengths per step, all at
-    # the confirmation's seed (common random numbers)
+    confirmation_seeds = {r["seed"] for r in runs if r["kind"] == "confirmation"}
+    assert len(confirmation_seeds) == 2
+    # polishing on the batteries: one Jacobian point per factor, then three trial lengths per step, every
+    # point at the confirmation's seeds (common random numbers)
     polish_runs = [r for r in runs if r["kind"] == "polish"]
-    assert len(polish_runs) >= 3 and (len(polish_runs) - 3) % 3 == 0
-    assert {r["seed"] for r in polish_runs} == {confirmation_seed}
+    assert len(polish_runs) >= 6 and (len(polish_runs) - 6) % 6 == 0
+    assert {r["seed"] for r in polish_runs} == confirmation_seeds
+    # the diagnosis runs every candidate effect at the optimum's two seeds; with two confirmation seeds
+    # it needs no baseline battery of its own
     diagnosis_runs = [r for r in runs if r["kind"] == "diagnosis"]
-    assert {r["seed"] for r in diagnosis_runs} == {confirmation_seed, confirmation_seed + 1}
+    assert {r["seed"] for r in diagnosis_runs} == confirmation_seeds
     # (particle shape is built at the screening fidelity only; this campaign is at the thesis's)
-    assert len(diagnosis_runs) == 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
+    assert len(diagnosis_runs) == 2 * sum(c.applies_to("thesis") for c in candidates().values())
     with app.state.session_factory() as session:
         jobs = session.query(Job).filter(Job.campaign_id == cid).all()
     assert {j.id for j in jobs} == {r["job_id"] for r in runs}
-    assert len(jobs) == 12 + len(diagnosis_runs) + len(polish_runs)
+    assert len(jobs) == 13 + len(diagnosis_runs) + len(polish_runs)
     assert all(j.evaluator == "analytic" and j.spec["test"] == "battery" for j in jobs)
     assert {j.seed for j in jobs} == {r["seed"] for r in runs}
     assert iteration["parameters"]["factors"][0]["name"] == "particle_density_kg_m3"
@@ -56,6 +57,8 @@ def test_analytic_campaign_from_creation_to_report(s2):
         assert factor["low"] <= optimum["parameters"][factor["name"]] <= factor["high"]
     confirmation = client.get(f"{API}/campaigns/{cid}/confirmation").json()
     assert confirmation["status"] == "succeeded" and confirmation["parameters"] == optimum["parameters"]
+    # the final optimum's batteries (polished or not) are at the confirmation's seeds
+    assert {r["seed"] for r in confirmation["runs"]} == confirmation_seeds
 
     report = client.get(f"{API}/campaigns/{cid}/report").json()
     rows = {r["quantity"]: r for r in report["targets"]}
@@ -67,7 +70,10 @@ def test_analytic_campaign_from_creation_to_report(s2):
         low, high = row["prediction_interval"]
         assert low < row["predicted"] < high
         assert row["confirmation_in_interval"] == (low <= row["confirmed"] <= high)
-        expected_z = (row["confirmed"] - row["measured"]) / math.hypot(row["measured_uncertainty"], row["simulator_sd"])
+        # the mean of the two confirmation batteries, whose single-run scatter counts divided by 2
+        assert math.isclose(row["confirmed"], sum(row["confirmed_per_seed"]) / 2)
+        expected_z = (row["confirmed"] - row["measured"]) / math.hypot(row["measured_uncertainty"],
+                                                                        row["simulator_sd"] / math.sqrt(2))
         assert math.isclose(row["standardised_residual"], expected_z)
     # density and modulus lie inside what the box can produce (rho_b = rho_p x solid fraction ~0.55;
     # E' grows linearly with k_p): the optimum matches them
@@ -144,7 +150,31 @@ def test_next_iteration_with_an_effect_keeps_the_first(s2):
     # 5 x 0.3/0.5 = 3 deg (x 0.8 in phi): about 55 deg at mu_pp = 1, so 60.6 deg is now within 3 u (9.1 deg)
     assert second["friction_angle_deg"]["reachable"] is True
     second_runs = [r for r in iterations[1]["runs"] if r["kind"] in ("design", "confirmation")]
-    assert len(second_runs) == 12
+    assert len(second_runs) == 11 + 2  # the design and a confirmation battery per seed
     with app.state.session_factory() as session:
         jobs = {j.id: j for j in session.query(Job).filter(Job.campaign_id == cid).all()}
     assert all(jobs[r["job_id"]].spec["parameters"]["effects"] == effects for r in second_runs)
+
+
+def test_one_confirmation_seed_gets_a_second_baseline_seed_for_the_diagnosis(s2):
+    """confirmation_seeds 1: one battery at the optimum, scatter at full weight in the report; the diagnosis
+    then queues a baseline battery at a second seed first (its signatures need the optimum at two seeds)."""
+    client, app, settings = s2
+    body = campaign_body(thesis_material_id(client), confirmation_seeds=1, polish_steps=0)
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()
+    (seed,) = [r["seed"] for r in iteration["runs"] if r["kind"] == "confirmation"]
+    diagnosis_runs = sorted((r for r in iteration["runs"] if r["kind"] == "diagnosis"), key=lambda r: r["std_order"])
+    optimum = client.get(f"{API}/campaigns/{cid}/optimum").json()["parameters"]
+    assert diagnosis_runs[0]["seed"] == seed + 1 and diagnosis_runs[0]["natural"] == optimum
+    assert {r["seed"] for r in diagnosis_runs} == {seed, seed + 1}
+    assert len(diagnosis_runs) == 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
+    report = client.get(f"{API}/campaigns/{cid}/report").json()
+    assert report["confirmation_seeds"] == [seed]
+    for row in report["targets"]:
+        if row["status"] == "modelled":
+            expected_z = (row["confirmed"] - row["measured"]) / math.hypot(row["measured_uncertainty"],
+                                                                            row["simulator_sd"])
+            assert math.isclose(row["standardised_residual"], expected_z)
