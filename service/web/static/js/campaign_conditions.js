@@ -1,6 +1,7 @@
 // Condition panels: how the model and the measurements change with the normal stress, where either
-// has data at several stresses. The model side is the confirmation run's own result (the battery
-// at the optimum: shear stress, dilatancy and E' per load); the measured side is the targets.
+// has data at several stresses. The model side is the first confirmation run's own result (one
+// battery at the optimum: shear stress, dilatancy and E' per load, with its Mohr-Coulomb line, which
+// the report's per-target mean does not have); the measured side is the targets.
 //   shear stress against normal stress, with the measured and the modelled Mohr-Coulomb lines;
 //   log E' against log normal stress; dilatancy angle against normal stress.
 import { fmt, h } from "./core.js";
@@ -69,6 +70,6 @@ export function conditionsSection(targets, result) {
   const props = result?.properties || [];
   const panels = [shearPanel(targets, props), modulusPanel(targets, props), dilatancyPanel(targets, props)].filter(Boolean);
   if (!panels.length) return "";
-  return h("section", { className: "card" }, h("h3", {}, "Across conditions (confirmation run at the optimum)"),
+  return h("section", { className: "card" }, h("h3", {}, "Across conditions (the first confirmation run at the optimum)"),
     h("div", { className: "panels" }, panels));
 }

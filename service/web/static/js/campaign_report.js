@@ -59,12 +59,12 @@ function residualStrip(rows) {
   const predicted = rows.map((r, i) => ({ value: [i, r.predicted_standardised_residual], name: labels[i] }));
   const extreme = Math.max(3, ...rows.flatMap((r) => [Math.abs(r.standardised_residual || 0), Math.abs(r.predicted_standardised_residual || 0)])) * 1.1;
   return chart({ title: { text: "Standardised residuals (model − measured) / σ" },
-    legend: { top: 2, right: 6, data: ["confirmation run", "surface prediction"] },
+    legend: { top: 2, right: 6, data: ["confirmation", "surface prediction"] },
     grid: { left: 56, right: 14, top: 36, bottom: 110 },
     xAxis: { type: "category", data: labels, axisLabel: { rotate: 35, fontSize: 10, interval: 0 } },
     yAxis: axis("residual (σ)", { min: -extreme, max: extreme }),
     series: [
-      { type: "scatter", name: "confirmation run", data, symbolSize: 10, z: 3, markArea: band(-2, 2, "rgba(7,148,85,0.10)", "±2σ"),
+      { type: "scatter", name: "confirmation", data, symbolSize: 10, z: 3, markArea: band(-2, 2, "rgba(7,148,85,0.10)", "±2σ"),
         markLine: { silent: true, symbol: "none", data: [{ yAxis: 0 }], lineStyle: { color: "#667085" }, label: { show: false } } },
       { type: "scatter", name: "surface prediction", data: predicted, symbol: "emptyCircle", symbolSize: 8, itemStyle: { color: "#667085" } },
     ] }, { height: 320, label: "residual strip" });
@@ -83,13 +83,19 @@ function reachabilityBars(rows, cutoff) {
   { height: 60 + 26 * rows.length, label: "reachability" });
 }
 
+// what the "confirmed" values are: one battery, or the mean of several seeds' batteries
+function seedsText(report) {
+  const m = report.confirmation_seeds?.length || 1;
+  return m > 1 ? `mean of the ${m} confirmation runs (one per seed)` : "confirmation run";
+}
+
 export function targetsSection(report) {
   const rows = modelled(report);
   const tests = [...new Set(rows.map((r) => r.test))];
   const cutoff = report.reachable_limit ?? 3;
   return h("section", { className: "card" }, h("h3", {}, "Targets"),
     h("div", { className: "panels" }, tests.map((t) => parityPanel(t, rows.filter((r) => r.test === t)))),
-    h("p", { className: "muted" }, "Dots: confirmation run at the optimum (the surface's prediction where it has none); horizontal bars ±2 u of the measurement, vertical ±2σ of the residual."),
+    h("p", { className: "muted" }, `Dots: ${seedsText(report)} at the optimum (the surface's prediction where it has none); horizontal bars ±2 u of the measurement, vertical ±2σ of the residual (the simulator's scatter divided by the number of seeds).`),
     rows.length ? residualStrip(rows) : "",
     rows.some((r) => Number.isFinite(r.reachability)) ? reachabilityBars(rows.filter((r) => Number.isFinite(r.reachability)), cutoff) : "",
     wideTable(["Test", "Quantity", "Condition", "Measured ± u", "Predicted [95% PI]", "Confirmed", "z", "Reachability", "Status"],
