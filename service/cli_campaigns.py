@@ -88,7 +88,8 @@ def _factor(text: str) -> dict:
 
 def campaign_create(args) -> int:
     body = _read_json(args.file) if args.file else {}
-    for key in ("name", "material_id", "evaluator", "fidelity", "seed", "max_iterations"):
+    for key in ("name", "material_id", "evaluator", "fidelity", "seed", "max_iterations", "confirmation_seeds",
+                "polish_steps"):
         value = getattr(args, key)
         if value is not None:
             body[key] = value
@@ -270,6 +271,10 @@ def register(subparsers) -> None:
                         help="add the indicated effects and iterate by itself until the lack of fit passes, "
                              "nothing improves, or --max-iterations")
     create.add_argument("--max-iterations", type=int, help="automatic mode: iterations at most (default 4)")
+    create.add_argument("--confirmation-seeds", type=int,
+                        help="batteries at each optimum, one per seed (default 2); the report uses their mean")
+    create.add_argument("--polish-steps", type=int,
+                        help="Gauss-Newton steps on the batteries after the confirmation (default 3; 0: none)")
     create.add_argument("--start", action="store_true", help="start it right away")
     list_parser = _leaf(csub, "list", campaign_list, "list campaigns")
     list_parser.add_argument("--status", choices=["draft", "running", "paused", "completed", "failed"])

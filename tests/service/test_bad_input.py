@@ -223,6 +223,16 @@ def test_campaign_priority_beyond_range(s2):
     assert snapshot(client) == before
 
 
+@pytest.mark.parametrize("seeds", [0, 9, "two"])
+def test_campaign_confirmation_seeds_out_of_range(s2, seeds):
+    """No battery at the optimum (0) leaves nothing to compare; more than 8 is refused as a typo."""
+    client, _, _ = s2
+    before = snapshot(client)
+    response = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client), confirmation_seeds=seeds))
+    assert_refused(response, ["body", "confirmation_seeds"])
+    assert snapshot(client) == before
+
+
 # -- job specs ------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("text, loc", [

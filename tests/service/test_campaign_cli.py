@@ -71,11 +71,12 @@ def test_campaign_and_schedule_commands(server, capsys, tmp_path):
     code, out, _ = run(capsys, "campaign", "create", "--url", url, "--name", "cli", "--material", "1",
                        "--evaluator", "analytic", "--fidelity", "thesis", "--centre-runs", "2",
                        "--factor", "particle_density_kg_m3:2300:2700", "--factor", "friction_pp:0.3:1.0",
-                       "--start", "--json")
+                       "--confirmation-seeds", "3", "--polish-steps", "0", "--start", "--json")
     assert code == 0
     campaign = json.loads(out)
     cid = campaign["id"]
     assert campaign["status"] == "running"
+    assert campaign["config"]["confirmation_seeds"] == 3 and campaign["config"]["polish_steps"] == 0
     code, _, err = run(capsys, "campaign", "start", str(cid), "--url", url)
     assert code == 2 and "HTTP 409" in err
     assert run(capsys, "campaign", "pause", str(cid), "--url", url)[0] == 0

@@ -95,7 +95,9 @@ export async function campaignsPage(view, params) {
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "diagnose", checked: true, "data-loc": "diagnose" }), " diagnose a missing effect when the model misses"),
       h("label", { className: "check", title: "after each iteration, add the effect the diagnosis indicates and run the next one, until the lack of fit passes, nothing improves, or the maximum is reached" },
         h("input", { type: "checkbox", name: "automatic", "data-loc": "automatic" }), " automatic mode"),
-      field("Max. iterations (automatic)", h("input", { name: "max_iterations", type: "number", value: 4, "data-loc": "max_iterations" }))),
+      field("Max. iterations (automatic)", h("input", { name: "max_iterations", type: "number", value: 4, "data-loc": "max_iterations" })),
+      field("Confirmation seeds (batteries at each optimum)", h("input", { name: "confirmation_seeds", type: "number", value: 2, min: 1, "data-loc": "confirmation_seeds",
+        title: "the report compares their mean with the measurements: more seeds average the simulator's scatter down" }))),
     h("h4", {}, "Priors (directly measured factors)"), priorRows, addPrior,
     h("h4", {}, "Constraints"),
     field("One per line, e.g. friction_pw <= friction_pp", h("textarea", { name: "constraints", rows: 2, "data-loc": "constraints" })),
@@ -147,6 +149,7 @@ function campaignBody(form, material) {
     default_relative_uncertainty: num(data.get("default_relative_uncertainty")),
     allow_extrapolation: data.get("allow_extrapolation") === "on", diagnose: data.get("diagnose") === "on",
     automatic: data.get("automatic") === "on", max_iterations: num(data.get("max_iterations")),
+    confirmation_seeds: num(data.get("confirmation_seeds")),
     constraints: String(data.get("constraints") || "").split("\n").map((c) => c.trim()).filter(Boolean),
   };
 }
