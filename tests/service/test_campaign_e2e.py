@@ -29,6 +29,15 @@ def test_analytic_campaign_from_creation_to_report(s2):
     polish_runs = [r for r in runs if r["kind"] == "polish"]
     assert len(polish_runs) >= 6 and (len(polish_runs) - 6) % 6 == 0
     assert {r["seed"] for r in polish_runs} == confirmation_seeds
+    points: dict[int, list[dict]] = {}
+    for r in polish_runs:  # a point's runs are consecutive in std_order, one per seed
+        points.setdefault((r["std_order"] - 1) // 2, []).append(r)
+    for runs_of_point in points.values():
+        assert {r["seed"] for r in runs_of_point} == confirmation_seeds
+        assert all(r["natural"] == runs_of_point[0]["natural"] for r in runs_of_point)
+    # the report is made on the final point's batteries, one per seed, at the optimum it reports
+    final = client.get(f"{API}/campaigns/{cid}/confirmation").json()
+    assert {r["seed"] for r in final["runs"]} == confirmation_seeds
     # the diagnosis runs every candidate effect at the optimum's two seeds; with two confirmation seeds
     # it needs no baseline battery of its own
     diagnosis_runs = [r for r in runs if r["kind"] == "diagnosis"]
