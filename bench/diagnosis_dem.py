@@ -256,7 +256,11 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
                            "ranking": [], "added": None, "tried": [], "error_ratio": None,
                            "chi2_per_dof_after": None, "density_error": None,
                            "verdicts": [h["verdict"] for h in history], "stop_reason": history[-1].get("stop_reason")}
-    out["lof_rejects"] = first["lack_of_fit_p"] is not None and first["lack_of_fit_p"] < 0.05
+    # the model's adequacy test: the omnibus lack of fit, or once the diagnosis ran (a failing or
+    # suspect report), Holm over it and the candidates' directed test
+    p = first["adequacy_p"] if first.get("adequacy_p") is not None else first["lack_of_fit_p"]
+    out["lof_rejects"] = p is not None and p < 0.05
+    out["p_omnibus"], out["p_directed"] = first["lack_of_fit_p"], first.get("directed_p")
     try:
         diagnosis = svc.call("GET", f"/campaigns/{cid}/diagnosis", params={"number": 1})
         out["ranking"] = [r["effect"] for r in diagnosis["ranking"]]
@@ -368,6 +372,7 @@ def main(argv=None) -> int:
             o["wall_s"] = time.perf_counter() - started
             outs.append(o)
             print(f"{name:<9} hidden={sc.effect or '-':<18} lof={'rejects' if o['lof_rejects'] else 'passes'} "
+                  f"(omnibus p {_f(o['p_omnibus'])}, directed p {_f(o['p_directed'])}) "
                   f"ranking={o['ranking'][:3]} rank={o['rank']} tried={o['tried']} added={o['added']} "
                   f"error_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
                   f"density_error={_f(o['density_error'])} stop='{o['stop_reason']}' "

@@ -12,6 +12,7 @@ signatures differ most, i.e. the one that would separate them.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -70,6 +71,13 @@ class Attribution:
     message: str
     measure_next: list[str]
     candidates: dict[str, Candidate]
+    directed: stats.DirectedTest | None = None   # the max-T score test over the candidates
+    adequacy_p: float | None = None               # Holm over the omnibus lack of fit and ``directed``
+
+    @property
+    def fails(self) -> bool:
+        """The model misses the measurements, by the omnibus or the directed test (Holm)."""
+        return self.adequacy_p is not None and self.adequacy_p < ALPHA
 
     @property
     def best(self) -> Ranked | None:
@@ -86,7 +94,12 @@ class Attribution:
                 "indicated": self.indicated(),
                 "alias_groups": self.alias_groups, "fingerprints": self.fingerprints,
                 "measure_next": self.measure_next, "alpha": ALPHA, "min_explained": MIN_EXPLAINED,
-                "critical_lm": _critical_lm(len(self.ranking))}
+                "critical_lm": _critical_lm(len(self.ranking)),
+                "directed": None if self.directed is None else self.directed.to_dict(),
+                "adequacy": {"p_value": self.adequacy_p, "fails": self.fails,
+                             "about": "Holm over the omnibus lack of fit and the directed test (the largest "
+                                      "candidate score against its simulated null): the model misses the "
+                                      "measurements when either p is below alpha / 2"}}
 
 
 def _critical_lm(k: int) -> float:
@@ -181,9 +194,13 @@ def _alias_groups(ranked: list[Ranked], labels: list[str]) -> list[dict]:
 
 
 def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[Signature],
-              labels: list[str]) -> Attribution:
-    """Rank the candidates; ``labels`` name the target rows (for the separating measurement)."""
+              labels: list[str], draws: np.ndarray | None = None) -> Attribution:
+    """Rank the candidates; ``labels`` name the target rows (for the separating measurement);
+    ``draws``: the null residuals of the localisation (``stats.null_residuals``), for the directed
+    test. The localisation the verdict is judged on carries that test (``Localisation.directed``)."""
     candidates = {s.candidate.name: s.candidate for s in signatures}
+    directed = stats.directed_test(r, M, [s.vector for s in signatures], draws)
+    loc = dataclasses.replace(loc, directed=directed)
     ranked = []
     for sig in signatures:
         score = stats.score_test(r, sig.vector, M)
@@ -202,7 +219,8 @@ def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[
                     "effects": {c.name: {col: c.fingerprint.get(col, "0") for col in FINGERPRINT_COLUMNS}
                                 for c in candidates.values()}}
     verdict, message, measure_next = _verdict(loc, ranked, groups, labels, r, M)
-    return Attribution(ranked, groups, fingerprints, verdict, message, measure_next, candidates)
+    return Attribution(ranked, groups, fingerprints, verdict, message, measure_next, candidates, directed,
+                       loc.adequacy_p)
 
 
 def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels, r, M):

@@ -78,14 +78,31 @@ class Localisation:
     trends: dict[str, Any]
     conflicts: dict[str, list[dict]]
     reachability: list[dict] = field(default_factory=list)
+    # the candidate effects' directed test, once the diagnosis has run their batteries (attribute.py)
+    directed: stats.DirectedTest | None = None
+
+    @property
+    def adequacy_p(self) -> float:
+        """p of "the model reproduces the measurements": the omnibus lack of fit alone, or, once the
+        diagnosis has tested the candidate effects, Holm over the omnibus and the directed test."""
+        return stats.combined_p(self.lack_of_fit.p_value, None if self.directed is None else self.directed.p_value)
 
     @property
     def fails(self) -> bool:
-        return self.lack_of_fit.p_value < ALPHA
+        return self.adequacy_p < ALPHA
+
+    @property
+    def suspect(self) -> bool:
+        """Signs of missing physics the omnibus test may not see: a parameter pinned at a bound of the
+        user's box, a prior pulled off its measured value, a target no parameter set reaches. Reason to
+        run the diagnosis (and its directed test) even when the lack of fit passes."""
+        return bool(self.conflicts.get("active_bounds") or self.conflicts.get("priors_pulled")
+                    or any(not r.get("reachable", True) for r in self.reachability))
 
     def to_dict(self) -> dict:
-        return {"lack_of_fit": self.lack_of_fit.to_dict(), "fails": self.fails, "targets": self.rows,
-                "tests": self.tests, "trends": self.trends, "conflicts": self.conflicts,
+        return {"lack_of_fit": self.lack_of_fit.to_dict(), "fails": self.fails, "adequacy_p": self.adequacy_p,
+                "directed": None if self.directed is None else self.directed.to_dict(), "suspect": self.suspect,
+                "targets": self.rows, "tests": self.tests, "trends": self.trends, "conflicts": self.conflicts,
                 "reachability": self.reachability}
 
 

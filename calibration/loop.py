@@ -21,6 +21,7 @@ from engine.lab.spec import MicroParameters
 
 from . import calibrate as cal
 from . import parameters as params_mod
+from . import stats
 from .attribute import PLAUSIBLE_SLACK, Attribution, Signature, attribute
 from .decisions import Decision, effect_range, judge
 from .evaluators import BatchEvaluator
@@ -286,7 +287,10 @@ class CalibrationLoop:
                 diff.append((on - res.model[i]) / res.sd[i] / steps[k])
             signatures.append(Signature(c, np.concatenate([diff, np.zeros(n_prior)]), steps[k], refs[k]))
         labels = [k.label for k in res.keys]
-        att = attribute(it.localisation, res.r, res.M(), signatures, labels)
+        # the same seeded null as the iteration's localisation (``iterate``), for the directed test
+        draws = stats.null_residuals(res.M(), res.df, seed=self.config.seed + it.number)
+        att = attribute(it.localisation, res.r, res.M(), signatures, labels, draws)
+        it.localisation.directed = att.directed  # the iteration is now judged on both tests
         return Diagnosis(it.number, att, signatures)
 
     # -- adding an effect ----------------------------------------------------------------------
@@ -341,12 +345,18 @@ class CalibrationLoop:
         iterations, diagnoses, decisions = [current], [], []
         number = 1
         while True:
-            if not current.localisation.fails:
+            loc = current.localisation
+            # a passing omnibus test with no conflict ends it; a conflict (a parameter pinned at a
+            # bound, a prior pulled off, a target out of reach) asks the directed test first
+            if not loc.fails and not loc.suspect:
                 return LoopResult(iterations, diagnoses, decisions, "lack of fit passes")
             if number >= c.max_iterations:
-                return LoopResult(iterations, diagnoses, decisions, "maximum number of iterations reached")
+                return LoopResult(iterations, diagnoses, decisions, "lack of fit passes" if not loc.fails
+                                  else "maximum number of iterations reached")
             diag = self.diagnose(current)
             diagnoses.append(diag)
+            if not current.localisation.fails:
+                return LoopResult(iterations, diagnoses, decisions, "lack of fit passes")
             options = diag.attribution.indicated()
             if not options:
                 return LoopResult(iterations, diagnoses, decisions, f"diagnosis {diag.attribution.verdict}")

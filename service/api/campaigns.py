@@ -173,6 +173,9 @@ def history(campaign_id: CampaignId, session: Session = Depends(get_session)) ->
             "optimum": report.get("optimum"), "parameter_std": (it.optimum or {}).get("parameter_std"),
             "chi2": lof.get("statistic"), "chi2_per_dof": lof.get("chi2_per_dof"), "dof": lof.get("dof"),
             "noise_band": lof.get("noise_band"), "lack_of_fit_p": lof.get("p_value"),
+            # once the diagnosis ran: Holm over the lack of fit and the candidates' directed test
+            "adequacy_p": (report.get("adequacy") or {}).get("p_value"),
+            "directed_p": ((report.get("adequacy") or {}).get("directed") or {}).get("p_value"),
             "per_test": {t["test"]: t["chi2"] for t in report.get("tests", [])},
             "verdict": report.get("verdict"),
             "top_effect": (diag or {}).get("ranking", [{}])[0].get("effect") if diag and diag.get("ranking") else None,

@@ -14,7 +14,7 @@ import numpy as np
 
 from calibration import calibrate as cal
 from calibration.fitting import TargetModel, fit_targets
-from calibration.localise import localise
+from calibration.localise import ALPHA, localise
 from calibration.records import Measured, measurement_variances
 from calibration.verdict import verdict
 from doe.confirm import confirm
@@ -225,10 +225,38 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
         if c.is_switch:
             reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
         signatures.append(Signature(c, vector, step, reference))
-    att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys])
+    from calibration import stats
+
+    # the localisation's own seeded null, for the directed test over the candidates
+    draws = stats.null_residuals(res.M(), res.df, seed=config.seed)
+    att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys], draws)
     return _json_safe({**att.to_dict(), "lack_of_fit": loc.lack_of_fit.to_dict(),
                        "seeds": sorted(set(confirmation_seeds) | {s for _, s, _ in planned}),
                        "batteries": len(planned)})
+
+
+def model_fails(report: dict) -> bool:
+    """Does the model miss the measurements? The diagnosis's adequacy test (the omnibus lack of fit and
+    the candidates' directed test, Holm) once it has run, else the report's omnibus lack of fit."""
+    adequacy = report.get("adequacy")
+    if adequacy is not None:
+        return bool(adequacy["fails"])
+    p = (report.get("lack_of_fit") or {}).get("p_value")
+    return p is not None and p < ALPHA
+
+
+def diagnosed_report(report: dict, diagnosis: dict) -> dict[str, Any]:
+    """The report with its diagnosis, and its verdict judged again on the diagnosis's adequacy test,
+    which has seen the candidates' batteries: a misfit only the directed test finds makes "calibrated"
+    "model misses the measurements"."""
+    out = {**report, "diagnosis": diagnosis, "adequacy": {**diagnosis["adequacy"],
+                                                          "omnibus_p": diagnosis["lack_of_fit"]["p_value"],
+                                                          "directed": diagnosis.get("directed")}}
+    surrogate = report.get("surrogate_check") or {}
+    polished = bool((report.get("polish") or {}).get("steps"))
+    out.update(verdict(unreachable=report.get("unreachable") or [], lack_of_fit_fails=out["adequacy"]["fails"],
+                       surrogate_ok=None if polished else surrogate.get("confirmed")))
+    return out
 
 
 def report_verdict(unreachable: list, assessment: dict) -> dict[str, Any]:

@@ -15,7 +15,6 @@ from __future__ import annotations
 from typing import Any
 
 from calibration.decisions import judge
-from calibration.localise import ALPHA
 
 STOP_PASSES = "lack of fit passes"
 STOP_MAX = "maximum number of iterations reached"
@@ -59,7 +58,7 @@ def _tried_from(iterations: list, base_number: int) -> set[str]:
 def next_step(config, campaign_config: dict, iterations: list, it, report: dict, settings=None) -> dict[str, Any]:
     """The automatic record of iteration ``it``: its decision, and either the next effect with the
     next iteration's configuration (``config``) or the reason to stop."""
-    from service.campaigns.analysis import active_effects
+    from service.campaigns.analysis import active_effects, model_fails
     from service.campaigns.store import with_effect_factor
     from service.errors import ApiError
     from service.limits import check_campaign_limits
@@ -71,7 +70,7 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     rejected = decision is not None and not decision["accepted"]
     base = next(p for p in iterations if p.number == base_number) if rejected else it
     base_report = report if base is it else (base.report or {})
-    passes = (_lof(report).get("p_value") or 0.0) >= ALPHA
+    passes = not model_fails(report)
     if not rejected and passes and report.get("verdict") != "targets out of reach":
         return {**record, "stop_reason": STOP_PASSES}
     if it.number >= config.max_iterations:

@@ -94,5 +94,7 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
         "tests": loc["tests"] if loc else [],
         "trends": loc["trends"] if loc else {},
         "conflicts": loc["conflicts"] if loc else {"active_bounds": [], "priors_pulled": []},
+        # conflicts or unreachable targets: the diagnosis runs (and its directed test) even if the lack of fit passes
+        "suspect": bool(loc and loc.get("suspect")),
         "surrogate_check": assessment.get("surrogate_check"),
     }

@@ -315,9 +315,10 @@ class CampaignRunner:
         if config.automatic:
             decision, _ = automatic.judge_iteration(campaign.iterations, it, report)
             rejected = decision is not None and not decision["accepted"]
-        # a diagnosis attributes misfit: none to attribute when the lack of fit passes and every target
-        # is reachable (whatever the surfaces' check says)
-        misfit = report["verdict"] in ("targets out of reach", "model misses the measurements")
+        # a diagnosis attributes misfit: it runs when the lack of fit fails or a target is out of reach, and
+        # when a conflict (a parameter pinned at a bound, a prior pulled off) suggests a misfit the omnibus
+        # test cannot see, which the diagnosis's directed test then judges (whatever the surfaces' check says)
+        misfit = report["verdict"] in ("targets out of reach", "model misses the measurements") or report["suspect"]
         plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, seeds) if (
             config.diagnose and diagnosable and misfit and not rejected) else []
         if plan:
@@ -338,7 +339,7 @@ class CampaignRunner:
                                       _records(confirmations), seeds,
                                       [(name, seed, list((r.responses or {}).values()))
                                        for (name, _, seed), r in zip(plan, runs)])
-        report = {**(it.report or {}), "diagnosis": diagnosis}
+        report = analysis.diagnosed_report(it.report or {}, diagnosis)
         return self._finish(session, campaign, config, it, "diagnosed", report)
 
     def _finish(self, session, campaign, config, it, phase: str, report: dict, **values: Any) -> bool:

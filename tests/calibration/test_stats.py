@@ -116,3 +116,60 @@ def test_noise_band_never_goes_below_zero():
     M = np.eye(6)
     lof = stats.lack_of_fit(np.ones(6), M, np.full(6, np.inf))
     assert lof.noise_band == pytest.approx((0.0, 1 + 2 * math.sqrt(2 / 6)))
+
+
+def test_directed_test_is_the_one_sided_score_test_for_one_candidate_with_known_variances():
+    """One candidate, every variance known: max(0, u.r)^2 is one-sided chi2_1, p = P(chi2_1 > T) / 2."""
+    rng = np.random.default_rng(11)
+    M = stats.residual_maker(rng.standard_normal((12, 3)))
+    s = rng.standard_normal(12)
+    u = M @ s / np.linalg.norm(M @ s)
+    r = M @ rng.standard_normal(12) + 2.5 * u
+    test = stats.directed_test(r, M, [s])
+    assert test.lm == pytest.approx(float(u @ r) ** 2)
+    assert test.lm == pytest.approx(stats.score_test(r, s, M).lm)
+    assert test.p_value == pytest.approx(0.5 * sps.chi2.sf(test.lm, 1))
+    assert stats.directed_test(-r, M, [s]).p_value == 1.0  # the signature pointing away explains nothing
+
+
+def test_directed_test_null_of_the_largest_of_k_orthogonal_candidates():
+    """k orthogonal signatures, M = I, variances known: the k projections are independent N(0, 1), so
+    P(max_e max(0, z_e)^2 >= t) = 1 - (1 - P(chi2_1 > t) / 2)^k; the simulated null (df huge) matches it."""
+    k, n = 4, 10
+    signatures = list(np.eye(n)[:k] * 3.0)
+    r = np.zeros(n)
+    r[2] = 2.2
+    M = np.eye(n)
+    draws = stats.null_residuals(M, np.full(n, 1e9), n_sim=40000, seed=5)
+    exact = 1.0 - (1.0 - 0.5 * sps.chi2.sf(2.2**2, 1)) ** k
+    assert stats.directed_test(r, M, signatures, draws).p_value == pytest.approx(exact, abs=0.005)
+    # with known variances (no draws) Bonferroni bounds it from above
+    assert exact <= stats.directed_test(r, M, signatures).p_value <= k * 0.5 * sps.chi2.sf(2.2**2, 1) + 1e-12
+
+
+def test_directed_test_and_its_combination_keep_their_size_with_three_replicates():
+    """True models, variances from 3 replicates (df 2), three candidates: the directed test and Holm
+    over it and the omnibus test each reject about 5 %, not more."""
+    rng = np.random.default_rng(21)
+    n_res = 14
+    M = stats.residual_maker(rng.standard_normal((n_res, 4)))
+    df = np.full(n_res, 2.0)
+    signatures = [rng.standard_normal(n_res) for _ in range(3)]
+    draws = stats.null_residuals(M, df, n_sim=4000, seed=3)
+    directed, combined, n = 0, 0, 400
+    for _ in range(n):
+        rr = (M @ rng.standard_normal(n_res)) / np.sqrt(rng.chisquare(2, n_res) / 2)
+        p_dir = stats.directed_test(rr, M, signatures, draws).p_value
+        p_omni = stats.lack_of_fit(rr, M, df, draws=draws).p_value
+        directed += p_dir < 0.05
+        combined += stats.combined_p(p_omni, p_dir) < 0.05
+    print(f"false alarms at alpha 0.05: directed {directed / n:.3f}, Holm with the omnibus {combined / n:.3f}")
+    assert 0.02 <= directed / n <= 0.09
+    assert combined / n <= 0.08
+
+
+def test_holm_of_two_is_twice_the_smaller_p():
+    assert stats.combined_p(0.03, 0.2) == pytest.approx(0.06)
+    assert stats.combined_p(0.3, 0.01) == pytest.approx(0.02)
+    assert stats.combined_p(0.04, None) == 0.04
+    assert stats.combined_p(0.9, 0.8) == 1.0

@@ -52,8 +52,11 @@ def test_automatic_mode_adds_the_indicated_effect_and_stops_with_a_reason(s2):
     client.post(f"{API}/campaigns/{cid}/start")
     summary = run_to_end(client, app, settings, cid, max_rounds=60)
     assert summary["status"] == "completed", summary
+    # (after rolling resistance, friction_pp still sits at its bound, so the diagnosis runs again; its
+    # directed test sees what is left, an E' pattern only an implausible Hertz strength would explain)
     assert summary["stop_reason"] in ("lack of fit passes", "maximum number of iterations reached",
-                                      "nothing improves"), summary["stop_reason"]
+                                      "nothing improves") or summary["stop_reason"].startswith("diagnosis: "), \
+        summary["stop_reason"]
     history = client.get(f"{API}/campaigns/{cid}/history").json()["iterations"]
     assert 2 <= len(history) <= 3
     first, second = history[0], history[1]
