@@ -147,7 +147,8 @@ def diagnosis(campaign_id: CampaignId, number: int | None = IterationQ,
               session: Session = Depends(get_session)) -> dict:
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     if "diagnosis" not in value:
-        reason = ("the model reproduces the measurements; nothing to diagnose" if value.get("verdict") == "calibrated"
+        reason = ("the model reproduces the measurements; nothing to diagnose"
+                  if value.get("verdict") == "calibrated" and it.phase != "diagnosis"
                   else f"the diagnosis batteries are not done (phase {it.phase})")
         raise Conflict(f"campaign {campaign_id} iteration {it.number} has no diagnosis: {reason}",
                        ["path", "campaign_id"])

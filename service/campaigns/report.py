@@ -66,7 +66,7 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
             uncertainty_assumed=opt_target.get("uncertainty_assumed", False),
             predicted=pred.get("value"), prediction_interval=[lo, hi],
             predicted_standardised_residual=opt_target.get("standardised_residual"),
-            simulator_sd=sd,
+            simulator_sd=sd, residual_sd=u_total,
             standardised_residual=(confirmed - meas.mean) / u_total if u_total > 0 else None,
             confirmation_in_interval=(lo is not None and hi is not None and lo <= confirmed <= hi),
             reachability=opt_target.get("reachability"),

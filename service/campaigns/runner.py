@@ -9,9 +9,11 @@ crash finds the job it already queued instead of queuing a twin.
 
 Phases of an iteration: design -> batteries -> analysis -> confirmation (``confirmation_seeds`` batteries
 at the optimum) -> polish (Gauss-Newton on the batteries, service.campaigns.polish, at the same seeds) ->
-report -> done, and when the report finds misfit (lack of fit, or a target out of reach): report ->
+report -> done, and when the report finds misfit (lack of fit, or a target out of reach) or a conflict
+(a parameter pinned at a bound, a prior pulled off; ``suspect``): report ->
 diagnosis (each candidate effect at the optimum's seeds, plus a second baseline seed when the confirmation
-has one) -> diagnosed -> done, the ranking stored in the report. In automatic mode
+has one) -> diagnosed -> done, the ranking stored in the report and its verdict judged again on the
+omnibus and the candidates' directed test together. In automatic mode
 (service.campaigns.automatic) a done iteration either configures the next one, with the indicated
 effect as a factor, or records why the loop stopped.
 Paused campaigns are skipped; their queued batteries keep running in the queue

@@ -98,6 +98,13 @@ def test_analytic_campaign_from_creation_to_report(s2):
     assert phi["reachable"] is False and phi["reachability"] > (60.6 - 42.0) / 3.03 - 1e-9
     assert report["verdict"] == "targets out of reach"
     assert report["unreachable"] == ["dst__friction_angle_deg"]
+    # the diagnosis judged the model on both tests: Holm over the omnibus lack of fit and the directed test
+    adequacy = report["adequacy"]
+    assert math.isclose(adequacy["p_value"], min(1.0, 2 * min(adequacy["omnibus_p"], adequacy["directed"]["p_value"])))
+    assert adequacy["omnibus_p"] == report["lack_of_fit"]["p_value"]  # the same batteries at the optimum
+    assert adequacy["fails"] == (adequacy["p_value"] < 0.05)
+    (entry,) = client.get(f"{API}/campaigns/{cid}/history").json()["iterations"]
+    assert entry["adequacy_p"] == adequacy["p_value"] and entry["directed_p"] == adequacy["directed"]["p_value"]
 
 
 def test_unmatched_and_unmodelled_targets_are_reported_not_fatal(s2):

@@ -5,8 +5,9 @@ import { COLOURS, TEST_COLOURS, axis, band, chart, errorBars } from "./plot.js";
 
 export const targetLabel = (r) => `${r.test} · ${r.quantity}${Object.keys(r.condition || {}).length ? " @ " + condition(r.condition) : ""}`;
 const modelled = (report) => report.targets.filter((r) => r.status === "modelled" && Number.isFinite(r.measured));
-// sigma of a residual: the measurement's and the simulator's standard uncertainties together
-const sigma = (r) => Math.hypot(r.measured_uncertainty || 0, r.simulator_sd || 0);
+// sigma of a residual: the measurement's and the simulator's standard uncertainties together (the
+// report's residual_sd divides the simulator's by the number of confirmation seeds)
+const sigma = (r) => r.residual_sd ?? Math.hypot(r.measured_uncertainty || 0, r.simulator_sd || 0);
 
 export function verdictSection(report) {
   const lof = report.lack_of_fit;
@@ -17,6 +18,9 @@ export function verdictSection(report) {
     lof ? h("p", {}, h("b", {}, "Model against measurements: "),
       `χ²/dof ${fmt(lof.chi2_per_dof, 3)} on ${lof.dof} dof (noise band ${fmt(lof.noise_band[0], 2)} – ${fmt(lof.noise_band[1], 2)}), p = ${fmt(lof.p_value, 3)}`,
       failing.length ? h("span", { className: "bad" }, ` · failing tests: ${failing.join(", ")}`) : "") : "",
+    report.adequacy ? h("p", {}, h("b", {}, "With the candidate effects' directed test: "),
+      `p = ${fmt(report.adequacy.directed?.p_value, 3)}; together with the lack of fit (Holm) p = ${fmt(report.adequacy.p_value, 3)}: `,
+      h("span", { className: report.adequacy.fails ? "bad" : "" }, report.adequacy.fails ? "the model misses the measurements" : "no misfit beyond noise")) : "",
     ...((report.conflicts?.active_bounds) || []).map((b) => h("p", { className: "bad" }, `${b.parameter} is pinned at its ${b.side} bound: ${b.meaning}`)),
     ...((report.conflicts?.priors_pulled) || []).map((p) => h("p", { className: "bad" }, p.meaning)),
     report.surrogate_check ? h("p", { className: "muted" }, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${report.surrogate_check.reason}`) : "");
