@@ -190,6 +190,11 @@ def campaign_report(args) -> int:
         text += (f"\nlack of fit: chi2 {_fmt(lof['statistic'])} on {lof['dof']} dof "
                  f"(per dof {_fmt(lof['chi2_per_dof'])}, "
                  f"noise band [{_fmt(lof['noise_band'][0])}, {_fmt(lof['noise_band'][1])}]), p {_fmt(lof['p_value'])}")
+    adequacy = r.get("adequacy")
+    if adequacy:
+        text += (f"\nwith the candidate effects' directed test: p {_fmt((adequacy.get('directed') or {}).get('p_value'))}; "
+                 f"with the lack of fit (Holm) p {_fmt(adequacy['p_value'])}: "
+                 + ("the model misses the measurements" if adequacy["fails"] else "no misfit beyond noise"))
     for b in (r.get("conflicts") or {}).get("active_bounds", []):
         text += f"\nat a bound: {b['parameter']} at its {b['side']} end, pushing {b['pushes']}"
     for p in (r.get("conflicts") or {}).get("priors_pulled", []):
