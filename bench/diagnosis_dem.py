@@ -21,6 +21,11 @@ their summed run time and the wall time; then the pass criteria of the issue and
     python3 bench/diagnosis_dem.py --url http://host:8000       # an existing service
     python3 bench/diagnosis_dem.py --reduced --scenarios rolling  # minutes: CI's DEM scenario
     python3 bench/diagnosis_dem.py --data-dir ~/tierb --scenarios rolling  # resumable across stops
+    python3 bench/diagnosis_dem.py --confirmation-seeds 3 --polish-steps 0   # the session-11 DEM table
+
+"lof" in the printed rows is the model's adequacy test: the omnibus lack of fit, or, where the diagnosis
+ran (a failing report, or a suspect one: a parameter pinned at a bound, a prior pulled off), Holm over it
+and the candidate effects' directed test; both p-values are printed beside it.
 
 With --data-dir the local service keeps its database there. Measuring jobs and campaigns are named by a
 digest of what they measure and how they calibrate, so rerunning the same command against the same
