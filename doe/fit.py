@@ -263,8 +263,8 @@ class ResponseFit:
         """Mean prediction with confidence and prediction intervals at natural-unit points.
 
         The prediction interval is for the mean of ``n_future`` new runs at a point (variance
-        se^2 + MSE / n_future; Montgomery, Design and Analysis of Experiments, eq. 10-41 with m runs):
-        a confirmation averaged over several seeds is judged against the interval of an average."""
+        se^2 + MSE / n_future, the regression textbooks' interval for a future mean): a confirmation
+        averaged over several seeds is judged against the interval of an average."""
         if n_future < 1:
             raise DoeError("n_future must be at least 1")
         alpha = self.alpha if alpha is None else alpha
