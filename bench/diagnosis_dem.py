@@ -22,6 +22,8 @@ their summed run time and the wall time; then the pass criteria of the issue and
     python3 bench/diagnosis_dem.py --reduced --scenarios rolling  # minutes: CI's DEM scenario
     python3 bench/diagnosis_dem.py --data-dir ~/tierb --scenarios rolling  # resumable across stops
     python3 bench/diagnosis_dem.py --confirmation-seeds 3 --polish-steps 0   # the session-11 DEM table
+    python3 bench/diagnosis_dem.py --scenarios null --json rows.json   # add the null's row to rows.json
+    python3 bench/diagnosis_dem.py --from-json rows.json           # reprint the rows and criteria
 
 "lof" in the printed rows is the model's adequacy test: the omnibus lack of fit, or, where the diagnosis
 ran (a failing report, or a suspect one: a parameter pinned at a bound, a prior pulled off), Holm over it
@@ -348,7 +350,17 @@ def main(argv=None) -> int:
                     help="batteries at each optimum, one per seed (default: the service's, 2); the lack of fit "
                          "compares their mean, so the simulator's scatter counts divided by this number, and "
                          "the diagnosis runs each candidate at the same seeds")
+    ap.add_argument("--json", help="keep each finished scenario's row in this file (rows already there for other "
+                                   "scenarios are kept, so runs in separate stops add up to one table)")
+    ap.add_argument("--from-json", help="print the rows and criteria written earlier by --json (no runs)")
     args = ap.parse_args(argv)
+    if args.from_json:
+        outs = list(_load_rows(args.from_json).values())
+        for o in outs:
+            _print_row(o)
+        _print_criteria(outs, (outs[0].get("evaluator") if outs else None) or args.evaluator,
+                        bool(outs and outs[0].get("form") == "reduced"))
+        return 0
     names = [n.strip() for n in args.scenarios.split(",") if n.strip()]
     unknown = set(names) - set(SCENARIOS)
     if unknown:
@@ -375,15 +387,28 @@ def main(argv=None) -> int:
             o["batteries"] = len(measuring_ids) + _batteries(svc, cid)
             o["battery_s"] = _battery_seconds(svc, cid, measuring_ids)
             o["wall_s"] = time.perf_counter() - started
+            o["evaluator"], o["form"] = args.evaluator, "reduced" if args.reduced else "screening"
+            o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds, args.polish_steps
             outs.append(o)
-            print(f"{name:<9} hidden={sc.effect or '-':<18} lof={'rejects' if o['lof_rejects'] else 'passes'} "
-                  f"(omnibus p {_f(o['p_omnibus'])}, directed p {_f(o['p_directed'])}) "
-                  f"ranking={o['ranking'][:3]} rank={o['rank']} tried={o['tried']} added={o['added']} "
-                  f"error_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
-                  f"density_error={_f(o['density_error'])} stop='{o['stop_reason']}' "
-                  f"batteries={o['batteries']} battery_time={o['battery_s']:.0f}s wall={o['wall_s']:.0f}s", flush=True)
+            _print_row(o)
+            if args.json:
+                _save_row(args.json, o)
     finally:
         svc.close()
+    _print_criteria(outs, args.evaluator, args.reduced)
+    return 0
+
+
+def _print_row(o: dict) -> None:
+    print(f"{o['scenario']:<9} hidden={o['effect'] or '-':<18} lof={'rejects' if o['lof_rejects'] else 'passes'} "
+          f"(omnibus p {_f(o['p_omnibus'])}, directed p {_f(o['p_directed'])}) "
+          f"ranking={o['ranking'][:3]} rank={o['rank']} tried={o['tried']} added={o['added']} "
+          f"error_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
+          f"density_error={_f(o['density_error'])} stop='{o['stop_reason']}' "
+          f"batteries={o['batteries']} battery_time={o['battery_s']:.0f}s wall={o['wall_s']:.0f}s", flush=True)
+
+
+def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
     res = criteria(outs)
     print(f"lack of fit rejects: {res['lof_rejects_effects']}/{res['n_effects']} effect scenarios "
           f"(target all), {res['lof_rejects_null']}/{res['n_null']} null (target none)")
@@ -393,9 +418,27 @@ def main(argv=None) -> int:
           f"(target all)")
     print(f"particle density within 5 %: {res['density_within_5pc']}/{res['n_density']} rolling and shape "
           f"(target all)")
-    print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={args.evaluator}"
-          + f" form={'reduced' if args.reduced else 'screening'}")
-    return 0
+    print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={evaluator}"
+          + f" form={'reduced' if reduced else 'screening'}")
+
+
+def _load_rows(path: str) -> dict[str, dict]:
+    """Rows by scenario name, in the order they were written."""
+    if not os.path.exists(path):
+        return {}
+    with open(path) as fh:
+        return {row["scenario"]: row for row in json.load(fh)}
+
+
+def _save_row(path: str, row: dict) -> None:
+    """Replace this scenario's row (a rerun supersedes it) and keep the others; written whole to a
+    temporary file and renamed, so a stop mid-write leaves the previous table."""
+    rows = _load_rows(path)
+    rows[row["scenario"]] = row
+    tmp = path + ".tmp"
+    with open(tmp, "w") as fh:
+        json.dump(list(rows.values()), fh, indent=1, default=str)
+    os.replace(tmp, path)
 
 
 def _f(value) -> str:
