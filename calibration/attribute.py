@@ -12,7 +12,6 @@ signatures differ most, i.e. the one that would separate them.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -194,13 +193,13 @@ def _alias_groups(ranked: list[Ranked], labels: list[str]) -> list[dict]:
 
 
 def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[Signature],
-              labels: list[str], draws: np.ndarray | None = None) -> Attribution:
-    """Rank the candidates; ``labels`` name the target rows (for the separating measurement);
-    ``draws``: the null residuals of the localisation (``stats.null_residuals``), for the directed
-    test. The localisation the verdict is judged on carries that test (``Localisation.directed``)."""
+              labels: list[str]) -> Attribution:
+    """Rank the candidates; ``labels`` name the target rows (for the separating measurement). The
+    directed test runs against the localisation's own null draws, and the verdict is judged on the
+    localisation with that test (``Localisation.with_directed``), as the caller's iteration then is."""
     candidates = {s.candidate.name: s.candidate for s in signatures}
-    directed = stats.directed_test(r, M, [s.vector for s in signatures], draws)
-    loc = dataclasses.replace(loc, directed=directed)
+    directed = stats.directed_test(r, M, [s.vector for s in signatures], loc.null_draws)
+    loc = loc.with_directed(directed)
     ranked = []
     for sig in signatures:
         score = stats.score_test(r, sig.vector, M)

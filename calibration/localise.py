@@ -13,6 +13,7 @@ is poor, not that physics is missing, and lives with the calibration (``calibrat
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -80,6 +81,13 @@ class Localisation:
     reachability: list[dict] = field(default_factory=list)
     # the candidate effects' directed test, once the diagnosis has run their batteries (attribute.py)
     directed: stats.DirectedTest | None = None
+    # the seeded null residuals the lack of fit was judged on; the directed test reuses them, so both
+    # tests see the same null (max-T over the two is then one simulation)
+    null_draws: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def with_directed(self, directed: stats.DirectedTest) -> "Localisation":
+        """This localisation judged on both tests: the omnibus and the candidates' directed test."""
+        return dataclasses.replace(self, directed=directed)
 
     @property
     def adequacy_p(self) -> float:
@@ -198,4 +206,4 @@ def localise(res: Residuals, *, active_bounds=(), priors=(), reachability=(), se
         row["p_holm"] = float(adj)
         row["fails"] = bool(adj < ALPHA)
     return Localisation(lof, rows, tests, trends(res), conflicts(list(active_bounds), list(priors)),
-                        list(reachability))
+                        list(reachability), null_draws=draws)

@@ -21,7 +21,6 @@ from engine.lab.spec import MicroParameters
 
 from . import calibrate as cal
 from . import parameters as params_mod
-from . import stats
 from .attribute import PLAUSIBLE_SLACK, Attribution, Signature, attribute
 from .decisions import Decision, effect_range, judge
 from .evaluators import BatchEvaluator
@@ -287,10 +286,8 @@ class CalibrationLoop:
                 diff.append((on - res.model[i]) / res.sd[i] / steps[k])
             signatures.append(Signature(c, np.concatenate([diff, np.zeros(n_prior)]), steps[k], refs[k]))
         labels = [k.label for k in res.keys]
-        # the same seeded null as the iteration's localisation (``iterate``), for the directed test
-        draws = stats.null_residuals(res.M(), res.df, seed=self.config.seed + it.number)
-        att = attribute(it.localisation, res.r, res.M(), signatures, labels, draws)
-        it.localisation.directed = att.directed  # the iteration is now judged on both tests
+        att = attribute(it.localisation, res.r, res.M(), signatures, labels)
+        it.localisation = it.localisation.with_directed(att.directed)  # now judged on both tests
         return Diagnosis(it.number, att, signatures)
 
     # -- adding an effect ----------------------------------------------------------------------

@@ -225,11 +225,7 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
         if c.is_switch:
             reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
         signatures.append(Signature(c, vector, step, reference))
-    from calibration import stats
-
-    # the localisation's own seeded null, for the directed test over the candidates
-    draws = stats.null_residuals(res.M(), res.df, seed=config.seed)
-    att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys], draws)
+    att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys])
     return _json_safe({**att.to_dict(), "lack_of_fit": loc.lack_of_fit.to_dict(),
                        "seeds": sorted(set(confirmation_seeds) | {s for _, s, _ in planned}),
                        "batteries": len(planned)})

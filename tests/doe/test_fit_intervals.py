@@ -12,9 +12,11 @@ from doe.fit import fit_response
 @pytest.mark.parametrize("m", [1, 2, 3])
 def test_interval_for_the_mean_of_m_runs_is_the_simple_regression_one(m):
     """y = b0 + b1 x on x = -1, +1 and three centres: at x0 the interval for the mean of m new runs is
-    yhat +- t s sqrt(1/m + 1/n + (x0 - xbar)^2 / Sxx) (Montgomery & Runger, eq. 11-33 with m runs), with
-    s^2 the residual mean square once the single-degree-of-freedom curvature sum of squares
-    n_F n_C (ybar_F - ybar_C)^2 / (n_F + n_C) has its own row (Montgomery, DAE, eq. 6-30), on n - 3 df."""
+    yhat +- t s sqrt(1/m + 1/n + (x0 - xbar)^2 / Sxx) (the prediction interval for a new observation of
+    simple linear regression, Montgomery & Runger, "Prediction of new observations", with 1 -> 1/m for
+    the mean of m), with s^2 the residual mean square once the single-degree-of-freedom curvature sum of
+    squares n_F n_C (ybar_F - ybar_C)^2 / (n_F + n_C) has its own row (Montgomery, Design and Analysis of
+    Experiments, "Addition of center points to the 2^k design"), on n - 3 df."""
     design = make_design([{"name": "x", "low": -1.0, "high": 1.0}], full=True, center_runs=3, seed=3,
                          randomize=False)
     x = np.array([row["x"] for row in design.records("std")])

@@ -4,6 +4,13 @@
 import { fmt, h, table } from "./core.js";
 import { TEST_COLOURS, axis, band, chart, errorBars } from "./plot.js";
 
+// the model's adequacy test: the omnibus lack of fit alone, or once the diagnosis ran, Holm over it and
+// the candidates' directed test (calibration.stats.combined_p)
+const adequacyCell = (it) => (it.directed_p === null || it.directed_p === undefined
+  ? fmt(it.lack_of_fit_p, 2)
+  : h("span", { title: "omnibus lack of fit · directed test → Holm over both" },
+    `${fmt(it.lack_of_fit_p, 2)} · ${fmt(it.directed_p, 2)} → ${fmt(it.adequacy_p, 2)}`));
+
 const stepLabel = (it) => `${it.number}${it.added_effect ? " + " + it.added_effect.join(", ") : ""}`;
 
 function errorChart(iterations) {
@@ -57,11 +64,11 @@ export function historySection(history, iterations, priors) {
   if (!its.length) return "";
   // the table takes the card's width (eight columns do not fit beside the chart); the chart sits under it
   return h("section", { className: "card history" }, h("h3", {}, "Across iterations"),
-    h("div", {}, h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (lack of fit)", "Verdict", "Next", "Automatic"],
+    h("div", {}, h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (omnibus · directed → Holm)", "Verdict", "Next", "Automatic"],
         its.map((it) => [String(it.number), it.effects.length ? it.effects.join(", ") : "none",
           h("span", { className: "chi2dof", "data-iteration": String(it.number) }, fmt(it.chi2_per_dof, 4)),
           it.noise_band ? `${fmt(Math.max(0, it.noise_band[0]), 2)} – ${fmt(it.noise_band[1], 2)}` : "–",
-          it.lack_of_fit_p, it.verdict || "–",
+          adequacyCell(it), it.verdict || "–",
           it.effect_added_next ? `+ ${it.effect_added_next.join(", ")}` : "–",
           // automatic mode: whether the effect this iteration added was kept (calibration.decisions)
           it.decision ? h("span", { className: it.decision.accepted ? "good" : "bad" }, `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`) : "–"]))),
