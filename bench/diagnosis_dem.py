@@ -215,7 +215,8 @@ def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float,
 
 def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: str, seed: int,
              density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False,
-             polish_steps: int | None = None, confirmation_seeds: int | None = None) -> int:
+             polish_steps: int | None = None, confirmation_seeds: int | None = None,
+             diagnose_always: bool = False) -> int:
     """The scenario's automatic campaign: an existing one calibrating exactly this (same measurements,
     priors, design and options; its name carries their digest) is reused, so a rerun resumes it."""
     rho = sc.parameters()["particle_density_kg_m3"]
@@ -236,6 +237,8 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         body["polish_steps"] = polish_steps
     if confirmation_seeds is not None:
         body["confirmation_seeds"] = confirmation_seeds
+    if diagnose_always:
+        body["diagnose_always"] = True
     digest = hashlib.sha256(json.dumps([body, measurements], sort_keys=True).encode()).hexdigest()[:12]
     name = f"tier B {sc.name} {digest}"
     existing = [c for c in svc.call("GET", "/campaigns") if c["name"] == name and c["status"] != "failed"]
@@ -350,6 +353,9 @@ def main(argv=None) -> int:
                     help="batteries at each optimum, one per seed (default: the service's, 2); the lack of fit "
                          "compares their mean, so the simulator's scatter counts divided by this number, and "
                          "the diagnosis runs each candidate at the same seeds")
+    ap.add_argument("--diagnose-always", action="store_true",
+                    help="diagnose after every report, also one that passes with nothing flagged, so the directed "
+                         "test over the candidates judges every scenario (one battery per candidate and seed)")
     ap.add_argument("--json", help="keep each finished scenario's row in this file (rows already there for other "
                                    "scenarios are kept, so runs in separate stops add up to one table)")
     ap.add_argument("--from-json", help="print the rows and criteria written earlier by --json (no runs)")
@@ -378,7 +384,7 @@ def main(argv=None) -> int:
             started = time.perf_counter()
             measurements, measuring_ids = measure(svc, sc, args.evaluator, poll_s, args.reduced)
             cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
-                           args.polish_steps, args.confirmation_seeds)
+                           args.polish_steps, args.confirmation_seeds, args.diagnose_always)
             final = _wait_campaign(svc, cid, poll_s)
             if final["status"] != "completed":
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)
@@ -389,6 +395,7 @@ def main(argv=None) -> int:
             o["wall_s"] = time.perf_counter() - started
             o["evaluator"], o["form"] = args.evaluator, "reduced" if args.reduced else "screening"
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds, args.polish_steps
+            o["diagnose_always"] = args.diagnose_always
             outs.append(o)
             _print_row(o)
             if args.json:

@@ -43,6 +43,8 @@ class LoopConfig:
     max_refinements: int = 0
     refine_shrink: float = 0.35
     candidates: list[str] | None = None      # None: every registered candidate
+    # diagnose (and run the directed test) after every iteration, not only a failing or suspect one
+    diagnose_always: bool = False
     fidelity: str | None = None              # the evaluator's lab fidelity (None: any, e.g. the stand-in)
     seed: int = 0
 
@@ -344,8 +346,9 @@ class CalibrationLoop:
         while True:
             loc = current.localisation
             # a passing omnibus test with no conflict ends it; a conflict (a parameter pinned at a
-            # bound, a prior pulled off, a target out of reach) asks the directed test first
-            if not loc.fails and not loc.suspect:
+            # bound, a prior pulled off, a target out of reach) asks the directed test first, as
+            # diagnose_always does every time
+            if not loc.fails and not loc.suspect and not c.diagnose_always:
                 return LoopResult(iterations, diagnoses, decisions, "lack of fit passes")
             if number >= c.max_iterations:
                 return LoopResult(iterations, diagnoses, decisions, "lack of fit passes" if not loc.fails

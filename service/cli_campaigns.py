@@ -95,6 +95,8 @@ def campaign_create(args) -> int:
             body[key] = value
     if args.automatic:
         body["automatic"] = True
+    if args.diagnose_always:
+        body["diagnose_always"] = True
     if args.factor:
         body["factors"] = [_factor(f) for f in args.factor]
     if args.centre_runs is not None or args.generators:
@@ -275,6 +277,9 @@ def register(subparsers) -> None:
     create.add_argument("--automatic", action="store_true",
                         help="add the indicated effects and iterate by itself until the lack of fit passes, "
                              "nothing improves, or --max-iterations")
+    create.add_argument("--diagnose-always", action="store_true",
+                        help="diagnose after every report, also a passing one: the directed test over the candidate "
+                             "effects sees misfit the lack of fit misses (one battery per candidate and seed)")
     create.add_argument("--max-iterations", type=int, help="automatic mode: iterations at most (default 4)")
     create.add_argument("--confirmation-seeds", type=int,
                         help="batteries at each optimum, one per seed (default 2); the report uses their mean")

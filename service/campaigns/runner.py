@@ -319,10 +319,11 @@ class CampaignRunner:
             rejected = decision is not None and not decision["accepted"]
         # a diagnosis attributes misfit: it runs when the lack of fit fails or a target is out of reach, and
         # when a conflict (a parameter pinned at a bound, a prior pulled off) suggests a misfit the omnibus
-        # test cannot see, which the diagnosis's directed test then judges (whatever the surfaces' check says)
+        # test cannot see, which the diagnosis's directed test then judges (whatever the surfaces' check says);
+        # with diagnose_always, after every report
         misfit = report["verdict"] in ("targets out of reach", "model misses the measurements") or report["suspect"]
         plan = analysis.diagnosis_plan(config, it.optimum, it.parameters, seeds) if (
-            config.diagnose and diagnosable and misfit and not rejected) else []
+            config.diagnose and diagnosable and (misfit or config.diagnose_always) and not rejected) else []
         if plan:
             for k, (name, natural, seed) in enumerate(plan):
                 session.add(CampaignRun(iteration_id=it.id, kind="diagnosis", std_order=k + 1, run_order=k + 1,

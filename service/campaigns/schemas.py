@@ -147,6 +147,11 @@ class CampaignCreate(BaseModel):
         True, description="after a report that is not 'calibrated', run one battery per candidate effect at the "
         "optimum and rank the missing effects (docs/diagnosis.md)",
     )
+    diagnose_always: bool = Field(
+        False, description="run the diagnosis after every report, also one that passes with nothing flagged: "
+        "its directed test (the candidates' score along their signatures) sees a misfit spread thinly over many "
+        "targets that the omnibus lack of fit misses; costs one battery per candidate and confirmation seed",
+    )
     confirmation_seeds: int = Field(
         2, ge=1, le=8, description="batteries at the optimum, each with its own seed; the report compares their "
         "mean with the measurements, so the simulator's seed-to-seed scatter enters the lack of fit divided by "
@@ -198,6 +203,8 @@ class CampaignCreate(BaseModel):
     def _no_overlap(self) -> "CampaignCreate":
         if self.automatic and not self.diagnose:
             raise ValueError("automatic mode needs diagnose: it adds the effects the diagnosis indicates")
+        if self.diagnose_always and not self.diagnose:
+            raise ValueError("diagnose_always needs diagnose")
         overlap = {f.name for f in self.factors} & set(self.fixed_parameters)
         if overlap:
             raise ValueError(f"{sorted(overlap)} are both factors and fixed parameters")

@@ -74,6 +74,15 @@ def test_no_misfit_no_effect():
     assert result.decisions == [] and result.stop_reason == "lack of fit passes"
 
 
+def test_diagnose_always_asks_the_directed_test_and_still_adds_nothing_to_a_true_model():
+    case = make_case(3, "null")
+    result = _loop(case, diagnose_always=True).run()
+    assert len(result.diagnoses) == 1
+    loc = result.iterations[0].localisation
+    assert loc.directed is not None and not loc.fails
+    assert result.decisions == [] and result.stop_reason == "lack of fit passes"
+
+
 def test_a_physically_impossible_measurement_is_not_blamed_on_physics():
     # a bulk density above the particle density (porosity < 0): every candidate loosens the packing, none
     # can explain a density the pycnometer forbids, so the diagnosis points at the measurement

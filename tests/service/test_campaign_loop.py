@@ -4,7 +4,7 @@ On the bundled thesis aggregate with the analytic stand-in, whose spheres satura
 (calibration/standin.py) while the aggregate measured 60.6 deg: the missing physics is a strength
 deficit that rolling resistance or particle shape supplies.
 """
-from conftest_s2 import API, campaign_body, run_to_end, s2, thesis_material_id  # noqa: F401
+from conftest_s2 import API, campaign_body, drain, run_to_end, s2, thesis_material_id  # noqa: F401
 
 from engine.candidates import candidates
 
@@ -144,3 +144,58 @@ def test_a_diagnosis_that_finds_no_misfit_stops_the_loop_and_says_on_what_eviden
     record = next_step(SimpleNamespace(max_iterations=3), {}, [it], it, report)
     assert record["next_effect"] is None
     assert record["stop_reason"].startswith("diagnosis: no misfit") and "p 0.26" in record["stop_reason"]
+
+
+def _material_from_the_stand_in(client, app, settings, truth: dict, seeds=(501, 502, 503)) -> int:
+    """Measurements the model can reproduce: the stand-in's own batteries at ``truth``, three seeds as
+    three laboratory replicates, for every fill, CCT and DST quantity (more targets than factors)."""
+    from calibration.keys import responses_of
+
+    ids = [client.post(f"{API}/jobs", json={"test": "battery", "fidelity": "thesis", "seed": seed,
+                                            "evaluator": "analytic", "parameters": truth}).json()["id"]
+           for seed in seeds]
+    drain(app, settings)
+    values: dict[str, list[dict]] = {}
+    for i in ids:
+        for name, record in responses_of(client.get(f"{API}/jobs/{i}/result").json()).items():
+            if record["test"] in ("fill", "cct", "dst"):
+                values.setdefault(name, []).append(record)
+    material = client.post(f"{API}/materials", json={"name": "stand-in truth", "measurements": [
+        {"test": r[0]["test"], "quantity": r[0]["quantity"], "condition": r[0]["condition"],
+         "values": [x["value"] for x in r], "source": "stand-in batteries"} for r in values.values()]})
+    assert material.status_code == 201, material.text
+    return material.json()["id"]
+
+
+def test_diagnose_always_runs_the_directed_test_after_a_passing_report(s2):
+    """A model that reproduces its measurements passes the omnibus test with nothing flagged, so by
+    default no diagnosis runs; with diagnose_always the candidates' batteries run anyway and the report
+    is judged on both tests (the one place a misfit spread thinly over many targets shows)."""
+    client, app, settings = s2
+    truth = {"particle_density_kg_m3": 2500.0, "particle_stiffness_n_per_m": 2.0e6, "friction_pp": 0.55,
+             "friction_pw": 0.5}
+    material_id = _material_from_the_stand_in(client, app, settings, truth)
+    outcomes = {}
+    for always in (False, True):
+        body = campaign_body(material_id, targets=None, diagnose_always=always, polish_steps=0,
+                             fixed_parameters={"friction_pw": 0.5}, name=f"always={always}")
+        cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+        client.post(f"{API}/campaigns/{cid}/start")
+        assert run_to_end(client, app, settings, cid)["status"] == "completed"
+        report = client.get(f"{API}/campaigns/{cid}/report").json()
+        assert report["lack_of_fit"]["p_value"] >= 0.05 and not report["suspect"], report["lack_of_fit"]
+        outcomes[always] = (report, client.get(f"{API}/campaigns/{cid}/diagnosis"))
+    report, diagnosis = outcomes[False]
+    assert diagnosis.status_code == 409 and "adequacy" not in report  # no diagnosis ran
+    report, diagnosis = outcomes[True]
+    assert diagnosis.status_code == 200, diagnosis.text
+    assert {r["effect"] for r in diagnosis.json()["ranking"]} <= set(candidates())
+    assert report["adequacy"]["directed"] is not None and not report["adequacy"]["fails"]
+    assert report["verdict"] != "model misses the measurements"
+
+
+def test_diagnose_always_without_diagnosis_is_refused(s2):
+    client, _, _ = s2
+    body = campaign_body(thesis_material_id(client), diagnose=False, diagnose_always=True)
+    response = client.post(f"{API}/campaigns", json=body)
+    assert response.status_code == 422 and "diagnose_always" in response.text
