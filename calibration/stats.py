@@ -189,6 +189,14 @@ def directed_test(r: np.ndarray, M: np.ndarray, signatures, draws: np.ndarray | 
     return DirectedTest(t_obs, p, len(units))
 
 
+def weighted_rms(standardised) -> float:
+    """Root mean square of the targets' standardised residuals: the "weighted error" whose fall the
+    acceptance criteria judge (docs/diagnosis.md: weighted RMS after / before). Priors stay out: they
+    are not the bulk measurements the model is asked to reproduce. NaN when there is no residual."""
+    r = np.asarray([v for v in standardised if v is not None], float)
+    return float(np.sqrt(np.mean(r * r))) if r.size else math.nan
+
+
 def combined_p(p_omnibus: float, p_directed: float | None) -> float:
     """Holm (Bonferroni for the global null) over the omnibus and the directed test: the model is
     rejected when either p is below ALPHA / 2, so the two routes together keep the level ALPHA."""

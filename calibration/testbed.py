@@ -19,7 +19,7 @@ from engine.candidates import candidates
 from engine.lab.spec import MicroParameters
 
 from . import parameters as params_mod
-from . import standin
+from . import standin, stats
 from .conditions import standin_conditions
 from .evaluators import StandinEvaluator
 from .keys import ResponseKey
@@ -195,7 +195,7 @@ def outcome(case: Case, result: LoopResult, diag, runs: int) -> dict[str, Any]:
             strengths[name] = abs(math.log(est / true)) <= math.log(1.3)
         else:
             strengths[name] = abs(est - true) <= 0.3 * (true - off)
-    rms = lambda it: float(math.sqrt(np.mean(it.residuals.r_targets ** 2)))  # noqa: E731
+    rms = lambda it: stats.weighted_rms(it.residuals.r_targets)  # noqa: E731
     return {"seed": case.seed, "kind": case.kind, "effects": case.effects, "detectability": case.detectability,
             "lof_fired": bool(first.localisation.fails), "lof_p": first.localisation.lack_of_fit.p_value,
             "final_lof_passes": not final.localisation.fails,

@@ -159,6 +159,7 @@ def diagnosis(campaign_id: CampaignId, number: int | None = IterationQ,
             summary="Per iteration: effects, optimum, weighted error overall and per test with the noise band, "
                     "verdict, effect added next; per target the residual in each iteration")
 def history(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
+    from calibration.stats import weighted_rms
     from service.campaigns.analysis import active_effects
 
     campaign = get_campaign(session, campaign_id)
@@ -178,6 +179,9 @@ def history(campaign_id: CampaignId, session: Session = Depends(get_session)) ->
             "adequacy_p": (report.get("adequacy") or {}).get("p_value"),
             "directed_p": ((report.get("adequacy") or {}).get("directed") or {}).get("p_value"),
             "per_test": {t["test"]: t["chi2"] for t in report.get("tests", [])},
+            # the weighted error the acceptance criteria halve: RMS of the targets' standardised residuals
+            "weighted_rms": _finite(weighted_rms([row.get("standardised_residual") for row in report.get("targets", [])
+                                                  if row.get("status") == "modelled"])),
             "verdict": report.get("verdict"),
             "top_effect": (diag or {}).get("ranking", [{}])[0].get("effect") if diag and diag.get("ranking") else None,
             # automatic mode: whether this iteration's added effect was kept, and why the loop stopped
@@ -197,3 +201,7 @@ def history(campaign_id: CampaignId, session: Session = Depends(get_session)) ->
     if entries:
         entries[-1]["effect_added_next"] = None
     return {"campaign_id": campaign.id, "iterations": entries, "targets": targets}
+
+
+def _finite(value: float) -> float | None:
+    return value if value == value else None  # NaN (no modelled target) -> null

@@ -173,3 +173,9 @@ def test_holm_of_two_is_twice_the_smaller_p():
     assert stats.combined_p(0.3, 0.01) == pytest.approx(0.02)
     assert stats.combined_p(0.04, None) == 0.04
     assert stats.combined_p(0.9, 0.8) == 1.0
+
+
+def test_weighted_rms_is_the_root_mean_square_of_the_standardised_residuals():
+    # (3, 4, None): sqrt((9 + 16) / 2); a missing residual is left out, none at all is NaN
+    assert math.isclose(stats.weighted_rms([3.0, 4.0, None]), math.sqrt(12.5))
+    assert math.isnan(stats.weighted_rms([]))

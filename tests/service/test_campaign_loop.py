@@ -4,6 +4,8 @@ On the bundled thesis aggregate with the analytic stand-in, whose spheres satura
 (calibration/standin.py) while the aggregate measured 60.6 deg: the missing physics is a strength
 deficit that rolling resistance or particle shape supplies.
 """
+import math
+
 from conftest_s2 import API, campaign_body, drain, run_to_end, s2, thesis_material_id  # noqa: F401
 
 from engine.candidates import candidates
@@ -39,6 +41,11 @@ def test_diagnosis_names_the_effect_and_adding_it_lets_the_error_fall(s2):
     assert first["number"] == 1 and first["effects"] == [] and first["effect_added_next"] == [top]
     assert second["effects"] == [top] and second["verdict"]
     assert second["chi2"] < first["chi2"]
+    # the weighted error is the RMS of the targets' standardised residuals the history lists
+    for entry in (first, second):
+        r = [t["residuals"][str(entry["number"])] for t in history["targets"].values()
+             if t["residuals"].get(str(entry["number"])) is not None]
+        assert math.isclose(entry["weighted_rms"], math.sqrt(sum(x * x for x in r) / len(r)), rel_tol=1e-12)
     phi = next(v for k, v in history["targets"].items() if k.startswith("dst__friction_angle_deg"))
     assert abs(phi["residuals"]["2"]) < abs(phi["residuals"]["1"])
 
