@@ -6,8 +6,10 @@ bulk cohesion on 20 mm spheres), Hertz-Mindlin (the Young's modulus matched to k
 at mid stress is about the same) and elongated clumps (aspect ratio 1.5); the fifth hides none.
 
 The measurements are batteries run by the service's own workers with the effect on, at three
-seeds the calibration never uses, plus laboratory scatter (calibration.testbed.MEASUREMENT_SD) and
-a nuisance: the pycnometer prior on particle density is 2 % off the truth. Each scenario then runs
+seeds the calibration never uses, plus laboratory scatter (calibration.testbed.MEASUREMENT_SD). The
+directly measured parameters are tier A's (calibration.testbed.measured_priors: particle-wall and
+particle-particle friction by tilt tests, with their scatter), with a nuisance: the pycnometer prior on
+particle density is 2 % off the truth. Each scenario then runs
 one automatic campaign through the queue and workers: the 2^(4-1) design with 3 centre runs, the
 confirmation, the diagnosis, the top effect added as a fifth factor and its confirmation, and,
 when that effect is rejected, the diagnosis's next candidate (max_iterations 3). Printed per
@@ -63,7 +65,7 @@ sys.path.insert(0, ROOT)
 import httpx  # noqa: E402
 
 from calibration.keys import responses_of  # noqa: E402
-from calibration.testbed import PYCNOMETER_RELATIVE_SD, TILT_TEST_SD, measurement_sd  # noqa: E402
+from calibration.testbed import measured_priors, measurement_sd  # noqa: E402
 from engine.candidates import candidates  # noqa: E402
 from engine.lab.spec import MicroParameters  # noqa: E402
 
@@ -84,6 +86,7 @@ MEASURING_SEEDS = (910001, 910002, 910003)
 # one effect tried, and when it is rejected the diagnosis's next candidate
 MAX_ITERATIONS = 3
 DENSITY_PRIOR_BIAS = 0.02
+PRIOR_STREAM = 20261124  # the priors' scatter: a stream of its own, so the measurements do not change
 
 
 @dataclass
@@ -219,16 +222,12 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
              diagnose_always: bool = False) -> int:
     """The scenario's automatic campaign: an existing one calibrating exactly this (same measurements,
     priors, design and options; its name carries their digest) is reused, so a rerun resumes it."""
-    rho = sc.parameters()["particle_density_kg_m3"]
     truth = sc.parameters()
     body = {
         "evaluator": evaluator,
         "fidelity": "screening", "factors": FACTORS, "design": {"type": "fractional", "generators": ["D=ABC"], "centre_runs": 3},
-        "priors": [
-            {"parameter": "particle_density_kg_m3", "value": rho * (1.0 + density_bias),
-             "uncertainty": PYCNOMETER_RELATIVE_SD * rho, "source": "pycnometer, 2 % off"},
-            {"parameter": "friction_pw", "value": truth["friction_pw"], "uncertainty": TILT_TEST_SD,
-             "source": "tilt test"}],
+        # the directly measured parameters of tier A's world, the pycnometer off by density_bias
+        "priors": measured_priors(truth, np.random.default_rng([sc.noise_seed, PRIOR_STREAM]), density_bias),
         "automatic": True, "max_iterations": MAX_ITERATIONS, "seed": seed,
     }
     if reduced:

@@ -63,6 +63,23 @@ WORLD_PERTURBATION = 0.02
 WORLD_SATURATION_POWER = 8.0
 
 
+def measured_priors(truth: dict, rng: np.random.Generator, density_bias: float | None = None) -> list[dict]:
+    """The directly measured parameters, as priors (pseudo-observations): particle density by
+    pycnometer, particle-wall friction by a tilt test on a plate, particle-particle friction by a tilt
+    test on a bed of glued particles; each the truth plus its test's scatter, drawn from ``rng`` in that
+    order. ``density_bias``: the pycnometer off by this relative amount instead (tier B's nuisance).
+    Tier A and tier B share it, so both worlds measure the same things."""
+    rho = truth["particle_density_kg_m3"]
+    draws = rng.standard_normal(3)
+    density = rho * (1.0 + (PYCNOMETER_RELATIVE_SD * float(draws[0]) if density_bias is None else density_bias))
+    return [{"parameter": "particle_density_kg_m3", "uncertainty": PYCNOMETER_RELATIVE_SD * rho, "value": density,
+             "source": "pycnometer" if density_bias is None else f"pycnometer, {100 * density_bias:+.0f} % off"},
+            {"parameter": "friction_pw", "uncertainty": TILT_TEST_SD,
+             "value": truth["friction_pw"] + TILT_TEST_SD * float(draws[1]), "source": "tilt test"},
+            {"parameter": "friction_pp", "uncertainty": PARTICLE_TILT_TEST_SD,
+             "value": truth["friction_pp"] + PARTICLE_TILT_TEST_SD * float(draws[2]), "source": "particle tilt test"}]
+
+
 def measurement_sd(record: dict) -> float | None:
     kind = MEASUREMENT_SD.get((record["test"], record["quantity"]))
     if kind is None:
@@ -118,15 +135,7 @@ def make_case(seed: int, kind: str, effects: dict[str, float] | None = None) -> 
         reps = v["value"] + sd * rng.standard_normal(REPLICATES)
         targets.append(Measured(ResponseKey.of(v["test"], v["quantity"], v["condition"]), tuple(float(x) for x in reps),
                                 v["unit"]))
-    rho = truth["particle_density_kg_m3"]
-    priors = [{"parameter": "particle_density_kg_m3", "uncertainty": PYCNOMETER_RELATIVE_SD * rho,
-               "value": rho * (1.0 + PYCNOMETER_RELATIVE_SD * float(rng.standard_normal())), "source": "pycnometer"},
-              {"parameter": "friction_pw", "uncertainty": TILT_TEST_SD,
-               "value": truth["friction_pw"] + TILT_TEST_SD * float(rng.standard_normal()), "source": "tilt test"},
-              {"parameter": "friction_pp", "uncertainty": PARTICLE_TILT_TEST_SD,
-               "value": truth["friction_pp"] + PARTICLE_TILT_TEST_SD * float(rng.standard_normal()),
-               "source": "particle tilt test"}]
-    case = Case(seed, kind, effects, truth, gains, targets, priors)
+    case = Case(seed, kind, effects, truth, gains, targets, measured_priors(truth, rng))
     case.detectability = detectability(case)
     return case
 
