@@ -21,6 +21,7 @@ import numpy as np
 from engine.effects.base import FINGERPRINT_COLUMNS, Candidate
 
 from . import stats
+from .keys import find
 from .localise import ALPHA, Localisation
 
 ALIAS_COS = 0.9
@@ -38,6 +39,39 @@ class Signature:
     vector: np.ndarray            # whitened, per unit strength (rows: targets then priors)
     step: float                   # strength change the battery applied
     reference: float | None = None  # switch-type: the strength switched on
+
+
+# signature batteries run at the confirmation seeds plus this (modulo the largest seed)
+SIGNATURE_SEED_OFFSET = 500_009
+SEED_MAX = 2**31 - 1
+
+
+def signature_seeds(confirmation_seeds) -> list[int]:
+    """Seeds of the diagnosis batteries (a baseline at the optimum and each candidate), not the
+    confirmation's. On the DEM engine a candidate's battery and the optimum's at one seed drift apart
+    (the trajectories are chaotic), so a signature taken against the confirmation batteries would carry
+    their noise, which the residuals carry with the opposite sign: every candidate then seems to explain
+    the residual (the tier-B null: all four "explained" 45-75 % of a misfit that was seed noise), and
+    the directed test loses its size. Against a baseline of its own, at seeds of its own, a signature's
+    noise is independent of the residuals, as the directed test's null assumes, and each candidate is
+    still paired with the baseline at the same seed (common random numbers)."""
+    return [(int(s) + SIGNATURE_SEED_OFFSET) % SEED_MAX for s in confirmation_seeds]
+
+
+def signature_vector(res, on: list[dict], base: list[dict], step: float) -> np.ndarray:
+    """A candidate's signature on the residual rows of ``res`` (calibrate.Residuals): the mean of its
+    batteries minus the mean of the baseline's at the same seeds (``on``, ``base``: run_values dicts,
+    one per seed), over each row's sd and the strength step; zero where a battery lacks the target,
+    and on the prior rows (an effect does not move a directly measured parameter)."""
+    diff = []
+    for i, key in enumerate(res.keys):
+        k_on, k_base = find(on[0].keys(), key), find(base[0].keys(), key)
+        if k_on is None or k_base is None:
+            diff.append(0.0)
+            continue
+        mean_on = float(np.mean([v[k_on] for v in on]))
+        diff.append((mean_on - float(np.mean([v[k_base] for v in base]))) / res.sd[i] / step)
+    return np.concatenate([diff, np.zeros(len(res.prior_names))])
 
 
 @dataclass

@@ -9,7 +9,6 @@ until the lack-of-fit test passes, nothing improves, or the iteration budget is 
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -21,11 +20,11 @@ from engine.lab.spec import MicroParameters
 
 from . import calibrate as cal
 from . import parameters as params_mod
-from .attribute import PLAUSIBLE_SLACK, Attribution, Signature, attribute
+from . import stats
+from .attribute import PLAUSIBLE_SLACK, Attribution, Signature, attribute, signature_seeds, signature_vector
 from .decisions import Decision, effect_range, judge
 from .evaluators import BatchEvaluator
 from .fitting import TargetModel, fit_targets, run_values
-from .keys import find
 from .localise import Localisation, Residuals, localise
 from .records import Measured
 
@@ -91,7 +90,7 @@ class Iteration:
         r = self.residuals.r_targets
         lof = self.localisation.lack_of_fit
         return {"chi2": float(r @ r), "chi2_per_dof": lof.per_dof, "dof": lof.dof, "noise_band": list(lof.noise_band),
-                "rms_standardised": float(math.sqrt(np.mean(r * r))) if r.size else None,
+                "rms_standardised": stats.weighted_rms(r) if r.size else None,
                 "per_test": {t["test"]: t["chi2"] for t in self.localisation.tests},
                 "lack_of_fit_p": lof.p_value}
 
@@ -273,20 +272,17 @@ class CalibrationLoop:
                 points.append(params_mod.apply(base, {c.factor: (c.off_value or 0.0) + c.step}))
                 steps.append(c.step)
                 refs.append(None)
-        requests = [(p, s) for p in points for s in seeds]
+        # a baseline and each candidate at seeds of their own (attribute.signature_seeds says why)
+        sig_seeds = signature_seeds(seeds)
+        n = len(sig_seeds)
+        requests = [(base, s) for s in sig_seeds] + [(p, s) for p in points for s in sig_seeds] if points else []
         results = self.evaluator(requests) if requests else []
         res = it.residuals
-        n_prior = len(res.prior_names)
+        baseline = [run_values(r) for r in results[:n]]
         signatures = []
         for k, c in enumerate(cands):
-            runs = results[k * len(seeds):(k + 1) * len(seeds)]
-            values = [run_values(r) for r in runs]
-            diff = []
-            for i, key in enumerate(res.keys):
-                sim_key = find(values[0].keys(), key)
-                on = float(np.mean([v[sim_key] for v in values])) if sim_key is not None else res.model[i]
-                diff.append((on - res.model[i]) / res.sd[i] / steps[k])
-            signatures.append(Signature(c, np.concatenate([diff, np.zeros(n_prior)]), steps[k], refs[k]))
+            on = [run_values(r) for r in results[n + k * n:n + (k + 1) * n]]
+            signatures.append(Signature(c, signature_vector(res, on, baseline, steps[k]), steps[k], refs[k]))
         labels = [k.label for k in res.keys]
         att = attribute(it.localisation, res.r, res.M(), signatures, labels)
         it.localisation = it.localisation.with_directed(att.directed)  # now judged on both tests

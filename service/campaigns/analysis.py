@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from calibration import calibrate as cal
+from calibration.attribute import signature_seeds
 from calibration.fitting import TargetModel, fit_targets
 from calibration.localise import ALPHA, localise
 from calibration.records import Measured, measurement_variances
@@ -172,15 +173,12 @@ BASELINE = "baseline"
 
 
 def diagnosis_plan(config, optimum: dict, iteration_parameters: dict, confirmation_seeds: list[int]) -> list[tuple]:
-    """(name, factor values, seed) of every diagnosis battery, in a fixed order: each candidate at every
-    seed the optimum has batteries at (common random numbers), after a second baseline battery at the
-    optimum when it has only one (a signature needs the optimum at the candidates' seeds, and the
-    simulator's scatter there needs two)."""
-    seeds = list(confirmation_seeds)
-    plan = []
-    if len(seeds) < 2:
-        plan.append((BASELINE, dict(optimum["parameters"]), seeds[0] + 1))
-        seeds.append(seeds[0] + 1)
+    """(name, factor values, seed) of every diagnosis battery, in a fixed order: a baseline battery at
+    the optimum, then each candidate, at as many seeds as the confirmation has, but seeds of their own
+    (calibration.attribute.signature_seeds: a signature measured against the confirmation batteries
+    would share their noise with the residuals)."""
+    seeds = signature_seeds(confirmation_seeds)
+    plan = [(BASELINE, dict(optimum["parameters"]), seed) for seed in seeds]
     for name, values in candidate_points(config, optimum, iteration_parameters):
         plan += [(name, values, seed) for seed in seeds]
     return plan
@@ -191,18 +189,16 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
     """Rank the candidate effects (calibration.attribute) from their batteries at the optimum.
 
     ``planned``: (name, seed, records) of the diagnosis batteries (``diagnosis_plan`` order). The
-    optimum's batteries (the confirmation's, and a planned baseline) give the baseline; each
-    candidate's signature is its mean over the same seeds minus the baseline's (common random numbers)."""
-    from calibration.attribute import Signature, attribute
+    residuals are the report's (the confirmation batteries); each candidate's signature is its mean
+    minus the planned baseline's at the same seeds (common random numbers), seeds the confirmation
+    did not use, so that the signatures' noise is independent of the residuals."""
+    from calibration.attribute import Signature, attribute, signature_vector
     from calibration.fitting import run_values
-    from calibration.keys import find
     from engine.candidates import candidates
 
     design, models = fit(design_dict, runs, targets)
     modelled = [m for m in models if m.fit is not None]
-    baseline = [(seed, records) for name, seed, records in planned if name == BASELINE]
-    conf = cal.confirm(modelled, list(confirmation_records) + [r for _, r in baseline],
-                       list(confirmation_seeds) + [s for s, _ in baseline])
+    conf = cal.confirm(modelled, list(confirmation_records), list(confirmation_seeds))
     theta = dict(optimum["parameters"])
     priors = [p.model_dump() for p in config.priors]
     res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty)
@@ -211,16 +207,12 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
     table = candidates()
     signatures = []
     names = [n for n in dict.fromkeys(name for name, _, _ in planned) if n != BASELINE]
+    baseline = [run_values(records) for n, _, records in planned if n == BASELINE]
     for name in names:
         c = table[name]
         values = [run_values(records) for n, _, records in planned if n == name]
         step = 1.0 if c.is_switch else c.step
-        diff = []
-        for i, key in enumerate(res.keys):
-            sim_key = find(values[0].keys(), key)
-            on = float(np.mean([v[sim_key] for v in values])) if sim_key is not None else res.model[i]
-            diff.append((on - res.model[i]) / res.sd[i] / step)
-        vector = np.concatenate([diff, np.zeros(len(res.prior_names))])
+        vector = signature_vector(res, values, baseline, step)
         reference = None
         if c.is_switch:
             reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)

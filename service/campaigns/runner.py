@@ -11,8 +11,8 @@ Phases of an iteration: design -> batteries -> analysis -> confirmation (``confi
 at the optimum) -> polish (Gauss-Newton on the batteries, service.campaigns.polish, at the same seeds) ->
 report -> done, and when the report finds misfit (lack of fit, or a target out of reach) or a conflict
 (a parameter pinned at a bound, a prior pulled off; ``suspect``): report ->
-diagnosis (each candidate effect at the optimum's seeds, plus a second baseline seed when the confirmation
-has one) -> diagnosed -> done, the ranking stored in the report and its verdict judged again on the
+diagnosis (a baseline at the optimum and each candidate effect, at as many seeds as the confirmation but
+seeds of their own) -> diagnosed -> done, the ranking stored in the report and its verdict judged again on the
 omnibus and the candidates' directed test together. In automatic mode
 (service.campaigns.automatic) a done iteration either configures the next one, with the indicated
 effect as a factor, or records why the loop stopped.

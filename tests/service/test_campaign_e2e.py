@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 
 from conftest_s2 import API, campaign_body, run_to_end, s2, thesis_material_id  # noqa: F401
+from calibration.attribute import signature_seeds
 from engine.candidates import candidates
 from service.models.job import Job
 
@@ -38,12 +39,13 @@ def test_analytic_campaign_from_creation_to_report(s2):
     # the report is made on the final point's batteries, one per seed, at the optimum it reports
     final = client.get(f"{API}/campaigns/{cid}/confirmation").json()
     assert {r["seed"] for r in final["runs"]} == confirmation_seeds
-    # the diagnosis runs every candidate effect at the optimum's two seeds; with two confirmation seeds
-    # it needs no baseline battery of its own
+    # the diagnosis runs a baseline at the optimum and every candidate effect at two seeds of their own:
+    # as many as the confirmation's, none of them (the signatures' noise must not be the residuals')
     diagnosis_runs = [r for r in runs if r["kind"] == "diagnosis"]
-    assert {r["seed"] for r in diagnosis_runs} == confirmation_seeds
+    diagnosis_seeds = {r["seed"] for r in diagnosis_runs}
+    assert len(diagnosis_seeds) == 2 and not diagnosis_seeds & confirmation_seeds
     # (particle shape is built at the screening fidelity only; this campaign is at the thesis's)
-    assert len(diagnosis_runs) == 2 * sum(c.applies_to("thesis") for c in candidates().values())
+    assert len(diagnosis_runs) == 2 * (1 + sum(c.applies_to("thesis") for c in candidates().values()))
     with app.state.session_factory() as session:
         jobs = session.query(Job).filter(Job.campaign_id == cid).all()
     assert {j.id for j in jobs} == {r["job_id"] for r in runs}
@@ -172,9 +174,10 @@ def test_next_iteration_with_an_effect_keeps_the_first(s2):
     assert all(jobs[r["job_id"]].spec["parameters"]["effects"] == effects for r in second_runs)
 
 
-def test_one_confirmation_seed_gets_a_second_baseline_seed_for_the_diagnosis(s2):
+def test_one_confirmation_seed_gets_a_baseline_seed_of_its_own_for_the_diagnosis(s2):
     """confirmation_seeds 1: one battery at the optimum, scatter at full weight in the report; the diagnosis
-    then queues a baseline battery at a second seed first (its signatures need the optimum at two seeds)."""
+    queues a baseline battery at the optimum first, at a seed the confirmation did not use, and each
+    candidate at that seed (attribute.signature_seeds)."""
     client, app, settings = s2
     body = campaign_body(thesis_material_id(client), confirmation_seeds=1, polish_steps=0)
     cid = client.post(f"{API}/campaigns", json=body).json()["id"]
@@ -184,9 +187,10 @@ def test_one_confirmation_seed_gets_a_second_baseline_seed_for_the_diagnosis(s2)
     (seed,) = [r["seed"] for r in iteration["runs"] if r["kind"] == "confirmation"]
     diagnosis_runs = sorted((r for r in iteration["runs"] if r["kind"] == "diagnosis"), key=lambda r: r["std_order"])
     optimum = client.get(f"{API}/campaigns/{cid}/optimum").json()["parameters"]
-    assert diagnosis_runs[0]["seed"] == seed + 1 and diagnosis_runs[0]["natural"] == optimum
-    assert {r["seed"] for r in diagnosis_runs} == {seed, seed + 1}
-    assert len(diagnosis_runs) == 1 + 2 * sum(c.applies_to("thesis") for c in candidates().values())
+    (own,) = signature_seeds([seed])
+    assert own != seed and diagnosis_runs[0]["natural"] == optimum
+    assert {r["seed"] for r in diagnosis_runs} == {own}
+    assert len(diagnosis_runs) == 1 + sum(c.applies_to("thesis") for c in candidates().values())
     report = client.get(f"{API}/campaigns/{cid}/report").json()
     assert report["confirmation_seeds"] == [seed]
     for row in report["targets"]:

@@ -30,11 +30,11 @@ def test_restart_mid_campaign_completes_without_duplicate_jobs(tmp_path):
         with app.state.session_factory() as session:
             jobs = session.scalars(select(Job).where(Job.campaign_id == cid)).all()
             runs = session.scalars(select(CampaignRun)).all()
-        # 11 batteries + confirmation and polishing at two seeds + each candidate effect at those two seeds:
-        # one job per run, none twice
+        # 11 batteries + confirmation and polishing at two seeds + a baseline and each candidate effect at
+        # two seeds of their own: one job per run, none twice
         kinds = [r.kind for r in runs]
         assert kinds.count("design") == 11 and kinds.count("confirmation") == 2 and kinds.count("polish") >= 6
-        assert kinds.count("diagnosis") == 2 * sum(c.applies_to("thesis") for c in candidates().values())
+        assert kinds.count("diagnosis") == 2 * (1 + sum(c.applies_to("thesis") for c in candidates().values()))
         assert sorted(j.id for j in jobs) == sorted(r.job_id for r in runs)
         report = client.get(f"{API}/campaigns/{cid}/report").json()
         assert len(report["targets"]) == 3
@@ -44,7 +44,7 @@ def test_restart_mid_diagnosis_resumes_without_duplicate_jobs(tmp_path):
     """The service dies with the diagnosis batteries half run: the new one queues none twice and
     ranks the effects from the batteries the old one ran."""
     settings = s2_settings(tmp_path)
-    n_diagnosis = 2 * sum(c.applies_to("thesis") for c in candidates().values())
+    n_diagnosis = 2 * (1 + sum(c.applies_to("thesis") for c in candidates().values()))  # baseline + each
     with running_app(settings) as (client, app):
         cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
         client.post(f"{API}/campaigns/{cid}/start")
