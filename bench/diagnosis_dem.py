@@ -358,7 +358,7 @@ def main(argv=None) -> int:
                          "the diagnosis runs each candidate at the same seeds")
     ap.add_argument("--diagnose-always", action="store_true",
                     help="diagnose after every report, also one that passes with nothing flagged, so the directed "
-                         "test over the candidates judges every scenario (one battery per candidate and seed)")
+                         "test over the candidates judges every scenario (a baseline and one battery per candidate, per seed)")
     ap.add_argument("--json", help="keep each finished scenario's row in this file (rows already there for other "
                                    "scenarios are kept, so runs in separate stops add up to one table)")
     ap.add_argument("--from-json", help="print the rows and criteria written earlier by --json (no runs)")

@@ -279,7 +279,7 @@ def register(subparsers) -> None:
                              "nothing improves, or --max-iterations")
     create.add_argument("--diagnose-always", action="store_true",
                         help="diagnose after every report, also a passing one: the directed test over the candidate "
-                             "effects sees misfit the lack of fit misses (one battery per candidate and seed)")
+                             "effects sees misfit the lack of fit misses (a baseline and one battery per candidate, per seed)")
     create.add_argument("--max-iterations", type=int, help="automatic mode: iterations at most (default 4)")
     create.add_argument("--confirmation-seeds", type=int,
                         help="batteries at each optimum, one per seed (default 2); the report uses their mean")

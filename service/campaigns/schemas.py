@@ -144,13 +144,14 @@ class CampaignCreate(BaseModel):
     )
     allow_extrapolation: bool = False
     diagnose: bool = Field(
-        True, description="after a report that is not 'calibrated', run one battery per candidate effect at the "
-        "optimum and rank the missing effects (docs/diagnosis.md)",
+        True, description="after a report that is not 'calibrated', run a baseline and each candidate effect at the "
+        "optimum, at as many seeds as the confirmation (seeds of their own), and rank the missing effects "
+        "(docs/diagnosis.md)",
     )
     diagnose_always: bool = Field(
         False, description="run the diagnosis after every report, also one that passes with nothing flagged: "
         "its directed test (the candidates' score along their signatures) sees a misfit spread thinly over many "
-        "targets that the omnibus lack of fit misses; costs one battery per candidate and confirmation seed",
+        "targets that the omnibus lack of fit misses; costs a baseline and one battery per candidate, per confirmation seed",
     )
     confirmation_seeds: int = Field(
         2, ge=1, le=8, description="batteries at the optimum, each with its own seed; the report compares their "

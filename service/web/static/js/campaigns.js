@@ -93,7 +93,7 @@ export async function campaignsPage(view, params) {
       field("Assumed relative uncertainty", h("input", { name: "default_relative_uncertainty", type: "number", step: "any", value: 0.05, "data-loc": "default_relative_uncertainty" })),
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "allow_extrapolation", "data-loc": "allow_extrapolation" }), " allow the optimum outside the box"),
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "diagnose", checked: true, "data-loc": "diagnose" }), " diagnose a missing effect when the model misses"),
-      h("label", { className: "check", title: "also after a report that passes with nothing flagged: the candidates' directed test sees a misfit spread thinly over many targets; one battery per candidate and confirmation seed" },
+      h("label", { className: "check", title: "also after a report that passes with nothing flagged: the candidates' directed test sees a misfit spread thinly over many targets; one battery per candidate and a baseline, per confirmation seed" },
         h("input", { type: "checkbox", name: "diagnose_always", "data-loc": "diagnose_always" }), " diagnose after every report"),
       h("label", { className: "check", title: "after each iteration, add the effect the diagnosis indicates and run the next one, until the lack of fit passes, nothing improves, or the maximum is reached" },
         h("input", { type: "checkbox", name: "automatic", "data-loc": "automatic" }), " automatic mode"),
