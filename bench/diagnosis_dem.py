@@ -399,6 +399,7 @@ def main(argv=None) -> int:
             o["evaluator"], o["form"] = args.evaluator, "reduced" if args.reduced else "screening"
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds, args.polish_steps
             o["diagnose_always"] = args.diagnose_always
+            o["commit"] = _commit()  # rows written over several stops may come from different code
             outs.append(o)
             _print_row(o)
             if args.json:
@@ -430,6 +431,14 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
           f"(target all)")
     print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={evaluator}"
           + f" form={'reduced' if reduced else 'screening'}")
+
+
+def _commit() -> str | None:
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True,
+                              timeout=10).stdout.strip() or None
+    except (OSError, subprocess.SubprocessError):
+        return None
 
 
 def _load_rows(path: str) -> dict[str, dict]:
