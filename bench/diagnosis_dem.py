@@ -219,7 +219,7 @@ def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float,
 def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: str, seed: int,
              density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False,
              polish_steps: int | None = None, confirmation_seeds: int | None = None,
-             diagnose_always: bool = False) -> int:
+             diagnose_always: bool = False, max_iterations: int = MAX_ITERATIONS) -> int:
     """The scenario's automatic campaign: an existing one calibrating exactly this (same measurements,
     priors, design and options; its name carries their digest) is reused, so a rerun resumes it."""
     truth = sc.parameters()
@@ -228,7 +228,7 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         "fidelity": "screening", "factors": FACTORS, "design": {"type": "fractional", "generators": ["D=ABC"], "centre_runs": 3},
         # the directly measured parameters of tier A's world, the pycnometer off by density_bias
         "priors": measured_priors(truth, np.random.default_rng([sc.noise_seed, PRIOR_STREAM]), density_bias),
-        "automatic": True, "max_iterations": MAX_ITERATIONS, "seed": seed,
+        "automatic": True, "max_iterations": max_iterations, "seed": seed,
     }
     if reduced:
         body.update(fixed_parameters=dict(REDUCED_PARAMETERS), polish_steps=0)
@@ -359,6 +359,9 @@ def main(argv=None) -> int:
     ap.add_argument("--diagnose-always", action="store_true",
                     help="diagnose after every report, also one that passes with nothing flagged, so the directed "
                          "test over the candidates judges every scenario (a baseline and one battery per candidate, per seed)")
+    ap.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS,
+                    help="iterations of each automatic campaign, the first included (default 3: one effect tried "
+                         "and, when it is rejected, the next; 2: the first effect added and judged)")
     ap.add_argument("--json", help="keep each finished scenario's row in this file (rows already there for other "
                                    "scenarios are kept, so runs in separate stops add up to one table)")
     ap.add_argument("--from-json", help="print the rows and criteria written earlier by --json (no runs)")
@@ -387,7 +390,7 @@ def main(argv=None) -> int:
             started = time.perf_counter()
             measurements, measuring_ids = measure(svc, sc, args.evaluator, poll_s, args.reduced)
             cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
-                           args.polish_steps, args.confirmation_seeds, args.diagnose_always)
+                           args.polish_steps, args.confirmation_seeds, args.diagnose_always, args.max_iterations)
             final = _wait_campaign(svc, cid, poll_s)
             if final["status"] != "completed":
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)
