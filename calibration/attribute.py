@@ -51,7 +51,7 @@ def signature_seeds(confirmation_seeds) -> list[int]:
     confirmation's. On the DEM engine a candidate's battery and the optimum's at one seed drift apart
     (the trajectories are chaotic), so a signature taken against the confirmation batteries would carry
     their noise, which the residuals carry with the opposite sign: every candidate then seems to explain
-    the residual (the tier-B null: all four "explained" 45-75 % of a misfit that was seed noise), and
+    the residual (the tier-B null: four unrelated effects each "explained" 30-74 % of its misfit), and
     the directed test loses its size. Against a baseline of its own, at seeds of its own, a signature's
     noise is independent of the residuals, as the directed test's null assumes, and each candidate is
     still paired with the baseline at the same seed (common random numbers)."""
