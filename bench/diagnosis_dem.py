@@ -367,7 +367,12 @@ def main(argv=None) -> int:
     ap.add_argument("--from-json", help="print the rows and criteria written earlier by --json (no runs)")
     args = ap.parse_args(argv)
     if args.from_json:
-        outs = list(_load_rows(args.from_json).values())
+        if not os.path.exists(args.from_json):
+            ap.error(f"--from-json: no file {args.from_json}")
+        try:
+            outs = list(_load_rows(args.from_json).values())
+        except (ValueError, KeyError, TypeError) as exc:
+            ap.error(f"--from-json: {args.from_json} is not a file of rows written by --json ({exc})")
         for o in outs:
             _print_row(o)
         _print_criteria(outs, (outs[0].get("evaluator") if outs else None) or args.evaluator,
