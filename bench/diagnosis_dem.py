@@ -247,7 +247,10 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         if c["status"] in ("draft", "paused"):
             svc.call("POST", f"/campaigns/{c['id']}/{'start' if c['status'] == 'draft' else 'resume'}")
         return c["id"]
-    material = svc.call("POST", "/materials", json={
+    # a campaign abandoned as failed leaves its material; the name carries the measurements' digest,
+    # so that material is this campaign's and is reused (a second POST would be a 409)
+    same = [m for m in svc.call("GET", "/materials") if m["name"] == f"{name} {evaluator}"]
+    material = same[0] if same else svc.call("POST", "/materials", json={
         "name": f"{name} {evaluator}", "measurements": measurements,
         "description": f"hidden effect: {sc.effect or 'none'}"})
     c = svc.call("POST", "/campaigns", json={**body, "name": name, "material_id": material["id"]})
