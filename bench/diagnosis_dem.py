@@ -219,7 +219,8 @@ def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float,
 def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: str, seed: int,
              density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False,
              polish_steps: int | None = None, confirmation_seeds: int | None = None,
-             diagnose_always: bool = False, max_iterations: int = MAX_ITERATIONS) -> int:
+             diagnose_always: bool = False, max_iterations: int = MAX_ITERATIONS,
+             polish_when: str | None = None) -> int:
     """The scenario's automatic campaign: an existing one calibrating exactly this (same measurements,
     priors, design and options; its name carries their digest) is reused, so a rerun resumes it."""
     truth = sc.parameters()
@@ -234,6 +235,8 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         body.update(fixed_parameters=dict(REDUCED_PARAMETERS), polish_steps=0)
     if polish_steps is not None:
         body["polish_steps"] = polish_steps
+    if polish_when is not None:
+        body["polish_when"] = polish_when
     if confirmation_seeds is not None:
         body["confirmation_seeds"] = confirmation_seeds
     if diagnose_always:
@@ -355,6 +358,9 @@ def main(argv=None) -> int:
                     help="Gauss-Newton rounds on the batteries after each confirmation (default: the service's; "
                          "0 with --reduced); each costs 3 batteries, plus one per factor for the Jacobian, "
                          "times the confirmation seeds")
+    ap.add_argument("--polish-when", choices=["always", "surrogate_misses"], default=None,
+                    help="polish every iteration (the service's default), or only one whose confirmation the "
+                         "response surfaces did not predict (typically an added effect's iteration)")
     ap.add_argument("--confirmation-seeds", type=int, default=None,
                     help="batteries at each optimum, one per seed (default: the service's, 2); the lack of fit "
                          "compares their mean, so the simulator's scatter counts divided by this number, and "
@@ -398,7 +404,8 @@ def main(argv=None) -> int:
             started = time.perf_counter()
             measurements, measuring_ids = measure(svc, sc, args.evaluator, poll_s, args.reduced)
             cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
-                           args.polish_steps, args.confirmation_seeds, args.diagnose_always, args.max_iterations)
+                           args.polish_steps, args.confirmation_seeds, args.diagnose_always, args.max_iterations,
+                           args.polish_when)
             final = _wait_campaign(svc, cid, poll_s)
             if final["status"] != "completed":
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)
@@ -409,7 +416,7 @@ def main(argv=None) -> int:
             o["wall_s"] = time.perf_counter() - started
             o["evaluator"], o["form"] = args.evaluator, "reduced" if args.reduced else "screening"
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds, args.polish_steps
-            o["diagnose_always"] = args.diagnose_always
+            o["diagnose_always"], o["polish_when"] = args.diagnose_always, args.polish_when
             o["commit"] = _commit()  # rows written over several stops may come from different code
             outs.append(o)
             _print_row(o)

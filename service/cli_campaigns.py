@@ -89,7 +89,7 @@ def _factor(text: str) -> dict:
 def campaign_create(args) -> int:
     body = _read_json(args.file) if args.file else {}
     for key in ("name", "material_id", "evaluator", "fidelity", "seed", "max_iterations", "confirmation_seeds",
-                "polish_steps"):
+                "polish_steps", "polish_when"):
         value = getattr(args, key)
         if value is not None:
             body[key] = value
@@ -285,6 +285,9 @@ def register(subparsers) -> None:
                         help="batteries at each optimum, one per seed (default 2); the report uses their mean")
     create.add_argument("--polish-steps", type=int,
                         help="Gauss-Newton steps on the batteries after the confirmation (default 3; 0: none)")
+    create.add_argument("--polish-when", choices=["always", "surrogate_misses"],
+                        help="polish every iteration (default), or only one whose confirmation the response "
+                             "surfaces did not predict")
     create.add_argument("--start", action="store_true", help="start it right away")
     list_parser = _leaf(csub, "list", campaign_list, "list campaigns")
     list_parser.add_argument("--status", choices=["draft", "running", "paused", "completed", "failed"])

@@ -99,32 +99,14 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
            confirmation_seeds: list[int]) -> dict[str, Any]:
     """The report step, on one fit: the surface check (doe.confirm), the localisation of the
     confirmation batteries' mean (one record list per seed) against the measurements, and the one verdict."""
-    from service.campaigns.design import design_view
-
     design, models = fit(design_dict, runs, targets)
     modelled = [m for m in models if m.fit is not None]
     conf = cal.confirm(modelled, confirmation_records, confirmation_seeds)
-    observed = {m.key.name: conf.mean[m.key] for m in modelled
-                if m.key in conf.mean and m.key.name in optimum["predictions"]}
-    surrogate: dict[str, Any]
-    if not observed:
-        surrogate = {"verdict": "not testable", "reason": "no modelled response in the confirmation run"}
-    else:
-        result = confirm({m.key.name: m.fit for m in modelled if m.key.name in observed}, optimum["parameters"],
-                         observed, seed=config.seed + 1, n_observations=len(confirmation_seeds))
-        surrogate = {"verdict": result.verdict, "confirmed": result.confirmed, "reason": result.reason,
-                     "next_design_kind": result.next_design_kind, "responses": result.responses,
-                     "n_observations": len(confirmation_seeds),
-                     "about": "the fitted response surfaces against the battery at the optimum; this checks the "
-                              "surrogate, not the model against the measurements"}
-        if result.next_design is not None:
-            view = design_view(result.next_design)
-            view.pop("doe")
-            surrogate["next_design"] = view
+    surrogate = _surrogate_check(config, modelled, optimum, conf)
     theta = dict(optimum["parameters"])
     priors = [p.model_dump() for p in config.priors]
     localisation = None
-    if observed:
+    if surrogate["verdict"] != "not testable":  # a modelled response was confirmed
         residuals = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty)
         localisation = localise(residuals, active_bounds=cal.active_bounds(design, theta),
                                 priors=cal.prior_rows(priors, theta), reachability=optimum.get("reachability", []),
@@ -132,6 +114,37 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
     return _json_safe({"surrogate_check": surrogate,
                        "localisation": localisation.to_dict() if localisation is not None else None,
                        "simulator_sd": {m.key.name: conf.sim_sd.get(m.key) for m in modelled}})
+
+
+def _surrogate_check(config, modelled, optimum: dict, conf) -> dict[str, Any]:
+    """Do the fitted response surfaces predict the batteries at ``optimum["parameters"]`` (doe.confirm's
+    prediction intervals, the confirmation's seeds averaged)? The report's ``surrogate_check``."""
+    from service.campaigns.design import design_view
+
+    observed = {m.key.name: conf.mean[m.key] for m in modelled
+                if m.key in conf.mean and m.key.name in optimum["predictions"]}
+    if not observed:
+        return {"verdict": "not testable", "reason": "no modelled response in the confirmation run"}
+    result = confirm({m.key.name: m.fit for m in modelled if m.key.name in observed}, optimum["parameters"],
+                     observed, seed=config.seed + 1, n_observations=len(conf.seeds))
+    surrogate = {"verdict": result.verdict, "confirmed": result.confirmed, "reason": result.reason,
+                 "next_design_kind": result.next_design_kind, "responses": result.responses,
+                 "n_observations": len(conf.seeds),
+                 "about": "the fitted response surfaces against the battery at the optimum; this checks the "
+                          "surrogate, not the model against the measurements"}
+    if result.next_design is not None:
+        view = design_view(result.next_design)
+        view.pop("doe")
+        surrogate["next_design"] = view
+    return surrogate
+
+
+def surrogate_check(config, modelled, optimum: dict, confirmation_records: list[list[dict]],
+                    confirmation_seeds: list[int]) -> dict[str, Any]:
+    """The surfaces' check of ``assess`` on its own (``modelled``: the fitted targets of ``fit``): what
+    ``polish_when="surrogate_misses"`` asks of the confirmation batteries before queueing a polishing round."""
+    return _json_safe(_surrogate_check(config, modelled, optimum,
+                                       cal.confirm(modelled, confirmation_records, confirmation_seeds)))
 
 
 def active_effects(iteration_parameters: dict) -> set[str]:

@@ -77,6 +77,12 @@ def start(config, design, modelled, theta: dict, run_ids: list[int], records: li
     return state, points
 
 
+def skipped(check: dict) -> dict:
+    """The state of an iteration that does not polish (``polish_when="surrogate_misses"``): the surfaces
+    predicted its confirmation batteries, whose reason is kept for the report."""
+    return {"stage": "done", "skipped": check.get("reason") or check.get("verdict"), "steps": 0, "batteries": 0}
+
+
 def std_order(state: dict, point: int, seed_index: int) -> int:
     """std_order of the run of ``point`` (0-based, in the round) at the ``seed_index``-th seed."""
     return state["round"] * ROUND + point * len(seeds_of(state)) + seed_index + 1
@@ -151,5 +157,7 @@ def summary(state: dict | None) -> dict[str, Any] | None:
     """What the report shows of the polishing."""
     if not state:
         return None
+    if "skipped" in state:
+        return {"steps": 0, "batteries": 0, "skipped": state["skipped"]}
     return {"chi2_start": state["chi2_start"], "chi2": state["chi2"], "steps": state["steps"],
             "batteries": state["batteries"], "parameters": state["theta"]}

@@ -239,6 +239,12 @@ class CampaignRunner:
         modelled = [m for m in models if m.fit is not None]
         if state is None:
             confirmations = polish.final_runs(it)
+            if config.polish_when == "surrogate_misses":
+                check = analysis.surrogate_check(config, modelled, it.optimum, _records(confirmations),
+                                                 [r.seed for r in confirmations])
+                if check.get("confirmed") is not False:  # confirmed, or nothing modelled to polish on
+                    return self._set_phase(session, it, "polish", "report",
+                                           optimum={**it.optimum, "polish": polish.skipped(check)})
             state, points = polish.start(config, design, modelled, dict(it.optimum["parameters"]),
                                          [r.id for r in confirmations], _records(confirmations),
                                          [r.seed for r in confirmations])

@@ -164,6 +164,13 @@ class CampaignCreate(BaseModel):
         "costs 3 batteries per confirmation seed, plus one per factor and seed for the Jacobian: the surfaces' "
         "optimum is biased inside the box for saturating responses",
     )
+    polish_when: Literal["always", "surrogate_misses"] = Field(
+        "always", description="'always': every iteration polishes; 'surrogate_misses': only an iteration whose "
+        "confirmation batteries fall outside the response surfaces' prediction intervals (the report's "
+        "surrogate_check), as the library loop does. Where the surfaces predict the optimum's batteries a "
+        "polishing round buys little; where they miss (typically once an effect's strength is a fifth factor) "
+        "the surfaces' optimum is not the simulator's and an effect that fits can look as if it did not",
+    )
     automatic: bool = Field(
         False, description="after each iteration, add the effect the diagnosis indicates and run the next "
         "iteration by itself, until the lack of fit passes, nothing improves, or max_iterations is reached "
@@ -206,6 +213,8 @@ class CampaignCreate(BaseModel):
             raise ValueError("automatic mode needs diagnose: it adds the effects the diagnosis indicates")
         if self.diagnose_always and not self.diagnose:
             raise ValueError("diagnose_always needs diagnose")
+        if self.polish_when != "always" and self.polish_steps == 0:
+            raise ValueError("polish_when needs polish_steps > 0: with none there is no polishing to decide on")
         overlap = {f.name for f in self.factors} & set(self.fixed_parameters)
         if overlap:
             raise ValueError(f"{sorted(overlap)} are both factors and fixed parameters")
