@@ -204,6 +204,12 @@ def campaign_report(args) -> int:
     if r.get("surrogate_check"):
         text += (f"\nresponse surfaces at the optimum: {r['surrogate_check'].get('verdict')}: "
                  f"{r['surrogate_check'].get('reason')}")
+    polished = r.get("polish")
+    if polished:
+        text += ("\npolishing on the batteries: " + (
+            f"skipped, the surfaces predicted the confirmation ({polished['skipped']})" if polished.get("skipped") else
+            f"{polished['steps']} Gauss-Newton step(s), {polished['batteries']} batteries, "
+            f"chi2 {_fmt(polished['chi2_start'])} -> {_fmt(polished['chi2'])}"))
     return _emit(args, r, text)
 
 

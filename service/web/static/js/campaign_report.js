@@ -23,7 +23,10 @@ export function verdictSection(report) {
       h("span", { className: report.adequacy.fails ? "bad" : "" }, report.adequacy.fails ? "the model misses the measurements" : "no misfit beyond noise")) : "",
     ...((report.conflicts?.active_bounds) || []).map((b) => h("p", { className: "bad" }, `${b.parameter} is pinned at its ${b.side} bound: ${b.meaning}`)),
     ...((report.conflicts?.priors_pulled) || []).map((p) => h("p", { className: "bad" }, p.meaning)),
-    report.surrogate_check ? h("p", { className: "muted" }, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${report.surrogate_check.reason}`) : "");
+    report.surrogate_check ? h("p", { className: "muted" }, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${report.surrogate_check.reason}`) : "",
+    report.polish ? h("p", { className: "muted" }, h("b", {}, "Polishing on the batteries: "), report.polish.skipped
+      ? `skipped, the surfaces predicted the confirmation (${report.polish.skipped})`
+      : `${report.polish.steps} Gauss-Newton step(s), ${report.polish.batteries} batteries, χ² ${fmt(report.polish.chi2_start, 3)} → ${fmt(report.polish.chi2, 3)}`) : "");
 }
 
 // Parity per test. Quantities of one test have different units, so each is divided by its own
