@@ -31,3 +31,27 @@ def test_rolling_and_null_scenarios_through_a_live_service(tmp_path):
     assert figures["true_top2"] == "1", out.stdout
     assert figures["error_halved_chi2_le_2"] == "1", out.stdout
     assert figures["density_within_5pc"] == "1", out.stdout
+
+
+def _criteria():
+    sys.path.insert(0, str(ROOT / "bench"))
+    try:
+        from diagnosis_dem import criteria
+    finally:
+        sys.path.remove(str(ROOT / "bench"))
+    return criteria
+
+
+@pytest.mark.parametrize("truth, ranking, groups, first", [
+    ("particle_shape", ["rolling_epsd2", "particle_shape"], [], 0),                    # second, not flagged
+    ("particle_shape", ["rolling_epsd2", "particle_shape"], [["rolling_epsd2", "particle_shape"]], 1),
+    ("rolling_epsd2", ["particle_shape", "rolling_epsd2"], [["particle_shape", "rolling_epsd2"]], 1),
+    ("particle_shape", ["cohesion_adhesive", "particle_shape"], [["cohesion_adhesive", "particle_shape"]], 0),
+    ("hertz_mindlin", ["hertz_mindlin", "cohesion_adhesive"], [], 1),
+])
+def test_rolling_and_shape_may_share_a_flagged_alias_group(truth, ranking, groups, first):
+    """The issue's rank criterion: first in >= 3 of 4, "rolling resistance and shape may share one
+    flagged alias group" (and only those two: elongation and rolling friction both resist rotation)."""
+    row = {"effect": truth, "rank": ranking.index(truth) + 1, "ranking": ranking, "alias_groups": groups,
+           "lof_rejects": True, "rms_ratio": None, "chi2_per_dof_after": None, "density_error": None}
+    assert _criteria()([row])["true_first"] == first
