@@ -315,12 +315,21 @@ def _batteries(svc: Service, cid: int) -> int:
     return sum(len(it["runs"]) for it in svc.call("GET", f"/campaigns/{cid}/iterations"))
 
 
-def _battery_seconds(svc: Service, cid: int, measuring_ids: list[int]) -> float:
-    """Summed wall time of the scenario's batteries as the workers ran them: unlike the script's own
-    wall time it does not depend on how many stops a resumed run took or how many workers ran."""
+def _battery_seconds(svc: Service, cid: int, measuring_ids: list[int]) -> tuple[float, float]:
+    """(summed run time of the scenario's batteries, the wall time during which at least one of them
+    ran): both as the workers ran them, so neither counts the time between a stop and its resumption,
+    and a scenario picked up where an earlier run left it still gets its whole wall time."""
+    from datetime import datetime
+
     jobs = svc.call("GET", "/jobs", params={"campaign_id": cid, "limit": 1000})["items"]
     jobs += [svc.call("GET", f"/jobs/{i}") for i in measuring_ids]
-    return float(sum(j["wall_time_s"] or 0.0 for j in jobs))
+    spans = sorted((datetime.fromisoformat(j["started_at"]).timestamp(), datetime.fromisoformat(j["finished_at"]).timestamp())
+                   for j in jobs if j["status"] == "succeeded" and j.get("started_at") and j.get("finished_at"))
+    busy, end = 0.0, -float("inf")
+    for start, stop in spans:  # the union of the run intervals
+        busy += max(0.0, stop - max(start, end))
+        end = max(end, stop)
+    return float(sum(j["wall_time_s"] or 0.0 for j in jobs)), busy
 
 
 # rolling resistance and elongation both resist grain rotation (Estrada et al. 2008; Wensrich & Katterfeld
@@ -387,6 +396,7 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="keep each finished scenario's row in this file (rows already there for other "
                                    "scenarios are kept, so runs in separate stops add up to one table)")
     ap.add_argument("--from-json", help="print the rows and criteria written earlier by --json (no runs)")
+    ap.add_argument("--markdown", action="store_true", help="with --from-json: the rows as a Markdown table too")
     args = ap.parse_args(argv)
     if args.from_json:
         if not os.path.exists(args.from_json):
@@ -397,6 +407,8 @@ def main(argv=None) -> int:
             ap.error(f"--from-json: {args.from_json} is not a file of rows written by --json ({exc})")
         for o in outs:
             _print_row(o)
+        if args.markdown:
+            _markdown(outs)
         _print_criteria(outs, (outs[0].get("evaluator") if outs else None) or args.evaluator,
                         bool(outs and outs[0].get("form") == "reduced"))
         return 0
@@ -414,7 +426,6 @@ def main(argv=None) -> int:
     try:
         for name in names:
             sc = SCENARIOS[name]
-            started = time.perf_counter()
             measurements, measuring_ids = measure(svc, sc, args.evaluator, poll_s, args.reduced)
             cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
                            args.polish_steps, args.confirmation_seeds, args.diagnose_always, args.max_iterations,
@@ -425,8 +436,7 @@ def main(argv=None) -> int:
                 continue
             o = outcome(svc, sc, cid)
             o["batteries"] = len(measuring_ids) + _batteries(svc, cid)
-            o["battery_s"] = _battery_seconds(svc, cid, measuring_ids)
-            o["wall_s"] = time.perf_counter() - started
+            o["battery_s"], o["wall_s"] = _battery_seconds(svc, cid, measuring_ids)
             o["evaluator"], o["form"] = args.evaluator, "reduced" if args.reduced else "screening"
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds, args.polish_steps
             o["diagnose_always"], o["polish_when"] = args.diagnose_always, args.polish_when
@@ -448,6 +458,24 @@ def _print_row(o: dict) -> None:
           f"rms_ratio={_f(o.get('rms_ratio'))} chi2_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
           f"density_error={_f(o['density_error'])} stop='{o['stop_reason']}' "
           f"batteries={o['batteries']} battery_time={o['battery_s']:.0f}s wall={o['wall_s']:.0f}s", flush=True)
+
+
+def _markdown(outs: list[dict]) -> None:
+    """The rows as the Markdown table docs/diagnosis.md carries (``--from-json FILE --markdown``)."""
+    print("| scenario | lack of fit (omnibus p, directed p) | diagnosis ranking | tried | kept | RMS ratio | "
+          "chi2 ratio | chi2/dof after | density error | stop | batteries | battery time | wall time | settings |")
+    print("|" + "---|" * 14)
+    for o in outs:
+        dens = "-" if o["density_error"] is None else f"{100 * o['density_error']:+.1f} %"
+        default = lambda key: "default" if o.get(key) is None else o[key]  # noqa: E731 (the service's own)
+        settings = (f"seeds {default('confirmation_seeds')}, polish {default('polish_steps')}"
+                    + (f" when {o['polish_when']}" if o.get("polish_when") else "")
+                    + (", diagnose always" if o.get("diagnose_always") else "") + f", {o.get('commit') or '?'}")
+        print(f"| {o['scenario']} | {'rejects' if o['lof_rejects'] else 'passes'} ({_f(o['p_omnibus'])}, "
+              f"{_f(o['p_directed'])}) | {', '.join(o['ranking'][:3]) or '-'} | "
+              f"{', '.join(t for t in o['tried'] if t) or '-'} | {o['added'] or '-'} | {_f(o.get('rms_ratio'))} | "
+              f"{_f(o['error_ratio'])} | {_f(o['chi2_per_dof_after'])} | {dens} | {o['stop_reason']} | "
+              f"{o['batteries']} | {o['battery_s']:,.0f} s | {o['wall_s']:,.0f} s | {settings} |")
 
 
 def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
