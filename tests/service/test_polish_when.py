@@ -3,9 +3,10 @@ confirmation batteries, as the library loop does (calibration/loop.py polishes w
 
 Both cases are physical, on the analytic evaluator: the thesis's three factors over the thesis's box,
 where a two-level surface of each target holds (every confirmation inside its prediction interval), and
-the same with rolling resistance as a fourth factor from 0 to 0.5, where the friction angle saturates
-in mu_r and mu_pp together (Estrada et al. 2008) and a two-level surface cannot follow it: the
-surrogate's optimum is not the simulator's, which is what polishing on the batteries corrects.
+the same with rolling resistance as a fourth factor from 0 to 0.5 (mu_pp from 0.05), where the
+stand-in's friction angle saturates in mu_r and mu_pp together, as a DEM packing's does (Estrada et al.
+2008), and a two-level surface cannot follow it: the surrogate's optimum is not the simulator's, which
+is what polishing on the batteries corrects.
 """
 from __future__ import annotations
 
