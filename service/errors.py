@@ -7,6 +7,7 @@ place to look for which field was wrong.
 from __future__ import annotations
 
 import logging
+import re
 
 from fastapi import FastAPI, Request
 from fastapi.encoders import jsonable_encoder
@@ -88,6 +89,21 @@ def _validation_detail(exc: ValidationError, prefix: tuple = ("body",)) -> list[
     ]
 
 
+_LEADING_FIELD = re.compile(r"^(?:Value error, )?([a-z_][a-z0-9_]*)(?:\[(\d+)\])?[ :]")
+
+
+def _field_of_model_error(loc: list, msg: str, body) -> list:
+    """A cross-field rule (a model validator) is reported by pydantic at the whole body; its message
+    starts with the field it refuses ("polish_when needs polish_steps > 0", "constraints[0]: ..."), so
+    the error points there when the body has that field: a client, or the web form, can mark it."""
+    if loc != ["body"] or not isinstance(body, dict):
+        return loc
+    match = _LEADING_FIELD.match(msg)
+    if match is None or match.group(1) not in body:
+        return loc
+    return ["body", match.group(1)] + ([int(match.group(2))] if match.group(2) is not None else [])
+
+
 def allowed_methods(request: Request) -> list[str]:
     """Every method the API documents for this path. Starlette's 405 lists only the first matching
     route's methods, so ``GET /materials`` and ``POST /materials`` (two routes) each hid the other; the
@@ -112,7 +128,8 @@ def install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(RequestValidationError)
     async def _request_validation(_request: Request, exc: RequestValidationError):
         detail = [
-            {"loc": list(err.get("loc", ())), "msg": err.get("msg", ""), "type": err.get("type", "value_error")}
+            {"loc": _field_of_model_error(list(err.get("loc", ())), err.get("msg", ""), getattr(exc, "body", None)),
+             "msg": err.get("msg", ""), "type": err.get("type", "value_error")}
             for err in exc.errors()
         ]
         return JSONResponse({"detail": jsonable_encoder(detail)}, status_code=422)

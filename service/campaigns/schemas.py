@@ -217,7 +217,7 @@ class CampaignCreate(BaseModel):
             raise ValueError("polish_when needs polish_steps > 0: with none there is no polishing to decide on")
         overlap = {f.name for f in self.factors} & set(self.fixed_parameters)
         if overlap:
-            raise ValueError(f"{sorted(overlap)} are both factors and fixed parameters")
+            raise ValueError(f"fixed_parameters: {sorted(overlap)} are factors too")
         names = {f.name for f in self.factors}
         for index, text in enumerate(self.constraints):
             try:
@@ -227,9 +227,10 @@ class CampaignCreate(BaseModel):
             unknown = set(constraint.parameters) - names
             if unknown:
                 raise ValueError(f"constraints[{index}] uses {sorted(unknown)}, which are not factors")
-        for prior in self.priors:
+        for index, prior in enumerate(self.priors):
             if prior.parameter not in names:
-                raise ValueError(f"prior on {prior.parameter!r}: only factors can have priors")
+                raise ValueError(f"priors[{index}]: a prior on {prior.parameter!r}, which is not a factor "
+                                 "(only factors can have priors)")
         for factor in self.factors:  # each corner must be a valid micro parameter set
             for level in (factor.low, factor.high):
                 MicroParameters.model_validate(factor_paths.apply(self.fixed_parameters, {factor.name: level}))

@@ -27,7 +27,7 @@ def test_create_and_read(s2):
     ({"factors": [{"name": "grain_size", "low": 1, "high": 2}]}, ["body", "factors"]),
     ({"factors": [{"name": "friction_pp", "low": 0.9, "high": 0.3}]}, ["body", "factors", 0]),
     ({"factors": [{"name": "friction_pp", "low": -0.5, "high": 0.3}]}, ["body"]),
-    ({"fixed_parameters": {"friction_pp": 0.5}}, ["body"]),
+    ({"fixed_parameters": {"friction_pp": 0.5}}, ["body", "fixed_parameters"]),
     ({"fixed_parameters": {"friction_pw": -1.0}}, ["body", "fixed_parameters"]),
     ({"options": {"cct_cycles": 0}}, ["body", "options"]),
     ({"evaluator": "quantum"}, ["body", "evaluator"]),
@@ -35,9 +35,13 @@ def test_create_and_read(s2):
     ({"design": {"type": "fractional"}}, ["body", "design"]),
     ({"design": {"type": "full", "centre_runs": -2}}, ["body", "design", "centre_runs"]),
     ({"targets": [{"test": "dst", "quantity": "porosity"}]}, ["body", "targets", 0, "quantity"]),
-    ({"constraints": ["friction_pw <= friction_pp"]}, ["body"]),
-    ({"constraints": ["friction_pp <= import os"]}, ["body"]),
-    ({"priors": [{"parameter": "friction_pw", "value": 0.6, "uncertainty": 0.05}]}, ["body"]),
+    ({"constraints": ["friction_pw <= friction_pp"]}, ["body", "constraints", 0]),
+    ({"constraints": ["friction_pp <= import os"]}, ["body", "constraints", 0]),
+    ({"priors": [{"parameter": "friction_pw", "value": 0.6, "uncertainty": 0.05}]}, ["body", "priors", 0]),
+    # cross-field rules point at the field they refuse (service.errors._field_of_model_error)
+    ({"automatic": True, "diagnose": False}, ["body", "automatic"]),
+    ({"diagnose_always": True, "diagnose": False}, ["body", "diagnose_always"]),
+    ({"polish_when": "surrogate_misses", "polish_steps": 0}, ["body", "polish_when"]),
     ({"name": ""}, ["body", "name"]),
 ])
 def test_create_rejects_bad_input_naming_the_field(s2, change, loc):
