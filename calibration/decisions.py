@@ -28,9 +28,13 @@ def effect_range(candidate: Candidate, strength: float | None = None,
 
     A switch-type effect (no "off" strength) spans a factor of 4 either way about its matched
     strength (``reference``, or the diagnosis's estimate ``strength``), on a log scale. Any other
-    spans from "off" to the whole plausible range, or to twice the diagnosis's estimate if that is
-    larger (a linear signature underestimates a saturating effect), at most PLAUSIBLE_SLACK x the
-    plausible top and never past the engine's limit.
+    spans from "off" to twice the diagnosis's estimate (at least one signature ``step``; a linear
+    signature underestimates a saturating effect, hence the factor 2), or to the plausible top when
+    there is no estimate; at most PLAUSIBLE_SLACK x the plausible span and never past the engine's
+    limit. A box about the estimate rather than over the whole plausible range keeps a two-level
+    surface local: on the DEM engine rolling resistance over 0-0.5 saturates inside the box and the
+    surface's optimum overshoots (mu_r 0.38 for a true 0.15). A strength pinned at the top of this
+    box gets a wider one (``widened_top``).
     """
     if candidate.is_switch:
         centre = strength if strength else reference
@@ -38,10 +42,27 @@ def effect_range(candidate: Candidate, strength: float | None = None,
             raise ValueError(f"{candidate.name}: a switch-type effect needs its matched strength")
         return centre / 4.0, centre * 4.0, True
     off = candidate.off_value or 0.0
-    gamma = strength - off if strength is not None else candidate.step
     span = candidate.plausible_range[1] - off
-    top = min(off + min(max(2.0 * gamma, span), PLAUSIBLE_SLACK * span), params_mod.upper_limit(candidate.factor))
-    return off, top, False
+    reach = max(2.0 * (strength - off), candidate.step) if strength is not None else span
+    return off, min(off + min(reach, PLAUSIBLE_SLACK * span), _cap(candidate)), False
+
+
+def _cap(candidate: Candidate) -> float:
+    off = candidate.off_value or 0.0
+    return min(off + PLAUSIBLE_SLACK * (candidate.plausible_range[1] - off), params_mod.upper_limit(candidate.factor))
+
+
+def widened_top(candidate: Candidate, high: float) -> float | None:
+    """The top of a range twice as wide from "off" for an added strength pinned at its ``high``
+    bound, up to PLAUSIBLE_SLACK x the plausible span and the engine's limit; None when the range
+    already reaches that cap or the effect is a switch (its log range is about a matched value)."""
+    if candidate.is_switch:
+        return None
+    off = candidate.off_value or 0.0
+    cap = _cap(candidate)
+    if not high < cap * (1.0 - 1e-9):
+        return None
+    return min(cap, off + 2.0 * (high - off))
 
 
 @dataclass

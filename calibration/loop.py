@@ -21,8 +21,8 @@ from engine.lab.spec import MicroParameters
 from . import calibrate as cal
 from . import parameters as params_mod
 from . import stats
-from .attribute import PLAUSIBLE_SLACK, Attribution, Signature, attribute, signature_seeds, signature_vector
-from .decisions import Decision, effect_range, judge
+from .attribute import Attribution, Signature, attribute, signature_seeds, signature_vector
+from .decisions import Decision, effect_range, judge, widened_top
 from .evaluators import BatchEvaluator
 from .fitting import TargetModel, fit_targets, run_values
 from .localise import Localisation, Residuals, localise
@@ -307,19 +307,15 @@ class CalibrationLoop:
 
     def iterate_effect(self, factors: list[dict], fixed: dict, number: int, name: str) -> Iteration:
         """``iterate`` with an effect's strength as a factor; a strength pinned at the top of its
-        range, pushing outward, is given a range twice as wide (up to PLAUSIBLE_SLACK x the
-        plausible top) and the iteration redone once."""
+        range, pushing outward, is given a range twice as wide (``decisions.widened_top``) and the
+        iteration redone once."""
         c = all_candidates()[name]
         it = self.iterate(factors, fixed, number, added_effect=name)
-        if c.is_switch:
-            return it
-        off = c.off_value or 0.0
-        cap = min(off + PLAUSIBLE_SLACK * (c.plausible_range[1] - off), params_mod.upper_limit(c.factor))
         pinned = any(b["parameter"] == c.factor and b["side"] == "high"
                      for b in it.localisation.conflicts["active_bounds"])
-        top = factors[-1]["high"]
-        if pinned and top < cap:
-            wider = [dict(f) for f in factors[:-1]] + [{**factors[-1], "high": min(cap, off + 2.0 * (top - off))}]
+        top = widened_top(c, factors[-1]["high"]) if pinned else None
+        if top is not None:
+            wider = [dict(f) for f in factors[:-1]] + [{**factors[-1], "high": top}]
             again = self.iterate(wider, fixed, number, added_effect=name)
             again.runs += it.runs
             return again

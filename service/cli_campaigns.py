@@ -151,7 +151,8 @@ def campaign_diagnosis(args) -> int:
 
 def campaign_history(args) -> int:
     h = _call(args, "GET", f"/campaigns/{args.id}/history")
-    rows = [[e["number"], ", ".join(e["effects"]) or "-", e["chi2_per_dof"],
+    rows = [[e["number"], (", ".join(e["effects"]) or "-") + (" (range widened)" if e.get("range_widened") else ""),
+             e["chi2_per_dof"],
              "[" + ", ".join(_fmt(x) for x in e["noise_band"] or []) + "]", e["verdict"],
              ", ".join(e.get("effect_added_next") or []) or "-"] for e in h["iterations"]]
     return _emit(args, h, _table(["iteration", "effects", "chi2/dof", "noise band", "verdict", "added next"],

@@ -164,10 +164,15 @@ def history(campaign_id: CampaignId, session: Session = Depends(get_session)) ->
 
     campaign = get_campaign(session, campaign_id)
     done = [it for it in sorted(campaign.iterations, key=lambda i: i.number) if it.report]
-    entries, previous, targets = [], set(), {}
+    entries, previous, targets, plan = [], set(), {}, {}
     for it in done:
         report = it.report
         effects = sorted(active_effects(it.parameters))
+        # in automatic mode an iteration is built on a named base (the one before, or an earlier one when
+        # an added effect was rejected or its range widened): what it added is relative to that base
+        base = next((b for b in done if b.number == plan.get("next_base")), None)
+        if base is not None:
+            previous = set(active_effects(base.parameters))
         lof = report.get("lack_of_fit") or {}
         diag = report.get("diagnosis")
         entries.append({
@@ -187,7 +192,9 @@ def history(campaign_id: CampaignId, session: Session = Depends(get_session)) ->
             # automatic mode: whether this iteration's added effect was kept, and why the loop stopped
             "decision": (report.get("automatic") or {}).get("decision"),
             "stop_reason": (report.get("automatic") or {}).get("stop_reason"),
+            "range_widened": bool(plan.get("widened")),
         })
+        plan = report.get("automatic") or {}
         previous = set(effects)
         for row in report.get("targets", []):
             if row.get("status") != "modelled":

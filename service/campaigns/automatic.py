@@ -7,14 +7,17 @@ campaign's ``max_iterations`` is reached; the reason it stopped is stored with t
 An iteration that added an effect is judged against the iteration it was built on
 (``calibration.decisions.judge``: the error must fall significantly with the lack of fit no worse).
 A rejected effect leaves the model as it was: the next candidate indicated by that earlier
-iteration's diagnosis is tried instead, and when none is left nothing improves. Pure functions of
+iteration's diagnosis is tried instead, and when none is left nothing improves. An added strength
+pinned at the top of its range (the range is about the diagnosis's estimate, which can fall short)
+is first given a range twice as wide on the same base, once (``calibration.decisions.widened_top``,
+as the library loop does), and that iteration is the one judged. Pure functions of
 what the database holds, so the runner stays resumable.
 """
 from __future__ import annotations
 
 from typing import Any
 
-from calibration.decisions import judge
+from calibration.decisions import judge, widened_top
 
 STOP_PASSES = "lack of fit passes"
 STOP_MAX = "maximum number of iterations reached"
@@ -51,6 +54,27 @@ def judge_iteration(iterations: list, it, report: dict) -> tuple[dict | None, in
     return decision.to_dict(), base_number
 
 
+def widening(config, iterations: list, it, report: dict) -> dict | None:
+    """{"effect", "base", "high"} when ``it`` added an effect in automatic mode whose strength the
+    optimum pins at the top of its range and that range was not widened already (and another
+    iteration is allowed); else None."""
+    from engine.candidates import get as get_candidate
+
+    if it.number >= config.max_iterations:
+        return None
+    previous = next((p for p in iterations if p.number == it.number - 1), None)
+    plan = _record(previous) if previous is not None else {}
+    name = plan.get("next_effect")
+    if not name or plan.get("widened"):
+        return None
+    c = get_candidate(name)
+    pinned = any(b.get("parameter") == c.factor and b.get("side") == "high"
+                 for b in (report.get("conflicts") or {}).get("active_bounds", []))
+    factor = next((f for f in it.parameters.get("factors", []) if f["name"] == c.factor), None)
+    top = widened_top(c, factor["high"]) if pinned and factor else None
+    return None if top is None else {"effect": name, "base": plan.get("next_base"), "high": top}
+
+
 def _tried_from(iterations: list, base_number: int) -> set[str]:
     return {_record(p).get("next_effect") for p in iterations if _record(p).get("next_base") == base_number} - {None}
 
@@ -58,15 +82,21 @@ def _tried_from(iterations: list, base_number: int) -> set[str]:
 def next_step(config, campaign_config: dict, iterations: list, it, report: dict, settings=None) -> dict[str, Any]:
     """The automatic record of iteration ``it``: its decision, and either the next effect with the
     next iteration's configuration (``config``) or the reason to stop."""
+    from engine.candidates import get as get_candidate
     from service.campaigns.analysis import active_effects, model_fails
     from service.campaigns.store import with_effect_factor
     from service.errors import ApiError
-    from service.limits import check_campaign_limits
-    from service.campaigns.schemas import CampaignCreate
 
     decision, base_number = judge_iteration(iterations, it, report)
     record: dict[str, Any] = {"decision": decision, "base_iteration": base_number, "next_effect": None,
                               "next_base": None, "stop_reason": None}
+    wide = widening(config, iterations, it, report)
+    if wide is not None:
+        params = it.parameters
+        factors = [{**f, "high": wide["high"]} if f["name"] == get_candidate(wide["effect"]).factor else dict(f)
+                   for f in params["factors"]]
+        return _configured({**record, "widened": True}, wide["effect"], wide["base"],
+                           {**campaign_config, "factors": factors, "fixed_parameters": _fixed(params)}, settings)
     rejected = decision is not None and not decision["accepted"]
     base = next(p for p in iterations if p.number == base_number) if rejected else it
     base_report = report if base is it else (base.report or {})
@@ -91,19 +121,37 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         return {**record, "stop_reason": reason}
     name = options[0]
     ranked = next((r for r in diagnosis.get("ranking", []) if r.get("effect") == name), {})
-    params = base.parameters
-    fixed = dict(params.get("fixed") or {})
-    if params.get("effects"):
-        fixed["effects"] = params["effects"]
-    base_config = {**campaign_config, "factors": params["factors"], "fixed_parameters": fixed}
+    base_config = {**campaign_config, "factors": base.parameters["factors"], "fixed_parameters": _fixed(base.parameters)}
     try:
         nxt = with_effect_factor(base_config, name, strength=ranked.get("strength"),
                                  at=(base_report.get("optimum") or None))
+    except (ApiError, ValueError) as exc:
+        return {**record, "stop_reason": f"the next iteration with {name} cannot run: {_message(exc)}"}
+    return _configured(record, name, base.number, nxt, settings)
+
+
+def _fixed(parameters: dict) -> dict:
+    """An iteration's fixed parameters with its active effects, as a campaign configuration holds them."""
+    fixed = dict(parameters.get("fixed") or {})
+    if parameters.get("effects"):
+        fixed["effects"] = parameters["effects"]
+    return fixed
+
+
+def _message(exc: Exception) -> str:
+    return getattr(exc, "message", None) or str(exc)
+
+
+def _configured(record: dict, name: str, base_number: int, nxt: dict, settings) -> dict[str, Any]:
+    """The record with the next iteration's validated configuration, or the reason it cannot run."""
+    from service.campaigns.schemas import CampaignCreate
+    from service.errors import ApiError
+    from service.limits import check_campaign_limits
+
+    try:
         validated = CampaignCreate.model_validate(nxt)
         if settings is not None:
             check_campaign_limits(validated, settings)
     except (ApiError, ValueError) as exc:
-        message = getattr(exc, "message", None) or str(exc)
-        return {**record, "stop_reason": f"the next iteration with {name} cannot run: {message}"}
-    return {**record, "next_effect": name, "next_base": base.number,
-            "next_config": validated.model_dump(mode="json")}
+        return {**record, "stop_reason": f"the next iteration with {name} cannot run: {_message(exc)}"}
+    return {**record, "next_effect": name, "next_base": base_number, "next_config": validated.model_dump(mode="json")}

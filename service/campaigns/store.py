@@ -124,8 +124,8 @@ def with_effect_factor(config: dict, name: str, strength_range=None, *, strength
     highest resolution for the larger design.
 
     The range is the user's ``strength_range``, else ``calibration.decisions.effect_range``: from
-    the effect's "off" value over its plausible range (or twice the diagnosis's ``strength``
-    estimate), or for a switch-type effect a log range about its strength matched at ``at`` (the
+    the effect's "off" value to twice the diagnosis's ``strength`` estimate (over the plausible
+    range without one), or for a switch-type effect a log range about its strength matched at ``at`` (the
     optimum's factor values; default the centre of the box)."""
     from calibration.calibrate import generators_for
     from calibration.decisions import effect_range

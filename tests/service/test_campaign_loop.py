@@ -6,6 +6,8 @@ deficit that rolling resistance or particle shape supplies.
 """
 import math
 
+import pytest
+
 from conftest_s2 import API, campaign_body, drain, run_to_end, s2, thesis_material_id  # noqa: F401
 
 from engine.candidates import candidates
@@ -206,3 +208,38 @@ def test_diagnose_always_without_diagnosis_is_refused(s2):
     body = campaign_body(thesis_material_id(client), diagnose=False, diagnose_always=True)
     response = client.post(f"{API}/campaigns", json=body)
     assert response.status_code == 422 and "diagnose_always" in response.text
+
+
+def test_an_added_strength_pinned_at_the_top_of_its_range_is_redone_once_on_a_wider_range():
+    """Iteration 2 added rolling resistance over 0-0.25 (twice a diagnosis estimate of 0.124) and its
+    optimum sits at 0.25: iteration 3 redoes it on the same base over 0-0.5, with no diagnosis of its
+    own; iteration 3, pinned again, is judged and goes on as usual (the range is widened once)."""
+    from types import SimpleNamespace
+
+    from service.campaigns.automatic import next_step, widening
+
+    factor = "effects.rolling_epsd2.rolling_friction"
+    box = [{"name": "friction_pp", "low": 0.3, "high": 0.9, "unit": "", "log": False},
+           {"name": "particle_density_kg_m3", "low": 2400.0, "high": 2800.0, "unit": "kg/m3", "log": False},
+           {"name": "particle_stiffness_n_per_m", "low": 1.0e6, "high": 3.0e6, "unit": "N/m", "log": True}]
+    lof = {"statistic": 30.0, "dof": 10, "n_residuals": 14, "p_value": 0.001}
+    first = SimpleNamespace(number=1, parameters={"factors": box, "fixed": {}},
+                            report={"automatic": {"next_effect": "rolling_epsd2", "next_base": 1}, "lack_of_fit": lof})
+    second = SimpleNamespace(number=2, parameters={"factors": box + [{"name": factor, "low": 0.0, "high": 0.248,
+                                                                      "unit": "1", "log": False}], "fixed": {}})
+    pinned = {"conflicts": {"active_bounds": [{"parameter": factor, "side": "high"}]}, "verdict": "calibrated",
+              "lack_of_fit": {**lof, "statistic": 12.0, "dof": 9, "p_value": 0.2}, "optimum": {factor: 0.248}}
+    config = SimpleNamespace(max_iterations=4)
+    campaign = {"name": "c", "material_id": 1, "factors": box, "design": {"type": "full", "centre_runs": 3}}
+    record = next_step(config, campaign, [first, second], second, pinned)
+    assert record["widened"] and record["next_effect"] == "rolling_epsd2" and record["next_base"] == 1
+    wider = next(f for f in record["next_config"]["factors"] if f["name"] == factor)
+    assert (wider["low"], wider["high"]) == (0.0, pytest.approx(0.496))
+    assert [f["name"] for f in record["next_config"]["factors"]][:3] == [f["name"] for f in box]
+
+    second.report = {**pinned, "automatic": record}
+    third = SimpleNamespace(number=3, parameters={**second.parameters, "factors": record["next_config"]["factors"]})
+    assert widening(config, [first, second, third], third, pinned) is None  # once
+    assert widening(SimpleNamespace(max_iterations=2), [first, second], second, pinned) is None  # no room left
+    unpinned = {**pinned, "conflicts": {"active_bounds": []}}
+    assert widening(config, [first, second], second, unpinned) is None
