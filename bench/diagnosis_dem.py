@@ -270,7 +270,8 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
     out: dict[str, Any] = {"scenario": sc.name, "effect": sc.effect, "lof_rejects": None, "rank": None,
                            "ranking": [], "added": None, "tried": [], "rms_ratio": None, "error_ratio": None,
                            "chi2_per_dof_after": None, "density_error": None,
-                           "verdicts": [h["verdict"] for h in history], "stop_reason": history[-1].get("stop_reason")}
+                           "verdicts": [h["verdict"] for h in history], "stop_reason": history[-1].get("stop_reason"),
+                           "campaign_id": cid, "rms_before": first.get("weighted_rms"), "rms_after": None}
     # the model's adequacy test: the omnibus lack of fit, or once the diagnosis ran (a failing or
     # suspect report), Holm over it and the candidates' directed test
     p = first["adequacy_p"] if first.get("adequacy_p") is not None else first["lack_of_fit_p"]
@@ -292,6 +293,7 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
         out["added"] = (final.get("added_effect") or [None])[0] if accepted else None
         # the criterion's weighted error: RMS of the targets' standardised residuals (priors apart);
         # error_ratio, the chi2 ratio priors included, is what tables before session 12 printed
+        out["rms_after"] = final.get("weighted_rms")
         if first.get("weighted_rms") and final.get("weighted_rms") is not None:
             out["rms_ratio"] = final["weighted_rms"] / first["weighted_rms"]
         out["error_ratio"] = final["chi2"] / first["chi2"] if first["chi2"] else None
@@ -455,14 +457,14 @@ def _print_row(o: dict) -> None:
     print(f"{o['scenario']:<9} hidden={o['effect'] or '-':<18} lof={'rejects' if o['lof_rejects'] else 'passes'} "
           f"(omnibus p {_f(o['p_omnibus'])}, directed p {_f(o['p_directed'])}) "
           f"ranking={o['ranking'][:3]} rank={o['rank']} tried={o['tried']} added={o['added']} "
-          f"rms_ratio={_f(o.get('rms_ratio'))} chi2_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
+          f"rms={_rms(o)} chi2_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
           f"density_error={_f(o['density_error'])} stop='{o['stop_reason']}' "
           f"batteries={o['batteries']} battery_time={o['battery_s']:.0f}s wall={o['wall_s']:.0f}s", flush=True)
 
 
 def _markdown(outs: list[dict]) -> None:
     """The rows as the Markdown table docs/diagnosis.md carries (``--from-json FILE --markdown``)."""
-    print("| scenario | lack of fit (omnibus p, directed p) | diagnosis ranking | tried | kept | RMS ratio | "
+    print("| scenario | lack of fit (omnibus p, directed p) | diagnosis ranking | tried | kept | RMS before -> after (ratio) | "
           "chi2 ratio | chi2/dof after | density error | stop | batteries | battery time | wall time | settings |")
     print("|" + "---|" * 14)
     for o in outs:
@@ -473,9 +475,16 @@ def _markdown(outs: list[dict]) -> None:
                     + (", diagnose always" if o.get("diagnose_always") else "") + f", {o.get('commit') or '?'}")
         print(f"| {o['scenario']} | {'rejects' if o['lof_rejects'] else 'passes'} ({_f(o['p_omnibus'])}, "
               f"{_f(o['p_directed'])}) | {', '.join(o['ranking'][:3]) or '-'} | "
-              f"{', '.join(t for t in o['tried'] if t) or '-'} | {o['added'] or '-'} | {_f(o.get('rms_ratio'))} | "
+              f"{', '.join(t for t in o['tried'] if t) or '-'} | {o['added'] or '-'} | {_rms(o)} | "
               f"{_f(o['error_ratio'])} | {_f(o['chi2_per_dof_after'])} | {dens} | {o['stop_reason']} | "
               f"{o['batteries']} | {o['battery_s']:,.0f} s | {o['wall_s']:,.0f} s | {settings} |")
+
+
+def _rms(o: dict) -> str:
+    before, after = o.get("rms_before"), o.get("rms_after")
+    if after is None:
+        return _f(before) if o.get("rms_ratio") is None else _f(o["rms_ratio"])
+    return f"{_f(before)} -> {_f(after)} ({_f(o.get('rms_ratio'))})"
 
 
 def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
@@ -486,6 +495,11 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
           f"top two: {res['true_top2']}/{res['n_effects']} (target all)")
     print(f"weighted RMS error halved with chi2/dof <= 2 after adding: {res['error_halved_chi2_le_2']}/{res['n_effects']} "
           f"(target all)")
+    befores = [f"{o['scenario']} {_f(o['rms_before'])}" for o in outs if o.get("rms_before") is not None]
+    if befores:
+        # a model that reproduces the measurements within their noise has a weighted RMS of about 1, so
+        # even a perfect calibration halves the RMS only from a before-RMS of about 2
+        print("  weighted RMS before (a model within the noise has about 1): " + ", ".join(befores))
     print(f"particle density within 5 %: {res['density_within_5pc']}/{res['n_density']} rolling and shape "
           f"(target all)")
     print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={evaluator}"
