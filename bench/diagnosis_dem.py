@@ -265,13 +265,15 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
     """The scenario's row. "added" and the error after are those of the model the loop kept: the last
     iteration whose added effect was accepted (an effect the automatic mode rejected does not count);
     when none was, the last iteration tried, so a rejected effect's error still shows."""
-    history = svc.call("GET", f"/campaigns/{cid}/history")["iterations"]
+    full = svc.call("GET", f"/campaigns/{cid}/history")
+    history = full["iterations"]
     first = history[0]
     out: dict[str, Any] = {"scenario": sc.name, "effect": sc.effect, "lof_rejects": None, "rank": None,
                            "ranking": [], "added": None, "tried": [], "rms_ratio": None, "error_ratio": None,
                            "chi2_per_dof_after": None, "density_error": None,
                            "verdicts": [h["verdict"] for h in history], "stop_reason": history[-1].get("stop_reason"),
-                           "campaign_id": cid, "rms_before": first.get("weighted_rms"), "rms_after": None}
+                           "campaign_id": cid, "rms_before": first.get("weighted_rms"), "rms_after": None,
+                           "n_targets": sum(t["residuals"].get("1") is not None for t in full["targets"].values())}
     # the model's adequacy test: the omnibus lack of fit, or once the diagnosis ran (a failing or
     # suspect report), Holm over it and the candidates' directed test
     p = first["adequacy_p"] if first.get("adequacy_p") is not None else first["lack_of_fit_p"]
@@ -487,6 +489,15 @@ def _rms(o: dict) -> str:
     return f"{_f(before)} -> {_f(after)} ({_f(o.get('rms_ratio'))})"
 
 
+def _detectability(o: dict) -> float | None:
+    """lambda ~ n (RMS^2 - 1): how far the targets' chi2 before stands above the n a model within the
+    noise would give (``docs/diagnosis.md``; the design note bins tier A by lambda = ||M Delta||^2).
+    Rough: it ignores the degrees of freedom the fitted parameters absorb."""
+    if o.get("rms_before") is None or not o.get("n_targets"):
+        return None
+    return o["n_targets"] * (o["rms_before"] ** 2 - 1.0)
+
+
 def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
     res = criteria(outs)
     print(f"lack of fit rejects: {res['lof_rejects_effects']}/{res['n_effects']} effect scenarios "
@@ -495,11 +506,13 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
           f"top two: {res['true_top2']}/{res['n_effects']} (target all)")
     print(f"weighted RMS error halved with chi2/dof <= 2 after adding: {res['error_halved_chi2_le_2']}/{res['n_effects']} "
           f"(target all)")
-    befores = [f"{o['scenario']} {_f(o['rms_before'])}" for o in outs if o.get("rms_before") is not None]
+    befores = [f"{o['scenario']} {_f(o['rms_before'])} (lambda ~ {_f(_detectability(o))})" for o in outs
+               if o.get("rms_before") is not None]
     if befores:
         # a model that reproduces the measurements within their noise has a weighted RMS of about 1, so
         # even a perfect calibration halves the RMS only from a before-RMS of about 2
-        print("  weighted RMS before (a model within the noise has about 1): " + ", ".join(befores))
+        print("  weighted RMS before (a model within the noise has about 1; lambda ~ n (RMS^2 - 1), the design "
+              "note's detectability: its tier A halves the RMS from lambda >= 30): " + ", ".join(befores))
     print(f"particle density within 5 %: {res['density_within_5pc']}/{res['n_density']} rolling and shape "
           f"(target all)")
     print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={evaluator}"
