@@ -187,14 +187,17 @@ def _wait_jobs(svc: Service, ids: list[int], poll_s: float) -> list[dict]:
 
 
 def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float,
-            reduced: bool = False) -> tuple[list[dict], list[int]]:
-    """The measuring world's replicates: one battery per measuring seed, plus laboratory scatter."""
+            reduced: bool = False, options: dict | None = None) -> tuple[list[dict], list[int]]:
+    """The measuring world's replicates: one battery per measuring seed, plus laboratory scatter.
+    ``options``: the battery's loads and E' windows (default OPTIONS); the campaigns calibrate on
+    the conditions measured."""
+    options = OPTIONS if options is None else options
     truth = {**sc.parameters(), **(REDUCED_PARAMETERS if reduced else {})}
     # the key names what is measured, so a rerun against the same service reuses exactly those jobs
-    digest = hashlib.sha256(json.dumps([truth, OPTIONS], sort_keys=True).encode()).hexdigest()[:12]
+    digest = hashlib.sha256(json.dumps([truth, options], sort_keys=True).encode()).hexdigest()[:12]
     ids = [svc.call("POST", "/jobs", json={"test": "battery", "fidelity": "screening", "seed": seed,
                                            "evaluator": evaluator, "parameters": truth,
-                                           "options": OPTIONS,
+                                           "options": options,
                                            "idempotency_key": f"tierb:{sc.name}:{evaluator}:{digest}:{seed}"})["id"]
            for seed in MEASURING_SEEDS]
     results = _wait_jobs(svc, ids, poll_s)
@@ -397,6 +400,11 @@ def main(argv=None) -> int:
     ap.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS,
                     help="iterations of each automatic campaign, the first included (default 3: one effect tried "
                          "and, when it is rejected, the next; 2: the first effect added and judged)")
+    ap.add_argument("--cct-window-stresses-kpa", default=None,
+                    help="comma-separated normal stresses (kPa) of the measured E' windows (default: "
+                         + ",".join(f"{x / 1e3:g}" for x in OPTIONS["cct_window_stresses_pa"])
+                         + "); a window at 3-6 kPa adds the low-stress end where a Hertzian E' falls below a "
+                           "linear one (E'(3 kPa)/E'(30 kPa) about 0.37 against 0.51 in two runs)")
     ap.add_argument("--json", help="keep each finished scenario's row in this file (rows already there for other "
                                    "scenarios are kept, so runs in separate stops add up to one table)")
     ap.add_argument("--from-json", help="print the rows and criteria written earlier by --json (no runs)")
@@ -416,6 +424,12 @@ def main(argv=None) -> int:
         _print_criteria(outs, (outs[0].get("evaluator") if outs else None) or args.evaluator,
                         bool(outs and outs[0].get("form") == "reduced"))
         return 0
+    options = dict(OPTIONS)
+    if args.cct_window_stresses_kpa:
+        try:
+            options["cct_window_stresses_pa"] = [float(x) * 1e3 for x in args.cct_window_stresses_kpa.split(",")]
+        except ValueError:
+            ap.error(f"--cct-window-stresses-kpa: not a comma-separated list of numbers: {args.cct_window_stresses_kpa}")
     names = [n.strip() for n in args.scenarios.split(",") if n.strip()]
     unknown = set(names) - set(SCENARIOS)
     if unknown:
@@ -430,7 +444,7 @@ def main(argv=None) -> int:
     try:
         for name in names:
             sc = SCENARIOS[name]
-            measurements, measuring_ids = measure(svc, sc, args.evaluator, poll_s, args.reduced)
+            measurements, measuring_ids = measure(svc, sc, args.evaluator, poll_s, args.reduced, options)
             cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
                            args.polish_steps, args.confirmation_seeds, args.diagnose_always, args.max_iterations,
                            args.polish_when)
@@ -444,6 +458,7 @@ def main(argv=None) -> int:
             o["evaluator"], o["form"] = args.evaluator, "reduced" if args.reduced else "screening"
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds, args.polish_steps
             o["diagnose_always"], o["polish_when"] = args.diagnose_always, args.polish_when
+            o["cct_window_stresses_pa"] = options["cct_window_stresses_pa"]
             o["commit"] = _commit()  # rows written over several stops may come from different code
             outs.append(o)
             _print_row(o)
@@ -474,7 +489,10 @@ def _markdown(outs: list[dict]) -> None:
         default = lambda key: "default" if o.get(key) is None else o[key]  # noqa: E731 (the service's own)
         settings = (f"seeds {default('confirmation_seeds')}, polish {default('polish_steps')}"
                     + (f" when {o['polish_when']}" if o.get("polish_when") else "")
-                    + (", diagnose always" if o.get("diagnose_always") else "") + f", {o.get('commit') or '?'}")
+                    + (", diagnose always" if o.get("diagnose_always") else "")
+                    + (", E' at " + ", ".join(f"{x / 1e3:g}" for x in o["cct_window_stresses_pa"]) + " kPa"
+                       if o.get("cct_window_stresses_pa") not in (None, OPTIONS["cct_window_stresses_pa"]) else "")
+                    + f", {o.get('commit') or '?'}")
         print(f"| {o['scenario']} | {'rejects' if o['lof_rejects'] else 'passes'} ({_f(o['p_omnibus'])}, "
               f"{_f(o['p_directed'])}) | {', '.join(o['ranking'][:3]) or '-'} | "
               f"{', '.join(t for t in o['tried'] if t) or '-'} | {o['added'] or '-'} | {_rms(o)} | "
