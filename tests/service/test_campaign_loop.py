@@ -243,3 +243,32 @@ def test_an_added_strength_pinned_at_the_top_of_its_range_is_redone_once_on_a_wi
     assert widening(SimpleNamespace(max_iterations=2), [first, second], second, pinned) is None  # no room left
     unpinned = {**pinned, "conflicts": {"active_bounds": []}}
     assert widening(config, [first, second], second, unpinned) is None
+
+
+def test_the_history_counts_an_added_effect_from_its_base_and_marks_a_widened_range(s2):
+    """Automatic mode built iteration 3 on iteration 1 again (rolling resistance redone on a wider
+    range): the history says iteration 3 added rolling resistance, over a widened range, and that
+    iteration 2 was followed by rolling resistance again, not by nothing."""
+    from service.models.campaign import CampaignIteration
+
+    client, app, _ = s2
+    body = campaign_body(thesis_material_id(client), automatic=True, max_iterations=3)
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    box = body["factors"]
+    rolling = {"name": "effects.rolling_epsd2.rolling_friction", "low": 0.0, "high": 0.25, "unit": "1"}
+    lof = {"statistic": 20.0, "dof": 6, "chi2_per_dof": 3.3, "p_value": 0.003}
+    plans = [{"next_effect": "rolling_epsd2", "next_base": 1},
+             {"next_effect": "rolling_epsd2", "next_base": 1, "widened": True},
+             {"stop_reason": "lack of fit passes"}]
+    with app.state.session_factory() as session:
+        for number, (factors, plan) in enumerate([(box, plans[0]), (box + [rolling], plans[1]),
+                                                  (box + [{**rolling, "high": 0.5}], plans[2])], start=1):
+            session.add(CampaignIteration(campaign_id=cid, number=number, phase="done",
+                                          parameters={"factors": factors, "fixed": {}, "effects": {}},
+                                          report={"verdict": "calibrated", "lack_of_fit": lof, "targets": [],
+                                                  "automatic": plan}))
+        session.commit()
+    entries = client.get(f"{API}/campaigns/{cid}/history").json()["iterations"]
+    assert [e["added_effect"] for e in entries] == [None, ["rolling_epsd2"], ["rolling_epsd2"]]
+    assert [e["effect_added_next"] for e in entries] == [["rolling_epsd2"], ["rolling_epsd2"], None]
+    assert [e["range_widened"] for e in entries] == [False, False, True]
