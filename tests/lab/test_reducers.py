@@ -9,7 +9,6 @@ from engine.lab.reducers import (
     angle_of_repose,
     bulk_properties,
     dilatancy_angle_deg,
-    lens_volume,
     mohr_coulomb_fit,
     moving_average,
     reduce_anchor,
@@ -18,17 +17,6 @@ from engine.lab.reducers import (
     split_cycles,
     window_mean,
 )
-
-
-def test_lens_volume_limits_and_half_overlap():
-    r = 0.01
-    assert lens_volume(r, r, 2 * r) == 0.0
-    # coincident spheres: the lens is the whole sphere
-    assert lens_volume(r, r, 1e-12) == pytest.approx(4 / 3 * math.pi * r**3, rel=1e-5)
-    assert lens_volume(r, 0.5 * r, 0.1 * r) == pytest.approx(4 / 3 * math.pi * (0.5 * r) ** 3)
-    # equal spheres at distance d: lens = pi/12 (4r + d)(2r - d)^2
-    d = r
-    assert lens_volume(r, r, d) == pytest.approx(math.pi / 12 * (4 * r + d) * (2 * r - d) ** 2)
 
 
 def test_bulk_properties_thesis_table_4_5_average():

@@ -61,6 +61,17 @@ def test_touching_double_clump_c1_has_no_lens():
                                                                    0.8 * m * r * r + 2 * m * r * r], rtol=1e-12)
 
 
+def test_lens_volume_limits_and_half_overlap():
+    r = 0.01
+    assert T.lens_volume_m3(r, r, 2 * r) == 0.0
+    # one sphere inside the other: the lens is the smaller sphere
+    assert T.lens_volume_m3(r, 0.5 * r, 0.1 * r) == pytest.approx(4 / 3 * np.pi * (0.5 * r) ** 3, rel=1e-12)
+    # coincident equal spheres: the whole sphere
+    assert T.lens_volume_m3(r, r, 1e-12) == pytest.approx(4 / 3 * np.pi * r**3, rel=1e-5)
+    # equal spheres at distance d: pi/12 (4r + d)(2r - d)^2
+    assert T.lens_volume_m3(r, r, r) == pytest.approx(np.pi / 12 * (4 * r + r) * (2 * r - r) ** 2, rel=1e-12)
+
+
 @pytest.mark.parametrize("r1,r2,c", [(0.01, 0.01, 0.5), (0.012, 0.015, 0.7), (0.015, 0.009, 0.55)])
 def test_overlapping_double_clump_volume_and_inertia(r1, r2, c):
     d = c * (r1 + r2)

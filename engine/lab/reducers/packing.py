@@ -1,32 +1,14 @@
 """Bulk density, porosity and voids ratio of a levelled packing (thesis section 4.5).
 
 The thesis measures height from the highest sphere top, takes the bulk volume as A*H, nets
-the clump lens overlaps out of the solid volume and mass (Eqs. 4.9-4.10), then applies
+the clump lens overlaps out of the solid volume and mass (Eqs. 4.9-4.10; the lens volume is the clump
+templates' ``engine.particles.templates.lens_volume_m3``), then applies
 Eq. 4.2 (rho_b = m_b / V_b), Eq. 4.4 (e = rho_p / rho_b - 1) and Eq. 4.7 (n = e / (e + 1)).
 Porosity is returned as a fraction (SI), not in percent.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import numpy as np
-
-
-def lens_volume(radius_1_m: float, radius_2_m: float, centre_distance_m: float) -> float:
-    """Volume of the lens shared by two overlapping spheres (thesis Eq. 4.9).
-
-    Zero when the spheres do not overlap; the smaller sphere's volume when one contains the other.
-    """
-    r1, r2, d = float(radius_1_m), float(radius_2_m), float(centre_distance_m)
-    if d >= r1 + r2:
-        return 0.0
-    if d <= abs(r1 - r2):
-        r = min(r1, r2)
-        return 4.0 / 3.0 * np.pi * r**3
-    return (
-        np.pi / (12.0 * d) * (r1 + r2 - d) ** 2
-        * (d**2 + 2 * d * r2 - 3 * r2**2 + 2 * d * r1 + 6 * r2 * r1 - 3 * r1**2)
-    )
 
 
 @dataclass(frozen=True)
