@@ -86,7 +86,13 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     for key, value in changed.items():
         config[key] = value
     if add_effect is not None:
-        config = with_effect_factor(config, add_effect, strength_range)
+        # the range the automatic mode would give: about the last diagnosis's estimate of the strength,
+        # a switch-type effect matched at the last optimum
+        last = max(campaign.iterations, key=lambda it: it.number, default=None)
+        report = (last.report or {}) if last is not None else {}
+        ranked = next((r for r in (report.get("diagnosis") or {}).get("ranking", []) if r.get("effect") == add_effect), {})
+        config = with_effect_factor(config, add_effect, strength_range, strength=ranked.get("strength"),
+                                    at=report.get("optimum") or None)
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
     check_campaign_limits(validated, _settings(session))
     config = validated.model_dump(mode="json")

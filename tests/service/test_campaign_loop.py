@@ -10,6 +10,7 @@ import pytest
 
 from conftest_s2 import API, campaign_body, drain, run_to_end, s2, thesis_material_id  # noqa: F401
 
+from calibration.decisions import effect_range
 from engine.candidates import candidates
 
 
@@ -36,7 +37,9 @@ def test_diagnosis_names_the_effect_and_adding_it_lets_the_error_fall(s2):
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
     iterations = client.get(f"{API}/campaigns/{cid}/iterations").json()
     factor = candidates()[top].factor
-    assert factor in [f["name"] for f in iterations[1]["parameters"]["factors"]]
+    added = next(f for f in iterations[1]["parameters"]["factors"] if f["name"] == factor)
+    # the range the automatic mode would give: about the diagnosis's estimate of the strength
+    assert (added["low"], added["high"]) == pytest.approx(effect_range(candidates()[top], ranking[0]["strength"])[:2])
 
     history = client.get(f"{API}/campaigns/{cid}/history").json()
     first, second = history["iterations"]
