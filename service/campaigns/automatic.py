@@ -8,8 +8,7 @@ An iteration that added an effect is judged against the iteration it was built o
 (``calibration.decisions.judge``: the error must fall significantly with the lack of fit no worse).
 A rejected effect leaves the model as it was: the next candidate indicated by that earlier
 iteration's diagnosis is tried instead, and when none is left nothing improves. An added strength
-pinned at the top of its range (the range is about the diagnosis's estimate, which can fall short)
-is first given a range twice as wide on the same base, once (``calibration.decisions.widened_top``,
+pinned at the top of its range (the optimum wants more than the range allows) is first given a range twice as wide on the same base, once (``calibration.decisions.widened_top``,
 as the library loop does), and that iteration is the one judged. Pure functions of
 what the database holds, so the runner stays resumable.
 """

@@ -270,8 +270,8 @@ class IterationIn(BaseModel):
     options: dict[str, Any] | None = None
     add_effect: str | None = Field(
         None, description="a diagnosis candidate (GET /api/v1/effects) whose strength becomes one more design "
-        "factor, keeping the previous factors: from 'off' to twice the last diagnosis's estimate of the strength "
-        "(its plausible range when the diagnosis has none; a switch-type effect a log range of 4x about its "
+        "factor, keeping the previous factors: from 'off' over its plausible range, or to twice the last "
+        "diagnosis's estimate of the strength if larger (a switch-type effect: a log range of 4x about its "
         "value matched at the last optimum), or strength_range",
     )
     strength_range: tuple[float, float] | None = Field(None, description="low, high of the added effect's strength")

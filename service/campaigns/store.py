@@ -86,7 +86,7 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     for key, value in changed.items():
         config[key] = value
     if add_effect is not None:
-        # the range the automatic mode would give: about the last diagnosis's estimate of the strength,
+        # the range the automatic mode would give from the last diagnosis's estimate of the strength,
         # a switch-type effect matched at the last optimum
         last = max(campaign.iterations, key=lambda it: it.number, default=None)
         report = (last.report or {}) if last is not None else {}
@@ -130,8 +130,8 @@ def with_effect_factor(config: dict, name: str, strength_range=None, *, strength
     highest resolution for the larger design.
 
     The range is the user's ``strength_range``, else ``calibration.decisions.effect_range``: from
-    the effect's "off" value to twice the diagnosis's ``strength`` estimate (over the plausible
-    range without one), or for a switch-type effect a log range about its strength matched at ``at`` (the
+    the effect's "off" value over its plausible range (or twice the diagnosis's ``strength``
+    estimate if larger), or for a switch-type effect a log range about its strength matched at ``at`` (the
     optimum's factor values; default the centre of the box)."""
     from calibration.calibrate import generators_for
     from calibration.decisions import effect_range

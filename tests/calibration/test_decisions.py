@@ -1,12 +1,10 @@
 """The added effect's range (``calibration.decisions.effect_range``) and its widening when the optimum
-pins the strength at the top (``widened_top``), on the catalogue's own plausible ranges and steps.
+pins the strength at the top (``widened_top``), on the catalogue's own plausible ranges.
 
 Every expected number follows from the rule and the catalogue entry: rolling resistance is "off" at
-mu_r 0, plausible up to 0.5, signature step 0.15; particle shape is "off" at aspect ratio 1, plausible
-up to 2, which is also the engine's limit for two touching spheres.
+mu_r 0 and plausible up to 0.5; particle shape is "off" at aspect ratio 1 and plausible up to 2, which
+is also the engine's limit for two touching spheres.
 """
-import math
-
 import pytest
 
 from calibration.attribute import PLAUSIBLE_SLACK
@@ -14,18 +12,14 @@ from calibration.decisions import effect_range, widened_top
 from engine.candidates import candidates
 
 
-def test_the_range_reaches_twice_the_estimate():
+def test_the_plausible_range_or_twice_the_estimate_when_larger():
     rolling = candidates()["rolling_epsd2"]
     low, high, log = effect_range(rolling, strength=0.124)
-    assert (low, log) == (0.0, False) and math.isclose(high, 2 * 0.124)
-    shape = candidates()["particle_shape"]
-    assert effect_range(shape, strength=1.3)[:2] == pytest.approx((1.0, 1.6))
-
-
-def test_at_least_one_step_and_the_plausible_range_without_an_estimate():
-    rolling = candidates()["rolling_epsd2"]
-    assert effect_range(rolling, strength=0.01)[1] == pytest.approx(rolling.step)
+    assert (low, log) == (0.0, False) and high == pytest.approx(rolling.plausible_range[1])
+    assert effect_range(rolling, strength=0.3)[1] == pytest.approx(2 * 0.3)
     assert effect_range(rolling)[1] == pytest.approx(rolling.plausible_range[1])
+    shape = candidates()["particle_shape"]
+    assert effect_range(shape, strength=1.3)[:2] == pytest.approx((1.0, 2.0))
 
 
 def test_never_past_the_slack_or_the_engines_limit():

@@ -38,7 +38,7 @@ def test_diagnosis_names_the_effect_and_adding_it_lets_the_error_fall(s2):
     iterations = client.get(f"{API}/campaigns/{cid}/iterations").json()
     factor = candidates()[top].factor
     added = next(f for f in iterations[1]["parameters"]["factors"] if f["name"] == factor)
-    # the range the automatic mode would give: about the diagnosis's estimate of the strength
+    # the range the automatic mode would give from the diagnosis's estimate of the strength
     assert (added["low"], added["high"]) == pytest.approx(effect_range(candidates()[top], ranking[0]["strength"])[:2])
 
     history = client.get(f"{API}/campaigns/{cid}/history").json()
@@ -214,9 +214,9 @@ def test_diagnose_always_without_diagnosis_is_refused(s2):
 
 
 def test_an_added_strength_pinned_at_the_top_of_its_range_is_redone_once_on_a_wider_range():
-    """Iteration 2 added rolling resistance over 0-0.25 (twice a diagnosis estimate of 0.124) and its
-    optimum sits at 0.25: iteration 3 redoes it on the same base over 0-0.5, with no diagnosis of its
-    own; iteration 3, pinned again, is judged and goes on as usual (the range is widened once)."""
+    """Iteration 2 added rolling resistance over 0-0.248 and its optimum sits at the top: iteration 3
+    redoes it on the same base over twice that range, with no diagnosis of its own; iteration 3, pinned
+    again, is judged and goes on as usual (the range is widened once)."""
     from types import SimpleNamespace
 
     from service.campaigns.automatic import next_step, widening
