@@ -404,7 +404,8 @@ def main(argv=None) -> int:
                     help="comma-separated normal stresses (kPa) of the measured E' windows (default: "
                          + ",".join(f"{x / 1e3:g}" for x in OPTIONS["cct_window_stresses_pa"])
                          + "); a window at 3-6 kPa adds the low-stress end where a Hertzian E' falls below a "
-                           "linear one (E'(3 kPa)/E'(30 kPa) about 0.37 against 0.51 in two runs)")
+                           "linear one (E'(3 kPa)/E'(30 kPa) about 0.37 against 0.51 in two runs; on the Hertz "
+                           "scenario it did not make the diagnosis see Hertz, docs/diagnosis.md)")
     ap.add_argument("--json", help="keep each finished scenario's row in this file (rows already there for other "
                                    "scenarios are kept, so runs in separate stops add up to one table)")
     ap.add_argument("--from-json", help="print the rows and criteria written earlier by --json (no runs)")
