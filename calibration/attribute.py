@@ -62,33 +62,16 @@ def signature_vector(res, on: list[dict], base: list[dict], step: float) -> np.n
     """A candidate's signature on the residual rows of ``res`` (calibrate.Residuals): the mean of its
     batteries minus the mean of the baseline's at the same seeds (``on``, ``base``: run_values dicts,
     one per seed), over each row's sd and the strength step; zero where a battery lacks the target,
-    and on the prior rows (an effect does not move a directly measured parameter).
-
-    Each row's mean difference is shrunk by its own seed scatter (``garrote``): on the DEM engine a
-    row the effect barely moves (the shear box under Hertz) carries seed noise as large as the
-    effect's rows, and that noise can turn the whole signature away from residuals it matches."""
+    and on the prior rows (an effect does not move a directly measured parameter)."""
     diff = []
     for i, key in enumerate(res.keys):
         k_on, k_base = find(on[0].keys(), key), find(base[0].keys(), key)
         if k_on is None or k_base is None:
             diff.append(0.0)
             continue
-        paired = [(a[k_on] - b[k_base]) / res.sd[i] / step for a, b in zip(on, base)]
-        diff.append(garrote(paired))
+        mean_on = float(np.mean([v[k_on] for v in on]))
+        diff.append((mean_on - float(np.mean([v[k_base] for v in base]))) / res.sd[i] / step)
     return np.concatenate([diff, np.zeros(len(res.prior_names))])
-
-
-def garrote(paired) -> float:
-    """Mean of the paired differences, shrunk by its standard error: m max(0, 1 - se^2/m^2), the
-    non-negative garrote (Breiman 1995) with the variance of the mean estimated from the pairs
-    themselves; an effect large against its scatter is kept almost whole, one within its scatter goes
-    to zero. A single pair has no scatter to judge by and is kept as it is."""
-    d = np.asarray(paired, dtype=float)
-    m = float(d.mean())
-    if d.size < 2 or m == 0.0:
-        return m
-    se2 = float(d.var(ddof=1)) / d.size
-    return m * max(0.0, 1.0 - se2 / (m * m))
 
 
 @dataclass

@@ -8,8 +8,7 @@ signatures against a baseline of its own at other seeds (``attribute.signature_s
 models whose "simulator" draws independent noise for every parameter set even at one seed (the worst
 case of chaos) and scatters five times the stand-in's (so that, as on the DEM engine, the simulator's
 scatter outweighs the laboratory's), the combined test must reject at about its nominal 5 %. Measured
-on these 100 cases: 6 % with signatures at seeds of their own, 22 % against the confirmation seeds; 8 %
-since each signature row is shrunk by its seed scatter (``attribute.garrote``, session 14).
+on these 100 cases: 6 % with signatures at seeds of their own, 22 % against the confirmation seeds.
 """
 import json
 import zlib
