@@ -54,7 +54,7 @@ def judge_iteration(iterations: list, it, report: dict) -> tuple[dict | None, in
 
 
 def widening(config, iterations: list, it, report: dict) -> dict | None:
-    """{"effect", "base", "high"} when ``it`` added an effect in automatic mode whose strength the
+    """{"effect", "factor", "base", "high"} when ``it`` added an effect in automatic mode whose strength the
     optimum pins at the top of its range and that range was not widened already (and another
     iteration is allowed); else None."""
     from engine.candidates import get as get_candidate
@@ -71,7 +71,7 @@ def widening(config, iterations: list, it, report: dict) -> dict | None:
                  for b in (report.get("conflicts") or {}).get("active_bounds", []))
     factor = next((f for f in it.parameters.get("factors", []) if f["name"] == c.factor), None)
     top = widened_top(c, factor["high"]) if pinned and factor else None
-    return None if top is None else {"effect": name, "base": plan.get("next_base"), "high": top}
+    return None if top is None else {"effect": name, "factor": c.factor, "base": plan.get("next_base"), "high": top}
 
 
 def _tried_from(iterations: list, base_number: int) -> set[str]:
@@ -81,9 +81,8 @@ def _tried_from(iterations: list, base_number: int) -> set[str]:
 def next_step(config, campaign_config: dict, iterations: list, it, report: dict, settings=None) -> dict[str, Any]:
     """The automatic record of iteration ``it``: its decision, and either the next effect with the
     next iteration's configuration (``config``) or the reason to stop."""
-    from engine.candidates import get as get_candidate
     from service.campaigns.analysis import active_effects, model_fails
-    from service.campaigns.store import with_effect_factor
+    from service.campaigns.store import effect_hints, with_effect_factor
     from service.errors import ApiError
 
     decision, base_number = judge_iteration(iterations, it, report)
@@ -92,8 +91,7 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     wide = widening(config, iterations, it, report)
     if wide is not None:
         params = it.parameters
-        factors = [{**f, "high": wide["high"]} if f["name"] == get_candidate(wide["effect"]).factor else dict(f)
-                   for f in params["factors"]]
+        factors = [{**f, "high": wide["high"]} if f["name"] == wide["factor"] else dict(f) for f in params["factors"]]
         return _configured({**record, "widened": True}, wide["effect"], wide["base"],
                            {**campaign_config, "factors": factors, "fixed_parameters": _fixed(params)}, settings)
     rejected = decision is not None and not decision["accepted"]
@@ -119,11 +117,9 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
             reason += f" (every battery at the optimum together: lack of fit p {pooled:.2g})"
         return {**record, "stop_reason": reason}
     name = options[0]
-    ranked = next((r for r in diagnosis.get("ranking", []) if r.get("effect") == name), {})
     base_config = {**campaign_config, "factors": base.parameters["factors"], "fixed_parameters": _fixed(base.parameters)}
     try:
-        nxt = with_effect_factor(base_config, name, strength=ranked.get("strength"),
-                                 at=(base_report.get("optimum") or None))
+        nxt = with_effect_factor(base_config, name, **effect_hints(base_report, name))
     except (ApiError, ValueError) as exc:
         return {**record, "stop_reason": f"the next iteration with {name} cannot run: {_message(exc)}"}
     return _configured(record, name, base.number, nxt, settings)

@@ -86,13 +86,10 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     for key, value in changed.items():
         config[key] = value
     if add_effect is not None:
-        # the range the automatic mode would give from the last diagnosis's estimate of the strength,
-        # a switch-type effect matched at the last optimum
+        # the range the automatic mode would give, from the last iteration's report
         last = max(campaign.iterations, key=lambda it: it.number, default=None)
-        report = (last.report or {}) if last is not None else {}
-        ranked = next((r for r in (report.get("diagnosis") or {}).get("ranking", []) if r.get("effect") == add_effect), {})
-        config = with_effect_factor(config, add_effect, strength_range, strength=ranked.get("strength"),
-                                    at=report.get("optimum") or None)
+        config = with_effect_factor(config, add_effect, strength_range,
+                                    **effect_hints((last.report or {}) if last is not None else {}, add_effect))
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
     check_campaign_limits(validated, _settings(session))
     config = validated.model_dump(mode="json")
@@ -122,6 +119,14 @@ def with_proposed_design(config: dict, campaign: Campaign) -> dict:
     number = last.number if last is not None else 0
     raise Conflict(f"iteration {number} proposes no design (its surface check: "
                    f"{check.get('verdict', 'not made')})", "proposed_design")
+
+
+def effect_hints(report: dict, name: str) -> dict:
+    """What an iteration's report says about adding ``name``: the diagnosis's estimate of its
+    strength and the optimum a switch-type effect is matched at (``with_effect_factor``'s keywords);
+    one place for the manual add-effect and the automatic mode."""
+    ranked = next((r for r in (report.get("diagnosis") or {}).get("ranking", []) if r.get("effect") == name), {})
+    return {"strength": ranked.get("strength"), "at": report.get("optimum") or None}
 
 
 def with_effect_factor(config: dict, name: str, strength_range=None, *, strength: float | None = None,
