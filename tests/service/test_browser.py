@@ -136,6 +136,19 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     history = service.api("GET", f"/campaigns/{campaign_id}/history").json()["iterations"]
     assert [it["effects"] for it in history] == [[], [top]]
     assert abs(history[1]["chi2_per_dof"] - chi2[2]) <= 1e-3 * history[1]["chi2_per_dof"]
+    # the added effect's trace, a factor of iteration 2 only, draws that iteration's design range
+    factors = service.api("GET", f"/campaigns/{campaign_id}/iterations/2").json()["parameters"]["factors"]
+    added = next(f for f in factors if f["name"].startswith("effects."))
+    trace = page.locator(f"section.history [aria-label='trace {added['name']}']")
+    from playwright.sync_api import expect
+    expect(trace.locator("svg")).to_have_count(1, timeout=TIMEOUT_MS)
+    drawn = page.evaluate("""async (el) => {
+        const echarts = await import("/static/vendor/echarts-6.1.0/echarts.esm.min.js");  // the page's own module instance
+        const series = echarts.getInstanceByDom(el).getOption().series;
+        return ["bounds", "bounds "].map((n) => series.find((s) => s.name === n).data.filter((p) => p[1] !== "-")); }""",
+                          trace.element_handle())
+    for points, bound in zip(drawn, (added["low"], added["high"])):
+        assert len(points) == 2 and all(1.5 < x < 2.5 and y == bound for x, y in points), (points, bound)
     # iteration 1 stays readable from the selector
     page.locator("nav.iterations a", has_text=re.compile(r"^1")).click()
     expect_text(page, "p.active-effects", "Iteration 1 model: no contact effects")

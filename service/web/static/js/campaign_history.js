@@ -32,13 +32,20 @@ function errorChart(iterations) {
     yAxis: axis("χ² / dof (-)", { min: 0, scale: false }), series }, { height: 300, label: "error history" });
 }
 
+// Each iteration's design bound as a segment of its own across its slot, broken between iterations
+// ("-" is ECharts' empty value): a line through one point per iteration drew nothing for a factor that
+// only one iteration has, typically the effect just added.
+function box(rows, key) {
+  return rows.flatMap((r) => [[r.number - 0.4, r[key] ?? "-"], [r.number + 0.4, r[key] ?? "-"], [r.number + 0.5, "-"]]);
+}
+
 function traceChart(name, rows) {
   // rows: [{number, value, std, low, high, prior}]
   const series = [
     { type: "line", name: "optimum", data: rows.map((r) => [r.number, r.value]), symbolSize: 8, itemStyle: { color: "#1f5fa8" }, z: 3 },
     errorBars("±2 sd", rows.filter((r) => Number.isFinite(r.std)).map((r) => [r.number, r.value, null, null, r.value - 2 * r.std, r.value + 2 * r.std]), "#1f5fa8"),
-    { type: "line", name: "bounds", step: "middle", data: rows.map((r) => [r.number, r.low]), showSymbol: false, lineStyle: { color: "#98a2b3", type: "dashed" } },
-    { type: "line", name: "bounds ", step: "middle", data: rows.map((r) => [r.number, r.high]), showSymbol: false, lineStyle: { color: "#98a2b3", type: "dashed" } },
+    { type: "line", name: "bounds", data: box(rows, "low"), showSymbol: false, lineStyle: { color: "#98a2b3", type: "dashed" } },
+    { type: "line", name: "bounds ", data: box(rows, "high"), showSymbol: false, lineStyle: { color: "#98a2b3", type: "dashed" } },
   ];
   const prior = rows.find((r) => r.prior)?.prior;
   if (prior) series[0].markArea = band(prior.value - 2 * prior.uncertainty, prior.value + 2 * prior.uncertainty, "rgba(122,90,248,0.12)", "prior ±2u");
