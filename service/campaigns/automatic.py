@@ -74,6 +74,16 @@ def widening(config, iterations: list, it, report: dict) -> dict | None:
     return None if top is None else {"effect": name, "factor": c.factor, "base": plan.get("next_base"), "high": top}
 
 
+def builds_on(config, iterations: list, it, report: dict) -> bool:
+    """Will the automatic mode build on iteration ``it``? Not when the effect it added did not earn its
+    place (the next candidate then comes from the diagnosis of the iteration it was built on), nor when
+    that effect's strength is pinned at the top of its range (the iteration is redone on a wider one):
+    such an iteration needs no diagnosis of its own."""
+    decision, _ = judge_iteration(iterations, it, report)
+    rejected = decision is not None and not decision["accepted"]
+    return not rejected and widening(config, iterations, it, report) is None
+
+
 def _tried_from(iterations: list, base_number: int) -> set[str]:
     return {_record(p).get("next_effect") for p in iterations if _record(p).get("next_base") == base_number} - {None}
 

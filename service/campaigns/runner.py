@@ -317,14 +317,8 @@ class CampaignRunner:
                   "responses": first.responses, "job_ids": [r.job_id for r in confirmations], "seeds": seeds}
         # a diagnosis needs misfit the parameters cannot absorb: more measured values than free parameters
         diagnosable = ((report.get("lack_of_fit") or {}).get("dof") or 0) > 0
-        # in automatic mode an added effect that did not earn its place needs no diagnosis of its own:
-        # the next candidate comes from the iteration it was built on
-        # (nor does one whose strength is pinned at the top of its range: it is redone on a wider one)
-        rejected = False
-        if config.automatic:
-            decision, _ = automatic.judge_iteration(campaign.iterations, it, report)
-            rejected = (decision is not None and not decision["accepted"]) or (
-                automatic.widening(config, campaign.iterations, it, report) is not None)
+        # in automatic mode an iteration the next one will not build on needs no diagnosis of its own
+        rejected = config.automatic and not automatic.builds_on(config, campaign.iterations, it, report)
         # a diagnosis attributes misfit: it runs when the lack of fit fails or a target is out of reach, and
         # when a conflict (a parameter pinned at a bound, a prior pulled off) suggests a misfit the omnibus
         # test cannot see, which the diagnosis's directed test then judges (whatever the surfaces' check says);
