@@ -64,7 +64,8 @@ sys.path.insert(0, ROOT)
 
 import httpx  # noqa: E402
 
-from calibration.keys import responses_of  # noqa: E402
+from calibration.keys import ResponseKey, find_response, responses_of  # noqa: E402
+from calibration.stats import weighted_rms  # noqa: E402
 from calibration.testbed import measured_priors, measurement_sd  # noqa: E402
 from engine.candidates import candidates  # noqa: E402
 from engine.lab.spec import MicroParameters  # noqa: E402
@@ -310,6 +311,35 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
     return out
 
 
+def truth_floor(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: float, reduced: bool,
+                options: dict) -> dict[str, Any]:
+    """The weighted RMS error the measuring world's own parameters reach (``--truth-floor``).
+
+    The truth, its hidden effect on, is run at the first iteration's confirmation seeds and judged as
+    that iteration's report judged its optimum: the same targets, measured uncertainties and simulator
+    scatter divided by the number of seeds. No calibration of the right model can be expected to do
+    better than the truth itself, so ``rms_truth / rms_before`` is the smallest ratio the criterion
+    "the weighted error falls by at least half" can see in this scenario (about 1 / rms_before)."""
+    report = svc.call("GET", f"/campaigns/{cid}/iterations/1")["report"]
+    seeds = report["confirmation_seeds"]
+    truth = {**sc.parameters(), **(REDUCED_PARAMETERS if reduced else {})}
+    digest = hashlib.sha256(json.dumps([truth, options], sort_keys=True).encode()).hexdigest()[:12]
+    ids = [svc.call("POST", "/jobs", json={"test": "battery", "fidelity": "screening", "seed": seed,
+                                           "evaluator": evaluator, "parameters": truth, "options": options,
+                                           "idempotency_key": f"tierb-truth:{sc.name}:{evaluator}:{digest}:{seed}"})["id"]
+           for seed in seeds]
+    runs = [responses_of(result) for result in _wait_jobs(svc, ids, poll_s)]
+    standardised = []
+    for row in report["targets"]:
+        if row.get("status") != "modelled" or not row.get("residual_sd"):
+            continue
+        key = ResponseKey.from_record(row)
+        values = [run[name]["value"] for run in runs if (name := find_response(run, key)) is not None]
+        if len(values) == len(runs):
+            standardised.append((float(np.mean(values)) - row["measured"]) / row["residual_sd"])
+    return {"rms_truth": weighted_rms(standardised), "truth_job_ids": ids}
+
+
 def _wait_campaign(svc: Service, cid: int, poll_s: float) -> dict:
     while True:
         c = svc.call("GET", f"/campaigns/{cid}")
@@ -406,6 +436,14 @@ def main(argv=None) -> int:
                          + "); a window at 3-6 kPa adds the low-stress end where a Hertzian E' falls below a "
                            "linear one (E'(3 kPa)/E'(30 kPa) about 0.37 against 0.51 in two runs; on the Hertz "
                            "scenario it did not make the diagnosis see Hertz, docs/diagnosis.md)")
+    ap.add_argument("--truth-floor", action="store_true",
+                    help="also run the measuring world's own parameters at the first iteration's confirmation seeds "
+                         "and print the weighted RMS they reach: the floor under any calibration's error, so "
+                         "rms_truth / rms_before is the smallest ratio the error criterion can see (3 more batteries "
+                         "a scenario, not counted in its batteries)")
+    ap.add_argument("--truth-floor-for", metavar="ROWS_JSON",
+                    help="add the truth floor to the rows written earlier by --json, from their campaigns in this "
+                         "service (--data-dir or --url); the rows are otherwise kept as their runs wrote them")
     ap.add_argument("--json", help="keep each finished scenario's row in this file (rows already there for other "
                                    "scenarios are kept, so runs in separate stops add up to one table)")
     ap.add_argument("--from-json", help="print the rows and criteria written earlier by --json (no runs)")
@@ -441,6 +479,11 @@ def main(argv=None) -> int:
     # `kill` (SIGTERM) unwinds like Ctrl-C, so the local service and its workers stop with the script
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     svc = Service(args.url, args.workers, args.data_dir)
+    if args.truth_floor_for:
+        try:
+            return _add_truth_floors(svc, args.truth_floor_for, poll_s)
+        finally:
+            svc.close()
     outs = []
     try:
         for name in names:
@@ -460,6 +503,8 @@ def main(argv=None) -> int:
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds, args.polish_steps
             o["diagnose_always"], o["polish_when"] = args.diagnose_always, args.polish_when
             o["cct_window_stresses_pa"] = options["cct_window_stresses_pa"]
+            if args.truth_floor:
+                o.update(truth_floor(svc, sc, cid, args.evaluator, poll_s, args.reduced, options))
             o["commit"] = _commit()  # rows written over several stops may come from different code
             outs.append(o)
             _print_row(o)
@@ -503,9 +548,10 @@ def _markdown(outs: list[dict]) -> None:
 
 def _rms(o: dict) -> str:
     before, after = o.get("rms_before"), o.get("rms_after")
+    floor = f"; truth {_f(o['rms_truth'])}" if o.get("rms_truth") is not None else ""
     if after is None:
-        return _f(before) if o.get("rms_ratio") is None else _f(o["rms_ratio"])
-    return f"{_f(before)} -> {_f(after)} ({_f(o.get('rms_ratio'))})"
+        return (_f(before) if o.get("rms_ratio") is None else _f(o["rms_ratio"])) + (f" ({floor[2:]})" if floor else "")
+    return f"{_f(before)} -> {_f(after)} ({_f(o.get('rms_ratio'))}{floor})"
 
 
 def _detectability(o: dict) -> float | None:
@@ -532,10 +578,29 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
         # even a perfect calibration halves the RMS only from a before-RMS of about 2
         print("  weighted RMS before (a model within the noise has about 1; lambda ~ n (RMS^2 - 1), the design "
               "note's detectability: its tier A halves the RMS from lambda >= 30): " + ", ".join(befores))
+    floors = [f"{o['scenario']} {_f(o['rms_truth'])} / {_f(o['rms_before'])} = {_f(o['rms_truth'] / o['rms_before'])}"
+              for o in outs if o["effect"] and o.get("rms_truth") is not None and o.get("rms_before")]
+    if floors:
+        print("  the truth's own weighted RMS over the RMS before, the smallest ratio any calibration can be "
+              "expected to reach (--truth-floor): " + ", ".join(floors))
     print(f"particle density within 5 %: {res['density_within_5pc']}/{res['n_density']} rolling and shape "
           f"(target all)")
     print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={evaluator}"
           + f" form={'reduced' if reduced else 'screening'}")
+
+
+def _add_truth_floors(svc: Service, path: str, poll_s: float) -> int:
+    """``--truth-floor-for``: each stored row gets its scenario's truth floor (same options as its run)."""
+    rows = list(_load_rows(path).values())
+    for o in rows:
+        options = {**OPTIONS, "cct_window_stresses_pa": o.get("cct_window_stresses_pa") or OPTIONS["cct_window_stresses_pa"]}
+        o.update(truth_floor(svc, SCENARIOS[o["scenario"]], o["campaign_id"], o.get("evaluator") or "dem", poll_s,
+                             o.get("form") == "reduced", options), truth_floor_commit=_commit())
+        _save_row(path, o)
+        _print_row(o)
+    _print_criteria(rows, (rows[0].get("evaluator") if rows else None) or "dem",
+                    bool(rows and rows[0].get("form") == "reduced"))
+    return 0
 
 
 def _commit() -> str | None:
