@@ -26,6 +26,7 @@ their summed run time and the wall time; then the pass criteria of the issue and
     python3 bench/diagnosis_dem.py --confirmation-seeds 3 --polish-steps 0   # the session-11 DEM table
     python3 bench/diagnosis_dem.py --scenarios null --json rows.json   # add the null's row to rows.json
     python3 bench/diagnosis_dem.py --from-json rows.json           # reprint the rows and criteria
+    python3 bench/diagnosis_dem.py --data-dir ~/tierb --truth-floor-for rows.json  # the truth's own RMS per row
 
 "lof" in the printed rows is the model's adequacy test: the omnibus lack of fit, or, where the diagnosis
 ran (a failing report, or a suspect one: a parameter pinned at a bound, a prior pulled off), Holm over it
@@ -527,7 +528,7 @@ def _print_row(o: dict) -> None:
 
 def _markdown(outs: list[dict]) -> None:
     """The rows as the Markdown table docs/diagnosis.md carries (``--from-json FILE --markdown``)."""
-    print("| scenario | lack of fit (omnibus p, directed p) | diagnosis ranking | tried | kept | RMS before -> after (ratio) | "
+    print("| scenario | lack of fit (omnibus p, directed p) | diagnosis ranking | tried | kept | RMS before -> after (ratio; truth) | "
           "chi2 ratio | chi2/dof after | density error | stop | batteries | battery time | wall time | settings |")
     print("|" + "---|" * 14)
     for o in outs:
