@@ -318,9 +318,10 @@ def truth_floor(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: fl
 
     The truth, its hidden effect on, is run at the first iteration's confirmation seeds and judged as
     that iteration's report judged its optimum: the same targets, measured uncertainties and simulator
-    scatter divided by the number of seeds. No calibration of the right model can be expected to do
-    better than the truth itself, so ``rms_truth / rms_before`` is the smallest ratio the criterion
-    "the weighted error falls by at least half" can see in this scenario (about 1 / rms_before)."""
+    scatter divided by the number of seeds. A calibration of the right model is expected to come down
+    to about the truth's error (a little below it, by the noise its fitted parameters absorb), not to
+    a fraction of it, so ``rms_truth / rms_before`` is about the smallest ratio the criterion "the
+    weighted error falls by at least half" can expect to see in this scenario."""
     report = svc.call("GET", f"/campaigns/{cid}/iterations/1")["report"]
     seeds = report["confirmation_seeds"]
     truth = {**sc.parameters(), **(REDUCED_PARAMETERS if reduced else {})}
@@ -439,9 +440,9 @@ def main(argv=None) -> int:
                            "scenario it did not make the diagnosis see Hertz, docs/diagnosis.md)")
     ap.add_argument("--truth-floor", action="store_true",
                     help="also run the measuring world's own parameters at the first iteration's confirmation seeds "
-                         "and print the weighted RMS they reach: the floor under any calibration's error, so "
-                         "rms_truth / rms_before is the smallest ratio the error criterion can see (3 more batteries "
-                         "a scenario, not counted in its batteries)")
+                         "and print the weighted RMS they reach: about where a calibration of the right model comes "
+                         "down to, so rms_truth / rms_before is about the smallest ratio the error criterion can "
+                         "expect (3 more batteries a scenario, not counted in its batteries)")
     ap.add_argument("--truth-floor-for", metavar="ROWS_JSON",
                     help="add the truth floor to the rows written earlier by --json, from their campaigns in this "
                          "service (--data-dir or --url); the rows are otherwise kept as their runs wrote them")
@@ -582,8 +583,8 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
     floors = [f"{o['scenario']} {_f(o['rms_truth'])} / {_f(o['rms_before'])} = {_f(o['rms_truth'] / o['rms_before'])}"
               for o in outs if o["effect"] and o.get("rms_truth") is not None and o.get("rms_before")]
     if floors:
-        print("  the truth's own weighted RMS over the RMS before, the smallest ratio any calibration can be "
-              "expected to reach (--truth-floor): " + ", ".join(floors))
+        print("  the truth's own weighted RMS over the RMS before, about the smallest ratio a calibration of the "
+              "right model can be expected to reach (--truth-floor): " + ", ".join(floors))
     print(f"particle density within 5 %: {res['density_within_5pc']}/{res['n_density']} rolling and shape "
           f"(target all)")
     print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={evaluator}"
