@@ -42,9 +42,9 @@ def measure(checkpoint: str, reps: int) -> dict:
 
     sim = Simulation.from_checkpoint(checkpoint)
     sim.run(steps=300)  # compile or load the kernels, first neighbour list
-    kern = sim._kernel
+    kern = sim.kernel
     pairs, spheres, bodies, walls, wall_contacts = sim.pairs, sim.spheres, sim.bodies, sim.walls, sim.wall_contacts
-    dt = float(sim._scal[0])
+    dt = sim.timestep_s
     g = sim.config.gravity_m_s2
     moved = np.zeros((bodies.pos.shape[0] + kern.CHUNK - 1) // kern.CHUNK)
 
@@ -62,7 +62,7 @@ def measure(checkpoint: str, reps: int) -> dict:
         "wall_resultants_us": _min_us(lambda: kern.wall_resultants(
             walls.kind.shape[0], wall_contacts.wall, wall_contacts.force, wall_contacts.point, wall_contacts.k,
             walls.origin, walls.force, walls.moment, walls.k_sum), reps),
-        "rebuild_us": _min_us(sim._rebuild, max(3, reps // 5)),
+        "rebuild_us": _min_us(sim.rebuild_neighbours, max(3, reps // 5)),
     }
     # the body-pass calls above kicked and drifted the bodies without fresh forces: whole steps are
     # timed on the settled packing restored, not on that disturbed state

@@ -460,9 +460,22 @@ class Simulation:
         finally:
             numba.set_num_threads(threads_before)
 
-    def _run(self, total, dt, callback, callback_every_s) -> int:
+    @property
+    def kernel(self):
+        """The compiled kernel module of this simulation's layout, loaded (or compiled) on first use.
+        The run loop calls its ``advance``; its pieces (pair pass, body pass, wall resultants) are
+        reachable here for benchmarks that time them apart (bench/kernel_pieces.py)."""
         if self._kernel is None:
             self._kernel = load_kernel(self.layout, self.config.kernel_cache_dir)
+        return self._kernel
+
+    def rebuild_neighbours(self) -> None:
+        """Rebuild the candidate-pair and wall-contact lists now. The run loop does this by itself
+        when a sphere has moved half the skin; this is for benchmarks that time one rebuild."""
+        self._rebuild()
+
+    def _run(self, total, dt, callback, callback_every_s) -> int:
+        kernel = self.kernel
         self._scal[0] = dt
         self._scal[5] = self._skin()
         every = max(1, int(round(callback_every_s / dt))) if callback_every_s else 2000
@@ -474,9 +487,8 @@ class Simulation:
             chunk = min(total - done, every)
             rec = np.zeros((chunk // rec_every + 2, self.n_walls, _REC))
             self._istate[2] = 0
-            k, flag = self._kernel.advance(self.bodies, self.spheres, self.walls, self.pairs, self.wall_contacts,
-                                           self.props, self.n_materials, self._scal, self._istate, chunk, rec,
-                                           rec_every)
+            k, flag = kernel.advance(self.bodies, self.spheres, self.walls, self.pairs, self.wall_contacts,
+                                     self.props, self.n_materials, self._scal, self._istate, chunk, rec, rec_every)
             if self._istate[2]:
                 self._records.append(rec[:self._istate[2]].copy())
             done += k
