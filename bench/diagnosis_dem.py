@@ -478,6 +478,14 @@ def main(argv=None) -> int:
     poll_s = 0.2 if args.evaluator == "analytic" else 5.0
     if args.url and args.data_dir:
         ap.error("--data-dir applies to the local service; not with --url")
+    if args.truth_floor_for:
+        if not os.path.exists(args.truth_floor_for):
+            ap.error(f"--truth-floor-for: no file {args.truth_floor_for}")
+        try:
+            if any(r["scenario"] not in SCENARIOS or "campaign_id" not in r for r in _load_rows(args.truth_floor_for).values()):
+                raise KeyError("a row without a known scenario or its campaign_id")
+        except (ValueError, KeyError, TypeError) as exc:
+            ap.error(f"--truth-floor-for: {args.truth_floor_for} is not a file of rows written by --json ({exc})")
     # `kill` (SIGTERM) unwinds like Ctrl-C, so the local service and its workers stop with the script
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     svc = Service(args.url, args.workers, args.data_dir)
