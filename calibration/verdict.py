@@ -8,15 +8,17 @@ apart, worded as what it is.
 """
 from __future__ import annotations
 
+from .vocabulary import Verdict
+
 VERDICTS = {
-    "targets out of reach": "no parameter set in the box reproduces these targets (reachability > 3): "
+    Verdict.OUT_OF_REACH: "no parameter set in the box reproduces these targets (reachability > 3): "
                             "the model lacks physics, or a measurement is wrong; see the diagnosis",
-    "model misses the measurements": "the weighted misfit exceeds what measurement and simulator noise explain "
+    Verdict.MISSES: "the weighted misfit exceeds what measurement and simulator noise explain "
                                      "(lack-of-fit test); see where it fails and the diagnosis",
-    "surrogate inadequate": "the battery at the optimum lies outside the fitted models' prediction intervals: "
+    Verdict.SURROGATE_INADEQUATE: "the battery at the optimum lies outside the fitted models' prediction intervals: "
                             "the response surfaces need a narrower box or axial points before the physics "
                             "can be judged",
-    "calibrated": "the model reproduces the measurements within their noise at the optimum",
+    Verdict.CALIBRATED: "the model reproduces the measurements within their noise at the optimum",
 }
 
 
@@ -24,11 +26,11 @@ def verdict(*, unreachable: list, lack_of_fit_fails: bool | None, surrogate_ok: 
     """``unreachable``: targets no parameter set reaches; ``lack_of_fit_fails``: model vs measurement;
     ``surrogate_ok``: the confirmation inside the prediction intervals (None: not testable)."""
     if unreachable:
-        name = "targets out of reach"
+        name = Verdict.OUT_OF_REACH
     elif lack_of_fit_fails:
-        name = "model misses the measurements"
+        name = Verdict.MISSES
     elif surrogate_ok is False:
-        name = "surrogate inadequate"
+        name = Verdict.SURROGATE_INADEQUATE
     else:
-        name = "calibrated"
-    return {"verdict": name, "meaning": VERDICTS[name]}
+        name = Verdict.CALIBRATED
+    return {"verdict": name.value, "meaning": VERDICTS[name]}

@@ -16,6 +16,8 @@ from fastapi.responses import JSONResponse
 from pydantic import ValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from calibration.errors import SettingsError
+
 log = logging.getLogger(__name__)
 
 
@@ -82,6 +84,12 @@ class Unauthorized(ApiError):
     error_type = "unauthorized"
 
 
+def from_settings_error(exc: SettingsError) -> ApiError:
+    """The loop's complaint about a setting (``calibration.errors.SettingsError``) as the API's error:
+    a 409 when it clashes with the campaign's state, else a 422, naming the field either way."""
+    return (Conflict if exc.conflict else Invalid)(exc.message, exc.field)
+
+
 def _validation_detail(exc: ValidationError, prefix: tuple = ("body",)) -> list[dict]:
     return [
         {"loc": [*prefix, *err.get("loc", ())], "msg": err.get("msg", ""), "type": err.get("type", "value_error")}
@@ -124,6 +132,10 @@ def install_error_handlers(app: FastAPI) -> None:
     async def _api_error(_request: Request, exc: ApiError):
         headers = {"WWW-Authenticate": "Bearer"} if exc.status_code == 401 else None
         return JSONResponse({"detail": exc.detail()}, status_code=exc.status_code, headers=headers)
+
+    @app.exception_handler(SettingsError)
+    async def _settings_error(request: Request, exc: SettingsError):
+        return await _api_error(request, from_settings_error(exc))
 
     @app.exception_handler(RequestValidationError)
     async def _request_validation(_request: Request, exc: RequestValidationError):

@@ -214,12 +214,17 @@ def check_campaign_limits(config, settings: Settings, field_prefix: str = "") ->
     (e.g. an effect's strength) do not change the cost and are not applied here.
     """
     from engine.lab.spec import MicroParameters, TestOptions
-    from service.campaigns.design import build_design
+    from calibration.design import build_design
+    from calibration.errors import SettingsError
+    from service.errors import from_settings_error
 
     design = config.design
     check_design_size(len(config.factors), len(design.generators or ()), design.replicates, design.centre_runs,
                       settings, field_prefix, "design.", axial=design.axial != "none")
-    built = build_design(config.factors, design, config.seed, field_prefix=f"{field_prefix}design.")
+    try:
+        built = build_design(config.factors, design, config.seed, field_prefix=f"{field_prefix}design.")
+    except SettingsError as exc:
+        raise from_settings_error(exc) from exc
     options = TestOptions.model_validate(config.options)
     seen: set[tuple] = set()
     scalar = set(MicroParameters.model_fields) - {"effects"}

@@ -110,7 +110,7 @@ def optimum(campaign_id: CampaignId, number: int | None = IterationQ, session: S
             summary="The batteries at the optimum, one per seed (after polishing on the batteries); the top level is "
                     "the first seed's", responses=_NOT_YET)
 def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
-    from service.campaigns.polish import final_runs
+    from calibration.polish import final_runs
 
     campaign = get_campaign(session, campaign_id)
     it = iteration(session, campaign, number)
@@ -131,7 +131,7 @@ def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, sessi
 @router.get("/{campaign_id}/report",
             summary="Per target: measured, predicted (interval), confirmed, residual, reachability", responses=_NOT_YET)
 def report(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
-    from service.campaigns.report import REACHABLE_LIMIT
+    from calibration.report import REACHABLE_LIMIT
 
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     # reachable_limit: the cutoff on reachability that decides "reachable" (the UI draws it)
@@ -159,56 +159,9 @@ def diagnosis(campaign_id: CampaignId, number: int | None = IterationQ,
             summary="Per iteration: effects, optimum, weighted error overall and per test with the noise band, "
                     "verdict, effect added next; per target the residual in each iteration")
 def history(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
-    from calibration.stats import weighted_rms
-    from service.campaigns.analysis import active_effects
+    from calibration.history import history as loop_history
 
     campaign = get_campaign(session, campaign_id)
-    done = [it for it in sorted(campaign.iterations, key=lambda i: i.number) if it.report]
-    entries, previous, targets, plan = [], set(), {}, {}
-    for it in done:
-        report = it.report
-        effects = sorted(active_effects(it.parameters))
-        # in automatic mode an iteration is built on a named base (the one before, or an earlier one when
-        # an added effect was rejected or its range widened): what it added is relative to that base
-        base = next((b for b in done if b.number == plan.get("next_base")), None)
-        if base is not None:
-            previous = set(active_effects(base.parameters))
-        lof = report.get("lack_of_fit") or {}
-        diag = report.get("diagnosis")
-        entries.append({
-            "number": it.number, "effects": effects, "added_effect": sorted(set(effects) - previous) or None,
-            "optimum": report.get("optimum"), "parameter_std": (it.optimum or {}).get("parameter_std"),
-            "chi2": lof.get("statistic"), "chi2_per_dof": lof.get("chi2_per_dof"), "dof": lof.get("dof"),
-            "noise_band": lof.get("noise_band"), "lack_of_fit_p": lof.get("p_value"),
-            # once the diagnosis ran: Holm over the lack of fit and the candidates' directed test
-            "adequacy_p": (report.get("adequacy") or {}).get("p_value"),
-            "directed_p": ((report.get("adequacy") or {}).get("directed") or {}).get("p_value"),
-            "per_test": {t["test"]: t["chi2"] for t in report.get("tests", [])},
-            # the weighted error the acceptance criteria halve: RMS of the targets' standardised residuals
-            "weighted_rms": _finite(weighted_rms([row.get("standardised_residual") for row in report.get("targets", [])
-                                                  if row.get("status") == "modelled"])),
-            "verdict": report.get("verdict"),
-            "top_effect": (diag or {}).get("ranking", [{}])[0].get("effect") if diag and diag.get("ranking") else None,
-            # automatic mode: whether this iteration's added effect was kept, and why the loop stopped
-            "decision": (report.get("automatic") or {}).get("decision"),
-            "stop_reason": (report.get("automatic") or {}).get("stop_reason"),
-            "range_widened": bool(plan.get("widened")),
-        })
-        plan = report.get("automatic") or {}
-        previous = set(effects)
-        for row in report.get("targets", []):
-            if row.get("status") != "modelled":
-                continue
-            label = row.get("response") or row["quantity"]
-            targets.setdefault(label, {"test": row["test"], "quantity": row["quantity"],
-                                       "condition": row["condition"], "residuals": {}})
-            targets[label]["residuals"][str(it.number)] = row.get("standardised_residual")
-    for a, b in zip(entries, entries[1:]):
-        a["effect_added_next"] = b["added_effect"]
-    if entries:
-        entries[-1]["effect_added_next"] = None
-    return {"campaign_id": campaign.id, "iterations": entries, "targets": targets}
+    return {"campaign_id": campaign.id, **loop_history(campaign.iterations)}
 
 
-def _finite(value: float) -> float | None:
-    return value if value == value else None  # NaN (no modelled target) -> null

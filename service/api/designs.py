@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter, Request
 
-from service.campaigns.design import build_design, design_view
+from calibration.design import build_design, design_view
 from service.campaigns.schemas import DesignPreviewIn
 from service.limits import check_design_size
 

@@ -11,9 +11,11 @@ from typing import Any
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
+from calibration.adding import effect_hints, with_effect_factor
+from calibration.errors import SettingsError
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.config import Settings, get_settings
-from service.errors import Conflict, Invalid, NotFound
+from service.errors import Conflict, NotFound, from_settings_error
 from service.limits import check_campaign_limits
 from service.materials.store import get_material
 from service.models.base import utcnow
@@ -88,8 +90,11 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     if add_effect is not None:
         # the range the automatic mode would give, from the last iteration's report
         last = max(campaign.iterations, key=lambda it: it.number, default=None)
-        config = with_effect_factor(config, add_effect, strength_range,
-                                    **effect_hints((last.report or {}) if last is not None else {}, add_effect))
+        try:
+            config = with_effect_factor(config, add_effect, strength_range,
+                                        **effect_hints((last.report or {}) if last is not None else {}, add_effect))
+        except SettingsError as exc:
+            raise from_settings_error(exc) from exc
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
     check_campaign_limits(validated, _settings(session))
     config = validated.model_dump(mode="json")
@@ -119,53 +124,6 @@ def with_proposed_design(config: dict, campaign: Campaign) -> dict:
     number = last.number if last is not None else 0
     raise Conflict(f"iteration {number} proposes no design (its surface check: "
                    f"{check.get('verdict', 'not made')})", "proposed_design")
-
-
-def effect_hints(report: dict, name: str) -> dict:
-    """What an iteration's report says about adding ``name``: the diagnosis's estimate of its
-    strength and the optimum a switch-type effect is matched at (``with_effect_factor``'s keywords);
-    one place for the manual add-effect and the automatic mode."""
-    ranked = next((r for r in (report.get("diagnosis") or {}).get("ranking", []) if r.get("effect") == name), {})
-    return {"strength": ranked.get("strength"), "at": report.get("optimum") or None}
-
-
-def with_effect_factor(config: dict, name: str, strength_range=None, *, strength: float | None = None,
-                       at: dict | None = None) -> dict:
-    """The configuration with candidate ``name``'s strength as one more factor and a half fraction of
-    highest resolution for the larger design.
-
-    The range is the user's ``strength_range``, else ``calibration.decisions.effect_range``: from
-    the effect's "off" value over its plausible range (or twice the diagnosis's ``strength``
-    estimate if larger), or for a switch-type effect a log range about its strength matched at ``at`` (the
-    optimum's factor values; default the centre of the box)."""
-    from calibration.calibrate import generators_for
-    from calibration.decisions import effect_range
-    from engine.candidates import get as get_candidate
-    from engine.lab.spec import MicroParameters
-    from calibration import parameters as factor_paths
-
-    c = get_candidate(name)
-    if not c.applies_to(config.get("fidelity")):
-        raise Invalid(f"{name} cannot be built at the {config.get('fidelity')} fidelity "
-                      f"(only {', '.join(c.fidelities or ())})", "add_effect")
-    if any(f["name"] == c.factor for f in config["factors"]):
-        raise Conflict(f"{name} is already a factor ({c.factor})", "add_effect")
-    if strength_range is not None:
-        low, high = strength_range
-        log = c.is_switch
-    else:
-        reference = None
-        if c.is_switch:
-            point = at or {f["name"]: 0.5 * (f["low"] + f["high"]) for f in config["factors"]}
-            optimum = factor_paths.apply(config.get("fixed_parameters") or {}, point)
-            reference = float(c.reference(MicroParameters.model_validate(optimum)))
-        low, high, log = effect_range(c, strength, reference)
-    factors = list(config["factors"]) + [{"name": c.factor, "low": low, "high": high, "unit": c.unit, "log": log}]
-    generators = generators_for(len(factors))
-    design = dict(config.get("design") or {})
-    design.update({"type": "fractional", "generators": generators} if generators else {"type": "full",
-                                                                                       "generators": None})
-    return {**config, "factors": factors, "design": design}
 
 
 def iteration(session: Session, campaign: Campaign, number: int | None = None) -> CampaignIteration:

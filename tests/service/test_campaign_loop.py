@@ -148,7 +148,7 @@ def test_a_diagnosis_that_finds_no_misfit_stops_the_loop_and_says_on_what_eviden
     # at the next seed and found none (p 0.26): the loop stops, and its reason carries both
     from types import SimpleNamespace
 
-    from service.campaigns.automatic import next_step
+    from calibration.automatic import next_step
 
     it = SimpleNamespace(number=1, report=None, parameters={"factors": [], "fixed": {}})
     report = {"lack_of_fit": {"p_value": 0.01}, "verdict": "model misses the measurements",
@@ -219,7 +219,7 @@ def test_an_added_strength_pinned_at_the_top_of_its_range_is_redone_once_on_a_wi
     again, is judged and goes on as usual (the range is widened once)."""
     from types import SimpleNamespace
 
-    from service.campaigns.automatic import next_step, widening
+    from calibration.automatic import next_step, widening
 
     factor = "effects.rolling_epsd2.rolling_friction"
     box = [{"name": "friction_pp", "low": 0.3, "high": 0.9, "unit": "", "log": False},

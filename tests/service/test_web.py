@@ -121,7 +121,7 @@ def test_api_docs_pages_load_only_the_services_own_files(s2):
 def test_report_gives_the_reachability_cutoff(s2):
     """The page draws the cutoff that decides 'reachable'; the report says it rather than the page guessing."""
     from conftest_s2 import API, campaign_body, run_to_end, thesis_material_id
-    from service.campaigns.report import REACHABLE_LIMIT
+    from calibration.report import REACHABLE_LIMIT
 
     client, app, settings = s2
     body = campaign_body(thesis_material_id(client), diagnose=False)

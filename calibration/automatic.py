@@ -16,11 +16,18 @@ from __future__ import annotations
 
 from typing import Any
 
-from calibration.decisions import judge, widened_top
+from typing import Callable
 
-STOP_PASSES = "lack of fit passes"
-STOP_MAX = "maximum number of iterations reached"
-STOP_NOTHING = "nothing improves"
+from calibration.adding import effect_hints, with_effect_factor
+from calibration.analysis import active_effects, model_fails
+from calibration.decisions import judge, widened_top
+from calibration.errors import SettingsError
+from calibration.settings import validated
+from calibration.vocabulary import StopReason, Verdict
+from engine.candidates import get as get_candidate
+
+# validates the next iteration's settings (a JSON dict) and returns them as stored; raises with the reason
+Validate = Callable[[dict], dict]
 
 
 def _record(it) -> dict[str, Any]:
@@ -33,8 +40,6 @@ def _lof(report: dict) -> dict:
 
 def judge_iteration(iterations: list, it, report: dict) -> tuple[dict | None, int | None]:
     """(decision, base iteration number) when ``it`` added an effect in automatic mode, else (None, None)."""
-    from engine.candidates import get as get_candidate
-
     previous = next((p for p in iterations if p.number == it.number - 1), None)
     plan = _record(previous) if previous is not None else {}
     name, base_number = plan.get("next_effect"), plan.get("next_base")
@@ -57,8 +62,6 @@ def widening(config, iterations: list, it, report: dict) -> dict | None:
     """{"effect", "factor", "base", "high"} when ``it`` added an effect in automatic mode whose strength the
     optimum pins at the top of its range and that range was not widened already (and another
     iteration is allowed); else None."""
-    from engine.candidates import get as get_candidate
-
     if it.number >= config.max_iterations:
         return None
     previous = next((p for p in iterations if p.number == it.number - 1), None)
@@ -88,13 +91,10 @@ def _tried_from(iterations: list, base_number: int) -> set[str]:
     return {_record(p).get("next_effect") for p in iterations if _record(p).get("next_base") == base_number} - {None}
 
 
-def next_step(config, campaign_config: dict, iterations: list, it, report: dict, settings=None) -> dict[str, Any]:
+def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
+              validate: Validate = validated) -> dict[str, Any]:
     """The automatic record of iteration ``it``: its decision, and either the next effect with the
-    next iteration's configuration (``config``) or the reason to stop."""
-    from service.campaigns.analysis import active_effects, model_fails
-    from service.campaigns.store import effect_hints, with_effect_factor
-    from service.errors import ApiError
-
+    next iteration's settings (``next_config``, checked by ``validate``) or the reason to stop."""
     decision, base_number = judge_iteration(iterations, it, report)
     record: dict[str, Any] = {"decision": decision, "base_iteration": base_number, "next_effect": None,
                               "next_base": None, "stop_reason": None}
@@ -103,15 +103,15 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         params = it.parameters
         factors = [{**f, "high": wide["high"]} if f["name"] == wide["factor"] else dict(f) for f in params["factors"]]
         return _configured({**record, "widened": True}, wide["effect"], wide["base"],
-                           {**campaign_config, "factors": factors, "fixed_parameters": _fixed(params)}, settings)
+                           {**campaign_config, "factors": factors, "fixed_parameters": _fixed(params)}, validate)
     rejected = decision is not None and not decision["accepted"]
     base = next(p for p in iterations if p.number == base_number) if rejected else it
     base_report = report if base is it else (base.report or {})
     passes = not model_fails(report)
-    if not rejected and passes and report.get("verdict") != "targets out of reach":
-        return {**record, "stop_reason": STOP_PASSES}
+    if not rejected and passes and report.get("verdict") != Verdict.OUT_OF_REACH:
+        return {**record, "stop_reason": StopReason.PASSES.value}
     if it.number >= config.max_iterations:
-        return {**record, "stop_reason": STOP_MAX}
+        return {**record, "stop_reason": StopReason.MAX_ITERATIONS.value}
     diagnosis = base_report.get("diagnosis") or {}
     skip = active_effects(base.parameters) | _tried_from(iterations, base.number) | (
         {decision["effect"]} if rejected else set())
@@ -119,7 +119,8 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     if not options:
         # a rejected effect with no other candidate left: nothing improves; otherwise the diagnosis
         # of the model as it stands says why no effect is indicated
-        reason = STOP_NOTHING if rejected else f"diagnosis: {diagnosis.get('verdict', 'not run')}"
+        reason = StopReason.NOTHING_IMPROVES.value if rejected else \
+            f"{StopReason.DIAGNOSIS.value}{diagnosis.get('verdict', 'not run')}"
         pooled = (diagnosis.get("lack_of_fit") or {}).get("p_value")
         if not rejected and diagnosis.get("verdict") == "no misfit" and pooled is not None:
             # the iteration's report saw a misfit (on one confirmation battery, or a target out of reach);
@@ -130,9 +131,9 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     base_config = {**campaign_config, "factors": base.parameters["factors"], "fixed_parameters": _fixed(base.parameters)}
     try:
         nxt = with_effect_factor(base_config, name, **effect_hints(base_report, name))
-    except (ApiError, ValueError) as exc:
-        return {**record, "stop_reason": f"the next iteration with {name} cannot run: {_message(exc)}"}
-    return _configured(record, name, base.number, nxt, settings)
+    except ValueError as exc:  # SettingsError included
+        return {**record, "stop_reason": _cannot_run(name, exc)}
+    return _configured(record, name, base.number, nxt, validate)
 
 
 def _fixed(parameters: dict) -> dict:
@@ -143,20 +144,16 @@ def _fixed(parameters: dict) -> dict:
     return fixed
 
 
-def _message(exc: Exception) -> str:
-    return getattr(exc, "message", None) or str(exc)
+def _cannot_run(name: str, exc: Exception) -> str:
+    return f"{StopReason.CANNOT_RUN.value}{name} cannot run: {getattr(exc, 'message', None) or str(exc)}"
 
 
-def _configured(record: dict, name: str, base_number: int, nxt: dict, settings) -> dict[str, Any]:
-    """The record with the next iteration's validated configuration, or the reason it cannot run."""
-    from service.campaigns.schemas import CampaignCreate
-    from service.errors import ApiError
-    from service.limits import check_campaign_limits
-
+def _configured(record: dict, name: str, base_number: int, nxt: dict, validate: Validate) -> dict[str, Any]:
+    """The record with the next iteration's validated settings, or the reason they cannot run."""
     try:
-        validated = CampaignCreate.model_validate(nxt)
-        if settings is not None:
-            check_campaign_limits(validated, settings)
-    except (ApiError, ValueError) as exc:
-        return {**record, "stop_reason": f"the next iteration with {name} cannot run: {_message(exc)}"}
-    return {**record, "next_effect": name, "next_base": base_number, "next_config": validated.model_dump(mode="json")}
+        validated = validate(nxt)
+    except Exception as exc:  # noqa: BLE001 - any refusal of the settings is a reason to stop, worded
+        if isinstance(exc, (ValueError, SettingsError)) or hasattr(exc, "message"):
+            return {**record, "stop_reason": _cannot_run(name, exc)}
+        raise
+    return {**record, "next_effect": name, "next_base": base_number, "next_config": validated}

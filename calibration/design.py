@@ -1,4 +1,5 @@
-"""Design generation through doe/, and its JSON view (natural and coded tables, aliases)."""
+"""An iteration's design through doe/, and its JSON view (natural and coded tables, aliases), which is
+what an iteration stores and what rebuilds the design exactly (``Design.from_dict(view["doe"])``)."""
 from __future__ import annotations
 
 from typing import Any
@@ -6,12 +7,12 @@ from typing import Any
 from doe.designs import Design, augment_ccd, fractional_factorial, full_factorial
 from doe.factors import DoeError
 
-from service.campaigns.schemas import DesignIn, FactorIn
-from service.errors import Invalid
+from calibration.errors import SettingsError
+from calibration.settings import DesignIn, FactorIn
 
 
 def build_design(factors: list[FactorIn], design: DesignIn, seed: int, field_prefix: str = "design.") -> Design:
-    """doe/ design for the given factors; doe's complaints become a 422 on `design`."""
+    """doe/ design for the given factors; doe's complaints name the design setting they concern."""
     raw = [{"name": f.name, "low": f.low, "high": f.high, "unit": f.unit, "log": f.log} for f in factors]
     try:
         if design.type == "full":
@@ -25,7 +26,7 @@ def build_design(factors: list[FactorIn], design: DesignIn, seed: int, field_pre
         return built
     except DoeError as exc:
         field = field_prefix + ("generators" if design.type == "fractional" else "type")
-        raise Invalid(str(exc), field) from exc
+        raise SettingsError(str(exc), field) from exc
 
 
 def design_view(design: Design) -> dict[str, Any]:

@@ -1,10 +1,9 @@
-"""Gauss-Newton on the batteries themselves, after the confirmation: the service's polishing phase.
+"""Gauss-Newton on the batteries themselves, after the confirmation: the loop's polishing phase.
 
 Why: a two-level response surface of a saturating response (friction angle against mu_pp,
 anything against an added effect's strength) is biased inside its box, so the surfaces' optimum is
 not the simulator's, and an added effect that would fit the measurements can look as if it did
-not. The library loop polishes (``calibration.loop.CalibrationLoop._polish``); this is the same
-method cut into rounds the campaign runner can queue and resume:
+not. The method is cut into rounds a driver can queue and resume (``calibration.machine``):
 
 * round 0, the Jacobian: one point per free factor, a coded step of 0.1 from the optimum (inward
   at a bound), each point run at every confirmation seed (common random numbers) and averaged over
@@ -25,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from calibration import calibrate as cal
+from calibration.vocabulary import RunKind
 
 CODED_STEP = 0.1
 SHRINKS = (1.0, 0.5, 0.25)
@@ -141,6 +141,12 @@ def _done(state: dict) -> dict:
     return state
 
 
+def round_runs(it, state: dict) -> list:
+    """The runs of the state's current round, in std_order (each point's runs at every seed in turn)."""
+    return sorted((r for r in it.runs if r.kind == RunKind.POLISH and r.std_order // ROUND == state["round"]),
+                  key=lambda r: r.std_order)
+
+
 def final_runs(it) -> list:
     """The batteries at the iteration's final optimum, one per seed: the best polishing point's, else
     the confirmation's ([] before the confirmation is queued)."""
@@ -148,9 +154,9 @@ def final_runs(it) -> list:
     ids = state.get("run_ids") or ([state["run_id"]] if state.get("run_id") is not None else [])
     by_id = {r.id: r for r in it.runs}
     runs = [by_id[i] for i in ids if i in by_id]
-    if runs and runs[0].kind == "polish":
+    if runs and runs[0].kind == RunKind.POLISH:
         return runs
-    return sorted((r for r in it.runs if r.kind == "confirmation"), key=lambda r: r.std_order)
+    return sorted((r for r in it.runs if r.kind == RunKind.CONFIRMATION), key=lambda r: r.std_order)
 
 
 def summary(state: dict | None) -> dict[str, Any] | None:

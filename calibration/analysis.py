@@ -1,9 +1,9 @@
-"""The campaign's analysis and report steps: calls into calibration/ on the stored runs.
+"""The loop's analysis, report and diagnosis computations on an iteration's runs.
 
-The campaign's targets are the material's measurements that the battery simulates, matched on
-the one (test, quantity, condition) key of ``calibration.keys``. Fitting, the optimum, the
-confirmation check, the localisation and the verdict are calibration/'s; this module turns ORM
-rows into its plain records and its results into the JSON the campaign stores.
+The targets are measurements (``calibration.records.Measured``) matched to the batteries' responses
+on the one (test, quantity, condition) key of ``calibration.keys``. Runs are any objects with
+``std_order``, ``seed`` and ``responses`` (the service's rows or ``calibration.state``'s records);
+the results are the plain JSON an iteration stores, whoever stores it (``calibration.machine``).
 """
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ import numpy as np
 
 from calibration import calibrate as cal
 from calibration.attribute import signature_seeds
-from calibration.fitting import TargetModel, fit_targets
+from calibration import fits
+from calibration.fitting import TargetModel
 from calibration.localise import ALPHA, localise
 from calibration.records import Measured, measurement_variances
 from calibration.verdict import verdict
@@ -28,7 +29,7 @@ class AnalysisError(Exception):
 
 
 def _measured(targets) -> list[Measured]:
-    return [Measured.from_record(t) for t in targets]
+    return [t if isinstance(t, Measured) else Measured.from_record(t) for t in targets]
 
 
 def _runs(design: Design, runs) -> list[list[dict]]:
@@ -39,8 +40,10 @@ def _runs(design: Design, runs) -> list[list[dict]]:
 
 
 def fit(design_dict: dict, runs, targets) -> tuple[Design, list[TargetModel]]:
-    design = Design.from_dict(design_dict)
-    return design, fit_targets(design, _runs(design, runs), _measured(targets))
+    """The iteration's design and its targets' response surfaces, fitted once per iteration: every
+    phase after the design's batteries (analysis, polishing rounds, report, diagnosis) asks again and
+    gets the same fit back (``calibration.fits``); after a restart the first ask refits it exactly."""
+    return fits.fitted(design_dict, _runs(Design.from_dict(design_dict), runs), _measured(targets))
 
 
 def _models_json(models: list[TargetModel]) -> dict[str, Any]:
@@ -119,7 +122,7 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
 def _surrogate_check(config, modelled, optimum: dict, conf) -> dict[str, Any]:
     """Do the fitted response surfaces predict the batteries at ``optimum["parameters"]`` (doe.confirm's
     prediction intervals, the confirmation's seeds averaged)? The report's ``surrogate_check``."""
-    from service.campaigns.design import design_view
+    from calibration.design import design_view
 
     observed = {m.key.name: conf.mean[m.key] for m in modelled
                 if m.key in conf.mean and m.key.name in optimum["predictions"]}

@@ -17,14 +17,15 @@ from typing import Any
 
 import numpy as np
 
-from calibration.keys import ResponseKey, find_response
-from service.campaigns.analysis import report_verdict
+from calibration.keys import find_response
+from calibration.analysis import report_verdict
+from calibration.records import Measured
 
 REACHABLE_LIMIT = 3.0
 
 
 def build_report(config, models: dict, optimum: dict, confirmations: list, targets, assessment: dict) -> dict[str, Any]:
-    """``confirmations``: the stored runs at the final optimum, one per seed."""
+    """``confirmations``: the runs at the final optimum, one per seed; ``targets``: the measurements."""
     confirmed_responses = confirmations[0].responses or {}
     m = len(confirmations)
     by_target = {t["measurement_id"]: t for t in optimum.get("targets", [])}
@@ -34,11 +35,11 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
                         for r in (assessment.get("surrogate_check") or {}).get("responses", [])}
     rows = []
     for meas in targets:
-        key = ResponseKey.from_record(meas)
+        meas = meas if isinstance(meas, Measured) else Measured.from_record(meas)
+        key = meas.key
         row: dict[str, Any] = {
-            "measurement_id": meas.id, "test": meas.test, "quantity": meas.quantity,
-            "condition": dict(meas.condition), "unit": meas.unit, "measured": meas.mean,
-            "n": len(meas.values),
+            "measurement_id": meas.id, "test": key.test, "quantity": key.quantity,
+            "condition": key.condition_dict, "unit": meas.unit, "measured": meas.mean, "n": meas.n,
         }
         opt_target = by_target.get(meas.id)
         name = find_response(confirmed_responses, key)

@@ -1,0 +1,55 @@
+"""Adding an effect to the model: its strength becomes one more design factor.
+
+One place for the manual "add this effect" (``POST .../iterations``) and the automatic mode
+(``calibration.automatic``): the range the strength is given, from the diagnosis's estimate or the
+user's, and the larger design that carries it.
+"""
+from __future__ import annotations
+
+from calibration import parameters as factor_paths
+from calibration.calibrate import generators_for
+from calibration.decisions import effect_range
+from calibration.errors import SettingsError
+from engine.candidates import get as get_candidate
+from engine.lab.spec import MicroParameters
+
+
+def effect_hints(report: dict, name: str) -> dict:
+    """What an iteration's report says about adding ``name``: the diagnosis's estimate of its
+    strength and the optimum a switch-type effect is matched at (``with_effect_factor``'s keywords);
+    one place for the manual add-effect and the automatic mode."""
+    ranked = next((r for r in (report.get("diagnosis") or {}).get("ranking", []) if r.get("effect") == name), {})
+    return {"strength": ranked.get("strength"), "at": report.get("optimum") or None}
+
+
+def with_effect_factor(config: dict, name: str, strength_range=None, *, strength: float | None = None,
+                       at: dict | None = None) -> dict:
+    """The configuration with candidate ``name``'s strength as one more factor and a half fraction of
+    highest resolution for the larger design.
+
+    The range is the user's ``strength_range``, else ``calibration.decisions.effect_range``: from
+    the effect's "off" value over its plausible range (or twice the diagnosis's ``strength``
+    estimate if larger), or for a switch-type effect a log range about its strength matched at ``at`` (the
+    optimum's factor values; default the centre of the box)."""
+    c = get_candidate(name)
+    if not c.applies_to(config.get("fidelity")):
+        raise SettingsError(f"{name} cannot be built at the {config.get('fidelity')} fidelity "
+                      f"(only {', '.join(c.fidelities or ())})", "add_effect")
+    if any(f["name"] == c.factor for f in config["factors"]):
+        raise SettingsError(f"{name} is already a factor ({c.factor})", "add_effect", conflict=True)
+    if strength_range is not None:
+        low, high = strength_range
+        log = c.is_switch
+    else:
+        reference = None
+        if c.is_switch:
+            point = at or {f["name"]: 0.5 * (f["low"] + f["high"]) for f in config["factors"]}
+            optimum = factor_paths.apply(config.get("fixed_parameters") or {}, point)
+            reference = float(c.reference(MicroParameters.model_validate(optimum)))
+        low, high, log = effect_range(c, strength, reference)
+    factors = list(config["factors"]) + [{"name": c.factor, "low": low, "high": high, "unit": c.unit, "log": log}]
+    generators = generators_for(len(factors))
+    design = dict(config.get("design") or {})
+    design.update({"type": "fractional", "generators": generators} if generators else {"type": "full",
+                                                                                       "generators": None})
+    return {**config, "factors": factors, "design": design}

@@ -1,0 +1,258 @@
+"""The calibration loop as a resumable state machine: ask which batteries to run, tell their results,
+advance to the next phase. The one home of every step of the loop.
+
+Phases of an iteration (``calibration.vocabulary.Phase``): design -> batteries -> analysis ->
+confirmation (``confirmation_seeds`` batteries at the optimum) -> polish (Gauss-Newton on the
+batteries, ``calibration.polish``, at the same seeds, when ``polish_when`` says so) -> report -> done;
+when the report finds misfit (lack of fit, or a target out of reach) or a conflict (a parameter pinned
+at a bound, a prior pulled off), or with ``diagnose_always``: report -> diagnosis (a baseline at the
+optimum and each candidate effect, at seeds of their own) -> diagnosed -> done, the ranking stored in the
+report and its verdict judged again on the omnibus and the candidates' directed test together. In
+automatic mode (``calibration.automatic``) a done iteration either configures the next one, with the
+indicated effect as a factor, or records why the loop stopped.
+
+Nothing here stores or queues anything. An iteration is any object with ``number``, ``phase``,
+``parameters``, ``design``, ``models``, ``optimum``, ``report`` and ``runs`` (the service's database row
+or ``calibration.state.IterationState``); a run has ``id``, ``kind``, ``std_order``, ``run_order``,
+``natural``, ``coded``, ``seed`` and ``responses``. A driver asks ``awaited(it)`` for the runs the phase
+waits for, has those without responses evaluated, then calls ``step`` and applies the ``Transition``
+it returns: the new phase, the iteration's new values, the runs to add and, at the end of an
+iteration, what follows. The service's runner applies it with a compare-and-swap on the phase (a
+restart or a second runner queues no twins); ``calibration.loop`` applies it in memory.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+from . import analysis, automatic, polish
+from .design import build_design, design_view
+from .errors import LoopFailed, SettingsError
+from .records import Measured
+from .report import build_report
+from .settings import LoopSettings
+from .vocabulary import MISFIT_VERDICTS, Phase, PolishRule, RunKind
+
+SEED_MAX = 2**31 - 1
+DESIGN_SEED_STRIDE = 7919          # the design's seeds of iteration n start at seed + 7919 (n - 1)
+CONFIRMATION_SEED_STRIDE = 1_000_003
+
+
+@dataclass
+class NewRun:
+    """A battery to add to the iteration (and to run)."""
+
+    kind: RunKind
+    std_order: int
+    run_order: int
+    natural: dict[str, float]
+    coded: dict[str, float]
+    seed: int
+    is_centre: bool = False
+
+
+@dataclass
+class Transition:
+    """What ``step`` decided: move the iteration from ``source`` to ``to`` with ``values`` set and
+    ``runs`` added. At the end of an iteration (``to`` is DONE): ``next_settings`` are the loop's
+    settings for the next iteration (automatic mode), else ``complete`` ends the loop."""
+
+    source: Phase
+    to: Phase
+    values: dict[str, Any] = field(default_factory=dict)
+    runs: list[NewRun] = field(default_factory=list)
+    next_settings: dict[str, Any] | None = None
+    complete: bool = False
+
+    @property
+    def finished(self) -> bool:
+        return self.to == Phase.DONE
+
+
+@dataclass
+class Context:
+    """What a step needs besides the iteration: the loop's settings now (``raw``: as stored), the
+    measurements, every iteration so far (the automatic mode judges against earlier ones) and how the
+    next iteration's settings are checked (the service adds its cost limits)."""
+
+    settings: LoopSettings
+    raw: dict[str, Any]
+    targets: Sequence[Measured]
+    iterations: Sequence[Any]
+    validate: Callable[[dict], dict]
+
+
+def records(runs) -> list[list[dict]]:
+    """Each run's response records (one list per battery)."""
+    return [list((r.responses or {}).values()) for r in runs]
+
+
+def runs_of(it, kind: RunKind) -> list:
+    return [r for r in it.runs if r.kind == kind]
+
+
+def iteration_parameters(settings: LoopSettings, evaluator: str | None = None) -> dict[str, Any]:
+    """What a new iteration records of the settings it runs with (its factors, fixed parameters with
+    the active effects apart, options), so the history can show each iteration's model."""
+    fixed = dict(settings.fixed_parameters)
+    return {"factors": [f.model_dump() for f in settings.factors],
+            "fixed": {k: v for k, v in fixed.items() if k != "effects"},
+            "effects": fixed.get("effects", {}), "options": dict(settings.options),
+            "evaluator": evaluator, "fidelity": settings.fidelity}
+
+
+def awaited(it) -> list:
+    """The runs the iteration's phase waits for (all must have succeeded before ``step``)."""
+    phase = Phase(it.phase)
+    if phase == Phase.BATTERIES:
+        return runs_of(it, RunKind.DESIGN)
+    if phase == Phase.CONFIRMATION:
+        return runs_of(it, RunKind.CONFIRMATION)
+    if phase == Phase.DIAGNOSIS:
+        return runs_of(it, RunKind.DIAGNOSIS)
+    if phase == Phase.POLISH:
+        state = (it.optimum or {}).get("polish")
+        if state and state["stage"] != "done":
+            return polish.round_runs(it, state)
+    return []
+
+
+def step(ctx: Context, it) -> Transition | None:
+    """The iteration's next transition, once every run ``awaited`` has its responses; None at DONE.
+    Raises ``LoopFailed`` when the step cannot succeed."""
+    phase = Phase(it.phase)
+    simple = {Phase.BATTERIES: Phase.ANALYSIS, Phase.CONFIRMATION: Phase.POLISH,
+              Phase.DIAGNOSIS: Phase.DIAGNOSED}
+    if phase in simple:
+        return Transition(phase, simple[phase])
+    handler = {Phase.DESIGN: _design, Phase.ANALYSIS: _analysis, Phase.POLISH: _polish,
+               Phase.REPORT: _report, Phase.DIAGNOSED: _diagnosed}.get(phase)
+    return handler(ctx, it) if handler else None
+
+
+# -- the steps ----------------------------------------------------------------------------------
+def _design(ctx: Context, it) -> Transition:
+    s = ctx.settings
+    seed = (s.seed + DESIGN_SEED_STRIDE * (it.number - 1)) % SEED_MAX
+    try:
+        design = build_design(s.factors, s.design, seed)
+    except SettingsError as exc:
+        raise LoopFailed(f"iteration {it.number}: the design cannot be built: {exc.message}") from exc
+    view = design_view(design)
+    runs = [NewRun(RunKind.DESIGN, row["std_order"], row["run_order"], row["natural"], row["coded"], row["seed"],
+                   is_centre=row["point_type"] == "center") for row in view["runs"]]
+    return Transition(Phase.DESIGN, Phase.BATTERIES, {"design": view}, runs)
+
+
+def _analysis(ctx: Context, it) -> Transition:
+    s = ctx.settings
+    try:
+        result = analysis.analyse(s, it.design["doe"], runs_of(it, RunKind.DESIGN), ctx.targets)
+    except analysis.AnalysisError as exc:
+        raise LoopFailed(f"iteration {it.number}: {exc}") from exc
+    opt = result["optimum"]
+    taken = {r.seed for r in it.runs}
+    seed = (s.seed + CONFIRMATION_SEED_STRIDE * it.number) % SEED_MAX
+    runs = []
+    for k in range(s.confirmation_seeds):
+        while seed in taken:
+            seed = (seed + 1) % SEED_MAX
+        taken.add(seed)
+        runs.append(NewRun(RunKind.CONFIRMATION, k, k, opt["parameters"], opt["coded"], seed))
+    return Transition(Phase.ANALYSIS, Phase.CONFIRMATION, {"models": result["models"], "optimum": opt}, runs)
+
+
+def _polish(ctx: Context, it) -> Transition:
+    """Start, continue or end the polishing on the batteries (``calibration.polish``)."""
+    s = ctx.settings
+    state = (it.optimum or {}).get("polish")
+    if s.polish_steps == 0 or (state and state["stage"] == "done"):
+        return Transition(Phase.POLISH, Phase.REPORT)
+    design, models = analysis.fit(it.design["doe"], runs_of(it, RunKind.DESIGN), ctx.targets)
+    modelled = [m for m in models if m.fit is not None]
+    if state is None:
+        confirmations = polish.final_runs(it)
+        if s.polish_when == PolishRule.SURROGATE_MISSES:
+            check = analysis.surrogate_check(s, modelled, it.optimum, records(confirmations),
+                                             [r.seed for r in confirmations])
+            if check.get("confirmed") is not False:  # confirmed, or nothing modelled to polish on
+                return Transition(Phase.POLISH, Phase.REPORT, {"optimum": {**it.optimum, "polish": polish.skipped(check)}})
+        state, points = polish.start(s, design, modelled, dict(it.optimum["parameters"]),
+                                     [r.id for r in confirmations], records(confirmations),
+                                     [r.seed for r in confirmations])
+        return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
+                          _polish_runs(state, points))
+    state, points = polish.advance(s, design, modelled, state, polish.round_runs(it, state), s.polish_steps)
+    if points:
+        return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
+                          _polish_runs(state, points))
+    theta = state["theta"]
+    optimum = {**it.optimum, "polish": state, "surrogate_parameters": it.optimum["parameters"],
+               "parameters": theta, "coded": {f.name: float(f.to_coded(theta[f.name])) for f in design.factors}}
+    return Transition(Phase.POLISH, Phase.REPORT, {"optimum": optimum})
+
+
+def _polish_runs(state: dict, points) -> list[NewRun]:
+    out = []
+    for k, (natural, coded) in enumerate(points):
+        for j, seed in enumerate(polish.seeds_of(state)):
+            order = polish.std_order(state, k, j)
+            out.append(NewRun(RunKind.POLISH, order, order, natural, coded, seed))
+    return out
+
+
+def _report(ctx: Context, it) -> Transition:
+    s = ctx.settings
+    confirmations = polish.final_runs(it)
+    seeds = [r.seed for r in confirmations]
+    design_runs = runs_of(it, RunKind.DESIGN)
+    assessment = analysis.assess(s, it.design["doe"], design_runs, ctx.targets, it.optimum,
+                                 records(confirmations), seeds)
+    polished = polish.summary((it.optimum or {}).get("polish"))
+    assessment["polished"] = bool(polished and polished["steps"] > 0)
+    report = build_report(s, it.models, it.optimum, confirmations, ctx.targets, assessment)
+    report["polish"] = polished
+    first = confirmations[0]
+    stored = {"job_id": first.job_id, "seed": first.seed, "parameters": first.natural,
+              "responses": first.responses, "job_ids": [r.job_id for r in confirmations], "seeds": seeds}
+    # a diagnosis needs misfit the parameters cannot absorb: more measured values than free parameters
+    diagnosable = ((report.get("lack_of_fit") or {}).get("dof") or 0) > 0
+    # in automatic mode an iteration the next one will not build on needs no diagnosis of its own
+    rejected = s.automatic and not automatic.builds_on(s, ctx.iterations, it, report)
+    # a diagnosis attributes misfit: it runs when the lack of fit fails or a target is out of reach, and
+    # when a conflict (a parameter pinned at a bound, a prior pulled off) suggests a misfit the omnibus
+    # test cannot see, which the diagnosis's directed test then judges (whatever the surfaces' check says);
+    # with diagnose_always, after every report
+    misfit = report["verdict"] in MISFIT_VERDICTS or report["suspect"]
+    plan = analysis.diagnosis_plan(s, it.optimum, it.parameters, seeds) if (
+        s.diagnose and diagnosable and (misfit or s.diagnose_always) and not rejected) else []
+    if plan:
+        runs = [NewRun(RunKind.DIAGNOSIS, k + 1, k + 1, natural, {}, seed) for k, (_, natural, seed) in enumerate(plan)]
+        return Transition(Phase.REPORT, Phase.DIAGNOSIS, {"report": report, "confirmation": stored}, runs)
+    return _finish(ctx, it, Phase.REPORT, report, confirmation=stored)
+
+
+def _diagnosed(ctx: Context, it) -> Transition:
+    s = ctx.settings
+    confirmations = polish.final_runs(it)
+    seeds = [r.seed for r in confirmations]
+    runs = sorted(runs_of(it, RunKind.DIAGNOSIS), key=lambda r: r.std_order)
+    plan = analysis.diagnosis_plan(s, it.optimum, it.parameters, seeds)
+    diagnosis = analysis.diagnose(s, it.design["doe"], runs_of(it, RunKind.DESIGN), ctx.targets, it.optimum,
+                                  records(confirmations), seeds,
+                                  [(name, seed, list((r.responses or {}).values()))
+                                   for (name, _, seed), r in zip(plan, runs)])
+    return _finish(ctx, it, Phase.DIAGNOSED, analysis.diagnosed_report(it.report or {}, diagnosis))
+
+
+def _finish(ctx: Context, it, source: Phase, report: dict, **values: Any) -> Transition:
+    """The iteration is done. In automatic mode the next one is configured with it; otherwise, or when
+    the automatic mode stops, the loop is complete."""
+    s = ctx.settings
+    following = None
+    if s.automatic:
+        record = automatic.next_step(s, ctx.raw, ctx.iterations, it, report, ctx.validate)
+        following = record.pop("next_config", None)
+        report = {**report, "automatic": record}
+    return Transition(source, Phase.DONE, {"report": report, **values}, next_settings=following,
+                      complete=following is None)

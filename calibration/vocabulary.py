@@ -1,0 +1,79 @@
+"""The loop's vocabulary: phases, run kinds, verdicts and stop reasons, each spelt once.
+
+Why enums of ``str``: the values are stored in the database's JSON and string columns and read by
+the page, so they must stay the plain words they were; an enum member compares equal to its word
+and serialises as it. What a word means lives beside it, so the API and the page can show it.
+"""
+from __future__ import annotations
+
+from enum import Enum
+
+
+class Phase(str, Enum):
+    """Where an iteration is. Phases that wait for batteries: BATTERIES (the design's),
+    CONFIRMATION, POLISH (one round at a time) and DIAGNOSIS; the others are computations."""
+
+    DESIGN = "design"
+    BATTERIES = "batteries"
+    ANALYSIS = "analysis"
+    CONFIRMATION = "confirmation"
+    POLISH = "polish"
+    REPORT = "report"
+    DIAGNOSIS = "diagnosis"
+    DIAGNOSED = "diagnosed"
+    DONE = "done"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class RunKind(str, Enum):
+    """Why a battery was run: a design point, a confirmation at the optimum, a polishing step on the
+    batteries themselves, or a diagnosis battery (a baseline or a candidate effect switched on)."""
+
+    DESIGN = "design"
+    CONFIRMATION = "confirmation"
+    POLISH = "polish"
+    DIAGNOSIS = "diagnosis"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class Verdict(str, Enum):
+    """One verdict per iteration (``calibration.verdict`` decides it, in the order the checks matter)."""
+
+    OUT_OF_REACH = "targets out of reach"
+    MISSES = "model misses the measurements"
+    SURROGATE_INADEQUATE = "surrogate inadequate"
+    CALIBRATED = "calibrated"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+MISFIT_VERDICTS = frozenset({Verdict.OUT_OF_REACH, Verdict.MISSES})
+
+
+class StopReason(str, Enum):
+    """Why the automatic mode stopped. Three are fixed words; the others carry the diagnosis's
+    verdict or the reason the next iteration cannot run, after these prefixes."""
+
+    PASSES = "lack of fit passes"
+    MAX_ITERATIONS = "maximum number of iterations reached"
+    NOTHING_IMPROVES = "nothing improves"
+    DIAGNOSIS = "diagnosis: "            # + the diagnosis's verdict
+    CANNOT_RUN = "the next iteration with "  # + effect + " cannot run: " + why
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class PolishRule(str, Enum):
+    """When an iteration polishes its optimum on the batteries (``LoopSettings.polish_when``)."""
+
+    ALWAYS = "always"
+    SURROGATE_MISSES = "surrogate_misses"
+
+    def __str__(self) -> str:
+        return self.value
