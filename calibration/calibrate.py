@@ -1,21 +1,22 @@
-"""Calibration of one design: optimum through doe.optimise, confirmation batteries, adequacy.
+"""Calibration of one design: optimum through doe.optimise, confirmation batteries, residuals.
 
 The fitted response surfaces give the optimum theta*; batteries at theta* with a few seeds (the
-confirmation) give the model's actual values there. If they miss the surfaces by more than the
-surfaces' own uncertainty, the surrogate is inadequate (curvature, a box too wide): that is fixed
-by a narrower design around theta*, never blamed on physics.
+confirmation) give the model's actual values there. Whether they miss the surfaces is judged in one
+place, doe.confirm's prediction intervals (``calibration.analysis``'s surrogate check): a miss is
+fixed on the batteries (``calibration.polish``) or by a narrower or composite design, never blamed
+on physics.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 
-from doe.designs import Design, make_design
+from doe.designs import Design
 from doe.constraints import Target
-from doe.factors import DoeError, as_factors
+from doe.factors import DoeError
 from doe.optimise import CalibrationResult, calibrate
 
 from .fitting import TargetModel, run_values
@@ -33,11 +34,6 @@ def generators_for(k: int) -> list[str] | None:
         return None
     letters = "ABCDEFGHJKLMNOPQRSTUVWXYZ"[:k]
     return [f"{letters[-1]}={letters[:-1]}"]
-
-
-def build_design(factors: Sequence[dict], centre_runs: int, seed: int) -> Design:
-    return make_design([dict(f) for f in factors], generators_for(len(factors)), center_runs=centre_runs,
-                       seed=seed, full=len(factors) <= 3)
 
 
 def doe_targets(models: Sequence[TargetModel], default_relative: float) -> list[Target]:
@@ -130,40 +126,6 @@ def confirm(models: Sequence[TargetModel], runs: list[list[dict]], seeds: list[i
     return conf
 
 
-@dataclass
-class Adequacy:
-    """Confirmation mean against the surrogate's prediction, target by target."""
-
-    rows: list[dict]
-    adequate: bool
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"adequate": self.adequate, "targets": self.rows,
-                "meaning": "the fitted response surfaces predict the batteries at the optimum within their "
-                           "uncertainty" if self.adequate else
-                           "the response surfaces miss the batteries at the optimum: a narrower design "
-                           "around it (or axial points) is needed before judging the physics"}
-
-
-def adequacy(models: Sequence[TargetModel], result: CalibrationResult, conf: Confirmation,
-             limit: float = 3.0, at: dict[str, float] | None = None) -> Adequacy:
-    """Do the surfaces predict the batteries at the optimum (or at ``at``, after polishing)?"""
-    rows, worst = [], 0.0
-    params = at or result.parameters
-    for m in models:
-        if m.fit is None or m.key not in conf.mean:
-            continue
-        pred = m.fit.predict([params])[0]
-        se = pred["se_mean"] or 0.0
-        sim = conf.sim_sd.get(m.key, 0.0)
-        sd = math.sqrt(se**2 + sim**2 / max(len(conf.seeds), 1))
-        z = (conf.mean[m.key] - pred["mean"]) / sd if sd > 0 else 0.0
-        worst = max(worst, abs(z))
-        rows.append({"response": m.key.name, "label": m.key.label, "surrogate": pred["mean"],
-                     "confirmed": conf.mean[m.key], "z": z})
-    return Adequacy(rows, worst <= limit)
-
-
 def natural_per_coded(factor, value: float) -> float:
     """d natural / d coded of a factor at ``value`` (log factors: proportional to the value)."""
     if factor.log:
@@ -205,25 +167,6 @@ def move(design: Design, theta: dict[str, float], free: Sequence[str], du: np.nd
     for name, d in zip(free, du):
         f = design.factor(name)
         out[name] = float(f.to_natural(float(np.clip(float(f.to_coded(theta[name])) + d, -1.0, 1.0))))
-    return out
-
-
-def narrowed(factors: Sequence[dict], parameters: dict[str, float], shrink: float = 0.35,
-             floors: dict[str, float] | None = None) -> list[dict]:
-    """Factors narrowed to ``shrink`` of their range about theta*, kept inside the old range.
-
-    ``floors`` keeps an effect's 'off' strength as its low level, so that the effect can still
-    be found absent (the likelihood-ratio test is then nested).
-    """
-    out = []
-    for f in as_factors([dict(x) for x in factors]):
-        centre = float(f.to_coded(parameters[f.name]))
-        lo_c = min(max(centre - shrink, -1.0), 1.0 - 2 * shrink)
-        lo, hi = float(f.to_natural(lo_c)), float(f.to_natural(lo_c + 2 * shrink))
-        if floors and f.name in floors:
-            lo = floors[f.name]
-            hi = max(hi, float(f.to_natural(min(1.0, float(f.to_coded(lo)) + 2 * shrink))))
-        out.append({"name": f.name, "low": lo, "high": hi, "unit": f.unit, "log": f.log})
     return out
 
 

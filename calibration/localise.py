@@ -9,7 +9,7 @@ residuals along the normal stress (E' log-log slope; shear-stress intercept and 
 slope), parameters pinned at a bound and priors pulled off their measured value.
 
 Surrogate adequacy (curvature, confirmation) is not here on purpose: it says the response surface
-is poor, not that physics is missing, and lives with the calibration (``calibrate.Adequacy``).
+is poor, not that physics is missing, and lives with the calibration (``calibration.analysis``'s surrogate check).
 """
 from __future__ import annotations
 

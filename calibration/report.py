@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from calibration.keys import find_response
+from calibration.keys import ResponseKey, find_response
 from calibration.analysis import report_verdict
 from calibration.records import Measured
 
@@ -28,7 +28,8 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
     """``confirmations``: the runs at the final optimum, one per seed; ``targets``: the measurements."""
     confirmed_responses = confirmations[0].responses or {}
     m = len(confirmations)
-    by_target = {t["measurement_id"]: t for t in optimum.get("targets", [])}
+    # the optimum's row of each target, found by the one measurement key (a notebook's targets have no ids)
+    optimum_rows = [(ResponseKey.from_record(t), t) for t in optimum.get("targets", [])]
     sim_sd = assessment.get("simulator_sd") or {}
     # the surfaces' prediction intervals for the mean of the m confirmation batteries (doe.confirm)
     interval_of_mean = {r["response"]: (r["pi_low"], r["pi_high"])
@@ -41,7 +42,7 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
             "measurement_id": meas.id, "test": key.test, "quantity": key.quantity,
             "condition": key.condition_dict, "unit": meas.unit, "measured": meas.mean, "n": meas.n,
         }
-        opt_target = by_target.get(meas.id)
+        opt_target = next((t for k, t in optimum_rows if k.matches(key)), None)
         name = find_response(confirmed_responses, key)
         if name is None:
             row.update(status="not_simulated",

@@ -23,8 +23,9 @@ from . import standin, stats
 from .conditions import standin_conditions
 from .evaluators import StandinEvaluator
 from .keys import ResponseKey
-from .loop import CalibrationLoop, LoopConfig, LoopResult
+from .loop import CalibrationLoop, LoopResult
 from .records import Measured
+from .settings import LoopSettings
 from .stats import residual_maker
 
 # Laboratory scatter of one test (design note 3.1): relative sd, or absolute in degrees.
@@ -171,32 +172,38 @@ def detectability(case: Case) -> dict[str, float]:
     return out
 
 
+DESIGN = {"type": "fractional", "generators": ["D=ABC"], "centre_runs": 3}  # the thesis's 2^(4-1), Table A.8
+
+
+def loop_settings(case: Case, max_iterations: int = 3, **overrides) -> LoopSettings:
+    """The loop a user would run on the case: the four factors in the thesis's half fraction, the case's
+    priors, automatic mode, and the diagnosis after every iteration (its ranking is scored whether or
+    not the lack-of-fit test fired, as a user asking for a diagnosis anyway sees it)."""
+    settings = {"factors": [dict(f) for f in FACTORS], "design": DESIGN, "priors": case.priors, "seed": case.seed,
+                "max_iterations": max_iterations, "automatic": True, "diagnose_always": True, "options": OPTIONS}
+    return LoopSettings.model_validate({**settings, **overrides})
+
+
 def run_case(case: Case, max_iterations: int = 3) -> dict[str, Any]:
     evaluator = StandinEvaluator(standin_conditions(OPTIONS))
-    config = LoopConfig(factors=[dict(f) for f in FACTORS], priors=case.priors, seed=case.seed,
-                        max_iterations=max_iterations)
-    loop = CalibrationLoop(case.targets, evaluator, config)
-    result = loop.run()
-    # the screen ranks the candidates whether or not the lack-of-fit test fired (what a user sees
-    # when asking for a diagnosis anyway); the loop itself only adds effects when it fired
-    diag = result.diagnoses[0] if result.diagnoses else loop.diagnose(result.iterations[0])
-    return outcome(case, result, diag, evaluator.runs)
+    result = CalibrationLoop(case.targets, evaluator, loop_settings(case, max_iterations)).run()
+    return outcome(case, result, evaluator.runs)
 
 
-def outcome(case: Case, result: LoopResult, diag, runs: int) -> dict[str, Any]:
-    first = result.iterations[0]
+def outcome(case: Case, result: LoopResult, runs: int) -> dict[str, Any]:
+    first = result.first
     final = result.final
-    ranking = [r.name for r in diag.attribution.ranking] if diag else []
-    top = diag.attribution.ranking[0] if diag and diag.attribution.ranking else None
-    top_group = {r.name for r in diag.attribution.ranking if top is not None and top.alias_group is not None
-                 and r.alias_group == top.alias_group} if diag else set()
-    accepted = [d.effect for d in result.decisions if d.accepted]
-    tried = [d.effect for d in result.decisions]
+    diag = result.diagnosis(first.number) or {}
+    ranking = diag.get("ranking") or []
+    top = ranking[0] if ranking else None
+    top_group = {r["effect"] for r in ranking if top is not None and top.get("alias_group") is not None
+                 and r.get("alias_group") == top["alias_group"]}
+    accepted = [d["effect"] for d in result.decisions if d["accepted"]]
+    tried = [d["effect"] for d in result.decisions]
     strengths = {}
     for name, true in case.effects.items():
-        factor = candidates()[name].factor
-        est = final.theta.get(factor) if name in accepted else None
         c = candidates()[name]
+        est = (final.report or {}).get("optimum", {}).get(c.factor) if name in accepted else None
         off = c.off_value or 0.0
         if est is None:
             strengths[name] = None
@@ -204,15 +211,19 @@ def outcome(case: Case, result: LoopResult, diag, runs: int) -> dict[str, Any]:
             strengths[name] = abs(math.log(est / true)) <= math.log(1.3)
         else:
             strengths[name] = abs(est - true) <= 0.3 * (true - off)
-    rms = lambda it: stats.weighted_rms(it.residuals.r_targets)  # noqa: E731
     return {"seed": case.seed, "kind": case.kind, "effects": case.effects, "detectability": case.detectability,
-            "lof_fired": bool(first.localisation.fails), "lof_p": first.localisation.lack_of_fit.p_value,
-            "final_lof_passes": not final.localisation.fails,
-            "diagnosis_verdict": diag.attribution.verdict if diag else None, "ranking": ranking,
+            "lof_fired": result.model_fails(first), "lof_p": first.report["lack_of_fit"]["p_value"],
+            "final_lof_passes": not result.model_fails(final),
+            "diagnosis_verdict": diag.get("verdict"), "ranking": [r["effect"] for r in ranking],
             "top_alias_group": sorted(top_group), "tried": tried, "accepted": accepted,
-            "rms_before": rms(first), "rms_after": rms(final), "strength_within_30": strengths,
+            "rms_before": _rms(first), "rms_after": _rms(final), "strength_within_30": strengths,
             "stop_reason": result.stop_reason, "batteries": runs,
-            "top_p_holm": top.p_holm if top else None}
+            "top_p_holm": top.get("p_holm") if top else None}
+
+
+def _rms(it) -> float:
+    """Weighted RMS of the targets' standardised residuals at the iteration's confirmation."""
+    return stats.weighted_rms([r["standardised_residual"] for r in it.report["targets"] if r.get("status") == "modelled"])
 
 
 # ---------------------------------------------------------------------------- acceptance

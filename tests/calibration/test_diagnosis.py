@@ -8,14 +8,15 @@ import pytest
 
 from calibration.conditions import standin_conditions
 from calibration.evaluators import StandinEvaluator
-from calibration.loop import CalibrationLoop, LoopConfig
+from calibration.loop import CalibrationLoop
 from calibration.records import Measured
-from calibration.testbed import FACTORS, OPTIONS, make_case
+from calibration.testbed import OPTIONS, loop_settings, make_case
 
 
-def _loop(case, **config):
-    return CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)),
-                           LoopConfig(factors=[dict(f) for f in FACTORS], priors=case.priors, seed=case.seed, **config))
+def _loop(case, targets=None, **settings):
+    """The testbed's loop (automatic mode) with the diagnosis only where the report asks for one."""
+    return CalibrationLoop(case.targets if targets is None else targets, StandinEvaluator(standin_conditions(OPTIONS)),
+                           loop_settings(case, **{"diagnose_always": False, **settings}))
 
 
 @pytest.fixture(scope="module")
@@ -27,59 +28,58 @@ def rolling():
 
 def test_where_the_model_fails(rolling):
     case, loop, result = rolling
-    first = result.iterations[0]
-    loc = first.localisation
-    assert loc.fails and loc.lack_of_fit.p_value < 0.05
+    report = result.first.report
+    assert result.model_fails(result.first) and report["lack_of_fit"]["p_value"] < 0.05
     # missing rolling resistance is a strength deficit: the shear test carries a significant share
-    dst = next(t for t in loc.tests if t["test"] == "dst")
+    dst = next(t for t in report["tests"] if t["test"] == "dst")
     assert dst["fails"] and dst["share"] > 0.2
     # ... and the friction saturates: mu_pp pinned at the top of its range pushing higher, or the
     # pycnometer density pulled (spheres pack too densely), the design note's G1 symptoms
-    conflicts = loc.conflicts
+    conflicts = report["conflicts"]
     assert any(b["parameter"] == "friction_pp" and b["pushes"] == "higher" for b in conflicts["active_bounds"]) \
         or conflicts["priors_pulled"]
-    assert {"modulus_log_slope", "shear_stress", "dilatancy"} <= set(loc.trends)
+    assert {"modulus_log_slope", "shear_stress", "dilatancy"} <= set(report["trends"])
 
 
 def test_which_effect_what_it_is_confused_with_and_what_separates_them(rolling):
     case, loop, result = rolling
-    att = result.diagnoses[0].attribution
-    assert att.verdict == "effect indicated"
-    top = att.ranking[0]
-    assert top.name in ("rolling_epsd2", "particle_shape")
-    group = next(g for g in att.alias_groups if top.name in g["effects"])
+    att = result.diagnosis(1)
+    assert att["verdict"] == "effect indicated"
+    top = att["ranking"][0]
+    assert top["effect"] in ("rolling_epsd2", "particle_shape")
+    group = next(g for g in att["alias_groups"] if top["effect"] in g["effects"])
     assert set(group["effects"]) >= {"rolling_epsd2", "particle_shape"}
     assert group["separators"][0]["separating_measurement"].startswith(("dst", "fill", "aor", "anchor", "cct"))
-    assert att.fingerprints["effects"]["rolling_epsd2"]["friction_angle"] == "+"
-    assert att.fingerprints["observed"]["friction_angle"] == "+"
-    hertz = next(r for r in att.ranking if r.name == "hertz_mindlin")
-    assert hertz.p_holm > 0.05          # no stress-dependence of E' was hidden: Hertz is not named
+    assert att["fingerprints"]["effects"]["rolling_epsd2"]["friction_angle"] == "+"
+    assert att["fingerprints"]["observed"]["friction_angle"] == "+"
+    hertz = next(r for r in att["ranking"] if r["effect"] == "hertz_mindlin")
+    assert hertz["p_holm"] > 0.05          # no stress-dependence of E' was hidden: Hertz is not named
 
 
 def test_adding_the_effect_makes_the_error_fall(rolling):
     case, loop, result = rolling
     decision = result.decisions[0]
-    assert decision.accepted and decision.effect in ("rolling_epsd2", "particle_shape")
-    before, after = result.iterations[0].error(), result.final.error()
-    assert after["chi2"] < 0.5 * before["chi2"]
+    assert decision["accepted"] and decision["effect"] in ("rolling_epsd2", "particle_shape")
+    before, after = result.first.report["lack_of_fit"], result.final.report["lack_of_fit"]
+    assert after["statistic"] < 0.5 * before["statistic"]
     assert result.stop_reason == "lack of fit passes"
-    history = result.history()
-    assert [h["number"] for h in history][:2] == [1, 2] and history[1]["added_effect"] == decision.effect
+    history = result.history()["iterations"]
+    assert [h["number"] for h in history][:2] == [1, 2] and history[1]["added_effect"] == [decision["effect"]]
 
 
 def test_no_misfit_no_effect():
     case = make_case(3, "null")
     result = _loop(case).run()
-    assert not result.iterations[0].localisation.fails
+    assert not result.model_fails(result.first)
     assert result.decisions == [] and result.stop_reason == "lack of fit passes"
 
 
 def test_diagnose_always_asks_the_directed_test_and_still_adds_nothing_to_a_true_model():
     case = make_case(3, "null")
     result = _loop(case, diagnose_always=True).run()
-    assert len(result.diagnoses) == 1
-    loc = result.iterations[0].localisation
-    assert loc.directed is not None and not loc.fails
+    assert result.diagnosis(1) is not None and len(result.iterations) == 1
+    adequacy = result.first.report["adequacy"]
+    assert adequacy["directed"] is not None and not adequacy["fails"]
     assert result.decisions == [] and result.stop_reason == "lack of fit passes"
 
 
@@ -89,11 +89,9 @@ def test_a_physically_impossible_measurement_is_not_blamed_on_physics():
     case = make_case(3, "null")
     targets = [dataclasses.replace(t, values=tuple(1.5 * v for v in t.values))
                if t.key.quantity == "bulk_density_kg_m3" else t for t in case.targets]
-    loop = CalibrationLoop(targets, StandinEvaluator(standin_conditions(OPTIONS)),
-                           LoopConfig(factors=[dict(f) for f in FACTORS], priors=case.priors, seed=case.seed))
-    first = loop.iterate([dict(f) for f in FACTORS], {}, 1)
-    assert first.localisation.fails
-    att = loop.diagnose(first).attribution
-    assert att.verdict == "no physical match"
-    assert any("bulk_density" in m for m in att.measure_next)
+    result = _loop(case, targets, automatic=False).run()
+    assert result.model_fails(result.first)
+    att = result.diagnosis(1)
+    assert att["verdict"] == "no physical match"
+    assert any("bulk_density" in m for m in att["measure_next"])
     assert all(isinstance(t, Measured) for t in targets)

@@ -18,8 +18,8 @@ import pytest
 from calibration import standin
 from calibration.conditions import standin_conditions
 from calibration.evaluators import StandinEvaluator
-from calibration.loop import CalibrationLoop, LoopConfig
-from calibration.testbed import FACTORS, OPTIONS, make_case
+from calibration.loop import CalibrationLoop
+from calibration.testbed import OPTIONS, loop_settings, make_case
 
 
 class ChaoticStandin(StandinEvaluator):
@@ -40,11 +40,10 @@ def test_directed_test_keeps_its_size_on_a_chaotic_simulator():
     for seed in range(n):
         case = make_case(1000 + seed, "null")
         loop = CalibrationLoop(case.targets, ChaoticStandin(standin_conditions(OPTIONS), noise_scale=5.0),
-                               LoopConfig(factors=[dict(f) for f in FACTORS], priors=case.priors, seed=case.seed,
-                                          diagnose_always=True, max_iterations=2))
+                               loop_settings(case, max_iterations=2, diagnose_always=True))
         result = loop.run()
-        assert len(result.diagnoses) == 1
-        false_alarms += result.iterations[0].localisation.fails
+        assert result.diagnosis(1) is not None
+        false_alarms += result.model_fails(result.first)
     rate = false_alarms / n
     print(f"\nchaotic simulator, {n} true models: the combined test rejects {rate:.3f} (nominal 0.05)")
     # binomial(100, 0.05): P(X >= 11) = 0.011
