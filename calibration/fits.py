@@ -49,3 +49,9 @@ def fitted(design_dict: dict, runs: Sequence[Sequence[dict]], targets: Sequence[
     while len(_CACHE) > _CACHE_SIZE:
         _CACHE.popitem(last=False)
     return design, models
+
+
+def forget() -> None:
+    """Empty the memo and zero the count (a fresh process, as after a restart)."""
+    _CACHE.clear()
+    FIT_COUNT["surfaces"] = 0
