@@ -225,9 +225,10 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
              density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False,
              polish_steps: int | None = None, confirmation_seeds: int | None = None,
              diagnose_always: bool = False, max_iterations: int = MAX_ITERATIONS,
-             polish_when: str | None = None) -> int:
-    """The scenario's automatic campaign: an existing one calibrating exactly this (same measurements,
-    priors, design and options; its name carries their digest) is reused, so a rerun resumes it."""
+             polish_when: str | None = None) -> tuple[int, dict]:
+    """The scenario's automatic campaign and the body it was created with: an existing one calibrating
+    exactly this (same measurements, priors, design and options; its name carries their digest) is
+    reused, so a rerun resumes it."""
     truth = sc.parameters()
     body = {
         "evaluator": evaluator,
@@ -254,7 +255,7 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         print(f"{sc.name}: resuming campaign {c['id']} ({c['status']})", flush=True)
         if c["status"] in ("draft", "paused"):
             svc.call("POST", f"/campaigns/{c['id']}/{'start' if c['status'] == 'draft' else 'resume'}")
-        return c["id"]
+        return c["id"], body
     # a campaign abandoned as failed leaves its material; the name carries the measurements' digest,
     # so that material is this campaign's and is reused (a second POST would be a 409)
     same = [m for m in svc.call("GET", "/materials") if m["name"] == f"{name} {evaluator}"]
@@ -263,7 +264,7 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         "description": f"hidden effect: {sc.effect or 'none'}"})
     c = svc.call("POST", "/campaigns", json={**body, "name": name, "material_id": material["id"]})
     svc.call("POST", f"/campaigns/{c['id']}/start")
-    return c["id"]
+    return c["id"], body
 
 
 def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
@@ -310,6 +311,23 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
     if rho is not None:
         out["density_error"] = rho / sc.parameters()["particle_density_kg_m3"] - 1.0
     return out
+
+
+def replay(svc: Service, cid: int, body: dict) -> list[str]:
+    """The campaign's stored batteries through the notebook loop (``calibration.loop`` over
+    ``calibration.replay``): where its verdicts, optimum, rankings, added effects or stop reason differ
+    from the service's ([] when it is the same loop)."""
+    from calibration.loop import CalibrationLoop
+    from calibration.records import Measured
+    from calibration.replay import ReplayEvaluator, differences
+    from calibration.settings import LoopSettings
+
+    stored = svc.call("GET", f"/campaigns/{cid}/iterations")
+    material = svc.call("GET", f"/materials/{svc.call('GET', f'/campaigns/{cid}')['material_id']}")
+    targets = [Measured.from_record(m) for m in material["measurements"]]
+    settings = LoopSettings.model_validate({k: v for k, v in body.items() if k in LoopSettings.model_fields})
+    replayed = CalibrationLoop(targets, ReplayEvaluator(stored), settings).run()
+    return differences(stored, replayed.iterations)
 
 
 def truth_floor(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: float, reduced: bool,
@@ -399,6 +417,10 @@ def criteria(outs: list[dict]) -> dict[str, Any]:
     dens = [o for o in effects if o["effect"] in ("rolling_epsd2", "particle_shape")]
     res["density_within_5pc"] = sum(o["density_error"] is not None and abs(o["density_error"]) <= 0.05 for o in dens)
     res["n_effects"], res["n_null"], res["n_density"] = len(effects), len(null), len(dens)
+    replayed = [o for o in outs if "replay_differences" in o]
+    if replayed:
+        res["replay_same"] = sum(not o["replay_differences"] for o in replayed)
+        res["n_replayed"] = len(replayed)
     return res
 
 
@@ -438,6 +460,10 @@ def main(argv=None) -> int:
                          + "); a window at 3-6 kPa adds the low-stress end where a Hertzian E' falls below a "
                            "linear one (E'(3 kPa)/E'(30 kPa) about 0.37 against 0.51 in two runs; on the Hertz "
                            "scenario it did not make the diagnosis see Hertz, docs/diagnosis.md)")
+    ap.add_argument("--replay", action="store_true",
+                    help="replay each campaign's stored batteries through the notebook loop (calibration.loop) and "
+                         "print replay_same: the campaigns whose verdicts, optimum, rankings, added effects and stop "
+                         "reason it reproduces")
     ap.add_argument("--truth-floor", action="store_true",
                     help="also run the measuring world's own parameters at the first iteration's confirmation seeds "
                          "and print the weighted RMS they reach: about where a calibration of the right model comes "
@@ -499,7 +525,7 @@ def main(argv=None) -> int:
         for name in names:
             sc = SCENARIOS[name]
             measurements, measuring_ids = measure(svc, sc, args.evaluator, poll_s, args.reduced, options)
-            cid = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
+            cid, body = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
                            args.polish_steps, args.confirmation_seeds, args.diagnose_always, args.max_iterations,
                            args.polish_when)
             final = _wait_campaign(svc, cid, poll_s)
@@ -513,6 +539,8 @@ def main(argv=None) -> int:
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds, args.polish_steps
             o["diagnose_always"], o["polish_when"] = args.diagnose_always, args.polish_when
             o["cct_window_stresses_pa"] = options["cct_window_stresses_pa"]
+            if args.replay:
+                o["replay_differences"] = replay(svc, cid, body)
             if args.truth_floor:
                 o.update(truth_floor(svc, sc, cid, args.evaluator, poll_s, args.reduced, options))
             o["commit"] = _commit()  # rows written over several stops may come from different code
@@ -595,6 +623,9 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
               "right model can be expected to reach (--truth-floor): " + ", ".join(floors))
     print(f"particle density within 5 %: {res['density_within_5pc']}/{res['n_density']} rolling and shape "
           f"(target all)")
+    for o in outs:
+        for line in o.get("replay_differences") or []:
+            print(f"  replay of {o['scenario']} differs: {line}")
     print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={evaluator}"
           + f" form={'reduced' if reduced else 'screening'}")
 

@@ -56,3 +56,33 @@ class ReplayEvaluator:
             out.append(found)
             self.runs += 1
         return out
+
+
+def differences(stored: Sequence[Mapping[str, Any]], replayed: Sequence[Any], rel: float = 1e-9) -> list[str]:
+    """Where a replay disagrees with the stored iterations (``[]``: the same loop): per iteration the
+    verdict, the optimum (relative ``rel``), the diagnosis's ranking, the automatic mode's added effect,
+    decision and stop reason."""
+    out = []
+    if [s["number"] for s in stored] != [r.number for r in replayed]:
+        return [f"iterations {[s['number'] for s in stored]} stored, {[r.number for r in replayed]} replayed"]
+    for s, r in zip(stored, replayed):
+        n, sr, rr = s["number"], s.get("report") or {}, r.report or {}
+        if rr.get("verdict") != sr.get("verdict"):
+            out.append(f"iteration {n}: verdict {rr.get('verdict')!r}, stored {sr.get('verdict')!r}")
+        so, ro = sr.get("optimum") or {}, rr.get("optimum") or {}
+        if so.keys() != ro.keys():
+            out.append(f"iteration {n}: optimum of {sorted(ro)}, stored {sorted(so)}")
+        for name in so.keys() & ro.keys():
+            if abs(ro[name] - so[name]) > rel * abs(so[name]):
+                out.append(f"iteration {n}: {name} = {ro[name]!r}, stored {so[name]!r}")
+        ranking = lambda rep: [x["effect"] for x in (rep.get("diagnosis") or {}).get("ranking", [])]  # noqa: E731
+        if ranking(rr) != ranking(sr):
+            out.append(f"iteration {n}: ranking {ranking(rr)}, stored {ranking(sr)}")
+        auto_s, auto_r = sr.get("automatic") or {}, rr.get("automatic") or {}
+        for key in ("next_effect", "stop_reason"):
+            if auto_r.get(key) != auto_s.get(key):
+                out.append(f"iteration {n}: {key} {auto_r.get(key)!r}, stored {auto_s.get(key)!r}")
+        accepted = lambda a: (a.get("decision") or {}).get("accepted")  # noqa: E731
+        if accepted(auto_r) != accepted(auto_s):
+            out.append(f"iteration {n}: decision accepted {accepted(auto_r)}, stored {accepted(auto_s)}")
+    return out

@@ -14,6 +14,8 @@ measurements (the lack of fit rejects), the diagnosis names it among its first t
 halves the weighted error with chi2/dof <= 2, and particle density comes back within 5 % of the truth;
 and the calibrated model's weighted error is no larger than the truth's own (`--truth-floor`: the
 measuring world's parameters run at the calibration's seeds and judged the same way).
+And one loop: `--replay` runs the campaign's stored batteries through the notebook loop
+(`calibration.loop`), which must reproduce what the service stored.
 On 40 mm spheres the error fell only to 0.59 (docs/diagnosis.md), so the reduced form stops at 35 mm.
 The full tier B (20 mm spheres, polish, the issue's pass table) is `python3 bench/diagnosis_dem.py`,
 hours.
@@ -34,7 +36,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_hidden_rolling_resistance_is_found_on_the_dem_engine(tmp_path):
     out = subprocess.run(
         [sys.executable, str(ROOT / "bench" / "diagnosis_dem.py"), "--reduced", "--scenarios", "rolling",
-         "--workers", "2", "--max-iterations", "2", "--truth-floor"],
+         "--workers", "2", "--max-iterations", "2", "--truth-floor", "--replay"],
         capture_output=True, text=True, timeout=2400, cwd=tmp_path)
     print(out.stdout)
     assert out.returncode == 0, out.stderr[-2000:]
@@ -57,3 +59,6 @@ def test_hidden_rolling_resistance_is_found_on_the_dem_engine(tmp_path):
     after, truth = map(float, re.search(r"rms=[\d.]+ -> ([\d.]+) \([\d.]+; truth ([\d.]+)\)", row).groups())
     assert after <= truth, row
     assert figures["density_within_5pc"] == "1", out.stdout
+    # one loop: the campaign's stored DEM batteries replayed through the notebook loop give the service's
+    # verdicts, optimum (relative 1e-9), rankings, added effect and stop reason
+    assert figures["replay_same"] == "1" and figures["n_replayed"] == "1", out.stdout
