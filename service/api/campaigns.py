@@ -11,7 +11,13 @@ from service.campaigns.store import (campaign_summary, create_campaign, get_camp
                                      list_campaigns, next_iteration, transition)
 from service.api.openapi import errors
 from service.api.params import CampaignId, IterationNumber
-from service.db import get_session
+from service.api.responses.campaigns import (CampaignDesign, CampaignModels, CampaignOptimum, CampaignSummary,
+                                             Confirmation, Iteration)
+from service.api.responses.common import typed
+from service.api.responses.diagnosis import DiagnosisOut
+from service.api.responses.history import History
+from service.api.responses.report import ReportOut
+from service.db import DbSession
 from service.errors import Conflict, NotFound
 from service.security import client_id
 
@@ -23,47 +29,51 @@ _NOT_YET = errors(409, c409="the iteration has not produced this yet")
 Status = Literal["draft", "running", "paused", "completed", "failed"]
 
 
-@router.post("", status_code=201, summary="Create a campaign (draft) for a material",
+@router.post("", status_code=201, summary="Create a campaign (draft) for a material", **typed(CampaignSummary),
              responses=errors(404, c404="the material does not exist"))
-def create(body: CampaignCreate, session: Session = Depends(get_session),
+def create(body: CampaignCreate, session: DbSession,
            client: str = Depends(client_id)) -> dict:
     return campaign_summary(create_campaign(session, body, client_id=client))
 
 
-@router.get("", summary="List campaigns, newest first")
-def list_all(status: Status | None = Query(None), session: Session = Depends(get_session)) -> list[dict]:
+@router.get("", summary="List campaigns, newest first", **typed(list[CampaignSummary]))
+def list_all(session: DbSession, status: Status | None = Query(None)) -> list[dict]:
     return [campaign_summary(c) for c in list_campaigns(session, status)]
 
 
-@router.get("/{campaign_id}", summary="Status: state, iteration, phase, run counts")
-def status(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
+@router.get("/{campaign_id}", summary="Status: state, iteration, phase, run counts", **typed(CampaignSummary))
+def status(campaign_id: CampaignId, session: DbSession) -> dict:
     return campaign_summary(get_campaign(session, campaign_id))
 
 
-@router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)", responses=_STATE)
-def start(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
+@router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)", responses=_STATE,
+             **typed(CampaignSummary))
+def start(campaign_id: CampaignId, session: DbSession) -> dict:
     return campaign_summary(transition(session, campaign_id, "start"))
 
 
-@router.post("/{campaign_id}/pause", summary="running -> paused (409 otherwise); queued batteries keep running", responses=_STATE)
-def pause(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
+@router.post("/{campaign_id}/pause", summary="running -> paused (409 otherwise); queued batteries keep running", responses=_STATE,
+             **typed(CampaignSummary))
+def pause(campaign_id: CampaignId, session: DbSession) -> dict:
     return campaign_summary(transition(session, campaign_id, "pause"))
 
 
-@router.post("/{campaign_id}/resume", summary="paused -> running (409 otherwise)", responses=_STATE)
-def resume(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
+@router.post("/{campaign_id}/resume", summary="paused -> running (409 otherwise)", responses=_STATE,
+             **typed(CampaignSummary))
+def resume(campaign_id: CampaignId, session: DbSession) -> dict:
     return campaign_summary(transition(session, campaign_id, "resume"))
 
 
-@router.get("/{campaign_id}/iterations", summary="All iterations with their parameters, design, runs and report")
-def iterations(campaign_id: CampaignId, session: Session = Depends(get_session)) -> list[dict]:
+@router.get("/{campaign_id}/iterations", summary="All iterations with their parameters, design, runs and report",
+            **typed(list[Iteration]))
+def iterations(campaign_id: CampaignId, session: DbSession) -> list[dict]:
     return [iteration_view(it) for it in get_campaign(session, campaign_id).iterations]
 
 
 @router.post("/{campaign_id}/iterations", status_code=201,
              summary="Start the next iteration of a completed campaign (e.g. with a contact effect added)",
-             responses=_STATE)
-def add_iteration(campaign_id: CampaignId, body: IterationIn, session: Session = Depends(get_session)) -> dict:
+             responses=_STATE, **typed(CampaignSummary))
+def add_iteration(campaign_id: CampaignId, body: IterationIn, session: DbSession) -> dict:
     return campaign_summary(next_iteration(session, campaign_id, body))
 
 
@@ -80,36 +90,39 @@ def _product(session: Session, campaign_id: CampaignId, number: int | None, attr
 IterationQ = Query(None, ge=1, le=2**63 - 1, description="iteration number; default the current one")
 
 
-@router.get("/{campaign_id}/iterations/{number}", summary="One iteration")
-def one_iteration(campaign_id: CampaignId, number: IterationNumber, session: Session = Depends(get_session)) -> dict:
+@router.get("/{campaign_id}/iterations/{number}", summary="One iteration", **typed(Iteration))
+def one_iteration(campaign_id: CampaignId, number: IterationNumber, session: DbSession) -> dict:
     campaign = get_campaign(session, campaign_id)
     if not any(it.number == number for it in campaign.iterations):
         raise NotFound(f"campaign {campaign_id} has no iteration {number}", ["path", "number"])
     return iteration_view(iteration(session, campaign, number))
 
 
-@router.get("/{campaign_id}/design", summary="The iteration's design: table, aliases, resolution", responses=_NOT_YET)
-def design(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+@router.get("/{campaign_id}/design", summary="The iteration's design: table, aliases, resolution", responses=_NOT_YET,
+            **typed(CampaignDesign))
+def design(session: DbSession, campaign_id: CampaignId, number: int | None = IterationQ) -> dict:
     _, it, value = _product(session, campaign_id, number, "design", "design")
     return {"iteration": it.number, **{k: v for k, v in value.items() if k != "doe"}}
 
 
-@router.get("/{campaign_id}/models", summary="Fitted model per target response, with ANOVA", responses=_NOT_YET)
-def models(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+@router.get("/{campaign_id}/models", summary="Fitted model per target response, with ANOVA", responses=_NOT_YET,
+            **typed(CampaignModels))
+def models(session: DbSession, campaign_id: CampaignId, number: int | None = IterationQ) -> dict:
     _, it, value = _product(session, campaign_id, number, "models", "fitted models")
     return {"iteration": it.number, "models": value}
 
 
-@router.get("/{campaign_id}/optimum", summary="Optimised parameters, predictions with intervals, reachability", responses=_NOT_YET)
-def optimum(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+@router.get("/{campaign_id}/optimum", summary="Optimised parameters, predictions with intervals, reachability", responses=_NOT_YET,
+            **typed(CampaignOptimum))
+def optimum(session: DbSession, campaign_id: CampaignId, number: int | None = IterationQ) -> dict:
     _, it, value = _product(session, campaign_id, number, "optimum", "optimum")
     return {"iteration": it.number, **value}
 
 
 @router.get("/{campaign_id}/confirmation",
             summary="The batteries at the optimum, one per seed (after polishing on the batteries); the top level is "
-                    "the first seed's", responses=_NOT_YET)
-def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+                    "the first seed's", responses=_NOT_YET, **typed(Confirmation))
+def confirmation(session: DbSession, campaign_id: CampaignId, number: int | None = IterationQ) -> dict:
     from calibration.polish import final_runs
 
     campaign = get_campaign(session, campaign_id)
@@ -129,8 +142,9 @@ def confirmation(campaign_id: CampaignId, number: int | None = IterationQ, sessi
 
 
 @router.get("/{campaign_id}/report",
-            summary="Per target: measured, predicted (interval), confirmed, residual, reachability", responses=_NOT_YET)
-def report(campaign_id: CampaignId, number: int | None = IterationQ, session: Session = Depends(get_session)) -> dict:
+            summary="Per target: measured, predicted (interval), confirmed, residual, reachability", responses=_NOT_YET,
+            **typed(ReportOut))
+def report(session: DbSession, campaign_id: CampaignId, number: int | None = IterationQ) -> dict:
     from calibration.report import REACHABLE_LIMIT
 
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
@@ -142,9 +156,8 @@ def report(campaign_id: CampaignId, number: int | None = IterationQ, session: Se
 
 @router.get("/{campaign_id}/diagnosis",
             summary="Which effect is missing: ranking (effect, LM, p, explained share, strength), alias groups, "
-                    "fingerprints, what to measure next", responses=_NOT_YET)
-def diagnosis(campaign_id: CampaignId, number: int | None = IterationQ,
-              session: Session = Depends(get_session)) -> dict:
+                    "fingerprints, what to measure next", responses=_NOT_YET, **typed(DiagnosisOut))
+def diagnosis(session: DbSession, campaign_id: CampaignId, number: int | None = IterationQ) -> dict:
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     if "diagnosis" not in value:
         reason = ("the model reproduces the measurements; nothing to diagnose"
@@ -157,8 +170,8 @@ def diagnosis(campaign_id: CampaignId, number: int | None = IterationQ,
 
 @router.get("/{campaign_id}/history",
             summary="Per iteration: effects, optimum, weighted error overall and per test with the noise band, "
-                    "verdict, effect added next; per target the residual in each iteration")
-def history(campaign_id: CampaignId, session: Session = Depends(get_session)) -> dict:
+                    "verdict, effect added next; per target the residual in each iteration", **typed(History))
+def history(campaign_id: CampaignId, session: DbSession) -> dict:
     from calibration.history import history as loop_history
 
     campaign = get_campaign(session, campaign_id)

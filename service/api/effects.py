@@ -12,6 +12,8 @@ from fastapi import APIRouter
 
 from engine.candidates import candidates
 from engine.effects import REGISTRY
+from service.api.responses.common import typed
+from service.api.responses.effects import Effects
 
 router = APIRouter(tags=["effects"])
 
@@ -34,7 +36,7 @@ def _candidate(c) -> dict[str, Any]:
             "off_value": c.off_value, "fingerprint": dict(c.fingerprint), "physics": c.physics}
 
 
-@router.get("/effects",
+@router.get("/effects", **typed(Effects),
             summary="Every contact effect and diagnosis candidate: physics, parameters, ranges, fingerprint")
 def list_effects() -> dict[str, Any]:
     cands = candidates()

@@ -1,13 +1,14 @@
 """Liveness and readiness in one call: database reachable, schema revision, queue depth, executors."""
 from __future__ import annotations
 
-from fastapi import APIRouter, Depends, Request
+from fastapi import APIRouter, Request
 from fastapi.responses import JSONResponse
 from sqlalchemy import text
-from sqlalchemy.orm import Session
 
 from service import queue
-from service.db import get_session
+from service.api.responses.common import typed
+from service.api.responses.health import Health
+from service.db import DbSession
 
 router = APIRouter(tags=["health"])
 
@@ -21,9 +22,10 @@ def _version() -> str:
         return "unknown"
 
 
-@router.get("/health", summary="Service health: database, schema, queue, workers",
-            responses={503: {"description": "storage unavailable or the executor cannot reach its cluster"}})
-def health(request: Request, session: Session = Depends(get_session)):
+@router.get("/health", summary="Service health: database, schema, queue, workers", **typed(Health),
+            responses={503: {"model": Health,
+                             "description": "storage unavailable or the executor cannot reach its cluster"}})
+def health(request: Request, session: DbSession):
     body = {"status": "ok", "version": _version(), "executor": getattr(request.app.state, "executor", "none")}
     pool = getattr(request.app.state, "worker_pool", None)
     body["local_workers_alive"] = pool.alive() if pool is not None else 0

@@ -1,13 +1,11 @@
 """DEM job endpoints: submit, list, status/progress, result and curves, cancel, retry."""
 from __future__ import annotations
 
-from datetime import datetime, timezone
 from typing import Any, Literal
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
 from fastapi import Path as PathParam
-from pydantic import BaseModel, ConfigDict, Field, field_serializer
-from sqlalchemy.orm import Session
+from pydantic import BaseModel, ConfigDict, Field
 
 from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
 from engine.lab.spec import Fidelity, JobSpec, MicroParameters, TestName, TestOptions
@@ -15,17 +13,15 @@ from service import queue
 from service.api.jsonsafe import json_safe
 from service.api.openapi import errors
 from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, Offset
-from service.db import get_session
+from service.api.responses.common import typed
+from service.api.responses.jobs import Curve, CurveIndex, JobList, JobOut, JobResult, JobStatus, Progress
+from service.db import DbSession
 from service.errors import Conflict, NotFound
-from service.models.job import JOB_STATUSES, Job
+from service.models.job import Job
 from service.security import client_id
 from service.workers.errors import scrub
 
 router = APIRouter(prefix="/jobs", tags=["jobs"])
-
-JobStatus = Literal["queued", "running", "succeeded", "failed", "cancelled"]
-assert set(JobStatus.__args__) == set(JOB_STATUSES)
-
 
 class JobSubmit(BaseModel):
     """A single test or a battery: the job spec plus how to queue it."""
@@ -47,53 +43,6 @@ class JobSubmit(BaseModel):
     def spec(self) -> JobSpec:
         return JobSpec(test=self.test, fidelity=self.fidelity, seed=self.seed,
                        parameters=self.parameters, options=self.options)
-
-
-class Progress(BaseModel):
-    fraction: float
-    phase: str | None
-
-
-class JobOut(BaseModel):
-    id: int
-    status: JobStatus
-    evaluator: str
-    test: str
-    fidelity: str
-    seed: int
-    priority: int
-    attempts: int
-    max_attempts: int
-    progress: Progress
-    cancel_requested: bool
-    error: str | None
-    engine_version: str | None
-    wall_time_s: float | None
-    created_at: datetime
-    started_at: datetime | None
-    finished_at: datetime | None
-    heartbeat_at: datetime | None
-    lease_owner: str | None
-    lease_expires_at: datetime | None
-    idempotency_key: str | None
-    client_id: str
-    campaign_id: int | None
-    result_available: bool
-    spec: dict[str, Any]
-
-    @field_serializer("created_at", "started_at", "finished_at", "heartbeat_at", "lease_expires_at")
-    def _utc(self, value: datetime | None) -> str | None:
-        """Stored naive UTC; sent with its zone, like the campaigns' timestamps."""
-        if value is None:
-            return None
-        return (value if value.tzinfo else value.replace(tzinfo=timezone.utc)).isoformat().replace("+00:00", "Z")
-
-
-class JobList(BaseModel):
-    items: list[JobOut]
-    total: int
-    limit: int
-    offset: int
 
 
 def job_out(job: Job) -> JobOut:
@@ -123,7 +72,7 @@ def _result(job: Job) -> dict[str, Any]:
                               "model": JobOut},
                         **errors(409, 422, 429, c409="idempotency key reused with a different body",
                                  c422="invalid spec or over a limit (field named, with the limit and estimate)")})
-def submit(body: JobSubmit, request: Request, response: Response, session: Session = Depends(get_session),
+def submit(body: JobSubmit, request: Request, response: Response, session: DbSession,
            client: str = Depends(client_id),
            idempotency_key: str | None = Header(None, alias="Idempotency-Key", max_length=200)) -> JobOut:
     job, created = queue.submit_job_ex(
@@ -138,7 +87,7 @@ def submit(body: JobSubmit, request: Request, response: Response, session: Sessi
 
 
 @router.get("", response_model=JobList, summary="List jobs, newest first, filtered")
-def list_jobs(session: Session = Depends(get_session), status_: JobStatus | None = Query(None, alias="status"),
+def list_jobs(session: DbSession, status_: JobStatus | None = Query(None, alias="status"),
               test: TestName | None = None, campaign_id: int | None = Query(None, ge=1, le=SQLITE_INT_MAX),
               evaluator: Literal["dem", "analytic"] | None = None,
               limit: int = Query(100, ge=1, le=1000), offset: Offset = 0) -> JobList:
@@ -148,13 +97,14 @@ def list_jobs(session: Session = Depends(get_session), status_: JobStatus | None
 
 
 @router.get("/{job_id}", response_model=JobOut, name="get_job", summary="Status and progress")
-def get_job(job_id: JobId, session: Session = Depends(get_session)) -> JobOut:
+def get_job(job_id: JobId, session: DbSession) -> JobOut:
     return job_out(queue.get_job(session, job_id))
 
 
 @router.get("/{job_id}/result", summary="The result record (properties, provenance, optionally curves)",
+            **typed(JobResult),
             responses=errors(409, c409="the job has not succeeded (no result)"))
-def get_result(job_id: JobId, include_curves: bool = True, session: Session = Depends(get_session)) -> dict:
+def get_result(session: DbSession, job_id: JobId, include_curves: bool = True) -> dict:
     record = dict(_result(queue.get_job(session, job_id)))
     if not include_curves:
         record.pop("curves", None)
@@ -162,18 +112,18 @@ def get_result(job_id: JobId, include_curves: bool = True, session: Session = De
 
 
 @router.get("/{job_id}/curves", summary="Names of the result's curves, their columns and lengths (no data)",
+            **typed(dict[str, CurveIndex]),
             responses=errors(409, c409="the job has not succeeded (no result)"))
-def get_curves(job_id: JobId, session: Session = Depends(get_session)) -> dict:
+def get_curves(job_id: JobId, session: DbSession) -> dict:
     """An index, small whatever the run: the data is at ``/curves/{name}`` (or in ``/result``)."""
     curves = _result(queue.get_job(session, job_id)).get("curves", {})
     return {name: {"columns": sorted(columns), "points": max((len(v) for v in columns.values()), default=0)}
             for name, columns in curves.items()}
 
 
-@router.get("/{job_id}/curves/{name}", summary="One curve: equal-length SI columns",
+@router.get("/{job_id}/curves/{name}", summary="One curve: equal-length SI columns", **typed(Curve),
             responses=errors(409, c409="the job has not succeeded (no result)"))
-def get_curve(job_id: JobId, name: str = PathParam(..., max_length=200),
-              session: Session = Depends(get_session)) -> dict:
+def get_curve(session: DbSession, job_id: JobId, name: str = PathParam(..., max_length=200)) -> dict:
     curves = _result(queue.get_job(session, job_id)).get("curves", {})
     if name not in curves:
         raise NotFound(f"job {job_id} has no curve {name!r}; it has {sorted(curves)}", ["path", "name"])
@@ -183,7 +133,7 @@ def get_curve(job_id: JobId, name: str = PathParam(..., max_length=200),
 @router.post("/{job_id}/cancel", response_model=JobOut, summary="Cancel a queued job, or ask a running one to stop",
              responses={202: {"description": "running: cancellation requested, the worker stops at its next check"},
                         **errors(409, c409="already finished")})
-def cancel(job_id: JobId, response: Response, session: Session = Depends(get_session)) -> JobOut:
+def cancel(job_id: JobId, response: Response, session: DbSession) -> JobOut:
     job = queue.cancel_job(session, job_id)
     if job.status == "running":
         response.status_code = status.HTTP_202_ACCEPTED
@@ -192,5 +142,5 @@ def cancel(job_id: JobId, response: Response, session: Session = Depends(get_ses
 
 @router.post("/{job_id}/retry", response_model=JobOut, summary="Queue a failed or cancelled job again",
              responses=errors(409, c409="the job is not failed or cancelled"))
-def retry(job_id: JobId, session: Session = Depends(get_session)) -> JobOut:
+def retry(job_id: JobId, session: DbSession) -> JobOut:
     return job_out(queue.retry_job(session, job_id))

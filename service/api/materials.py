@@ -1,13 +1,14 @@
 """Materials and measurements endpoints. Values go in with any accepted unit, come out SI."""
 from __future__ import annotations
 
-from fastapi import APIRouter, Depends, Response
+from fastapi import APIRouter, Response
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from service.api.openapi import errors
 from service.api.params import MaterialId, MeasurementId
-from service.db import get_session
+from service.api.responses.quantities import Quantities
+from service.db import DbSession
 from service.errors import Conflict, NotFound
 from service.materials.schemas import MaterialCopy, MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
 from service.materials.store import (add_measurement, copy_material, create_material, find_by_name, get_material,
@@ -31,7 +32,8 @@ def _material_or_404(session: Session, material_id: int):
 
 
 @router.get("/quantities",
-            summary="Canonical tests, quantities, SI units, accepted input units and physical bounds (SI)")
+            summary="Canonical tests, quantities, SI units, accepted input units and physical bounds (SI)",
+            response_model=Quantities)
 def quantities() -> dict:
     return {test: {q: {"si_unit": u, "accepted_units": accepted_units(u), "bounds": _bounds(test, q)}
                    for q, u in qs.items()}
@@ -46,14 +48,14 @@ def _bounds(test: str, quantity: str) -> dict:
 
 
 @router.get("", response_model=list[MaterialOut], summary="List materials with their measurements")
-def list_all(session: Session = Depends(get_session)):
+def list_all(session: DbSession):
     return [material_dict(m) for m in list_materials(session)]
 
 
 @router.post("", response_model=MaterialOut, status_code=201,
              summary="Create a material (optionally with measurements)",
              responses=errors(409, c409="a material with this name exists"))
-def create(body: MaterialIn, session: Session = Depends(get_session)):
+def create(body: MaterialIn, session: DbSession):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
     material = create_material(session, body)
@@ -64,7 +66,7 @@ def create(body: MaterialIn, session: Session = Depends(get_session)):
 @router.post("/{material_id}/copy", response_model=MaterialOut, status_code=201,
              summary="Copy a material (e.g. the read-only bundled one) under a new name, to edit it",
              responses=errors(409, c409="a material with this name exists"))
-def copy(material_id: MaterialId, body: MaterialCopy, session: Session = Depends(get_session)):
+def copy(material_id: MaterialId, body: MaterialCopy, session: DbSession):
     material = _material_or_404(session, material_id)
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
@@ -74,13 +76,13 @@ def copy(material_id: MaterialId, body: MaterialCopy, session: Session = Depends
 
 
 @router.get("/{material_id}", response_model=MaterialOut)
-def show(material_id: MaterialId, session: Session = Depends(get_session)):
+def show(material_id: MaterialId, session: DbSession):
     return material_dict(_material_or_404(session, material_id))
 
 
 @router.delete("/{material_id}", status_code=204, summary="Delete a material no campaign uses (not the bundled one)",
                responses=errors(409, c409="the material is bundled (read-only) or used by a campaign"))
-def delete(material_id: MaterialId, session: Session = Depends(get_session)):
+def delete(material_id: MaterialId, session: DbSession):
     material = _material_or_404(session, material_id)
     require_editable(material)
     if session.scalar(select(Campaign.id).where(Campaign.material_id == material_id).limit(1)) is not None:
@@ -91,14 +93,14 @@ def delete(material_id: MaterialId, session: Session = Depends(get_session)):
 
 
 @router.get("/{material_id}/measurements", response_model=list[MeasurementOut])
-def list_measurements(material_id: MaterialId, session: Session = Depends(get_session)):
+def list_measurements(material_id: MaterialId, session: DbSession):
     return [measurement_dict(m) for m in _material_or_404(session, material_id).measurements]
 
 
 @router.post("/{material_id}/measurements", response_model=MeasurementOut, status_code=201,
              summary="Add a measurement (replicates in any accepted unit; stored SI)",
              responses=errors(409, c409="the material is bundled reference data (read-only)"))
-def add(material_id: MaterialId, body: MeasurementIn, session: Session = Depends(get_session)):
+def add(material_id: MaterialId, body: MeasurementIn, session: DbSession):
     material = _material_or_404(session, material_id)
     require_editable(material)
     row = add_measurement(session, material, body)
@@ -108,8 +110,7 @@ def add(material_id: MaterialId, body: MeasurementIn, session: Session = Depends
 
 @router.delete("/{material_id}/measurements/{measurement_id}", status_code=204,
                responses=errors(409, c409="the material is bundled reference data (read-only)"))
-def delete_measurement(material_id: MaterialId, measurement_id: MeasurementId,
-                       session: Session = Depends(get_session)):
+def delete_measurement(material_id: MaterialId, measurement_id: MeasurementId, session: DbSession):
     require_editable(_material_or_404(session, material_id))
     row = session.get(Measurement, measurement_id)
     if row is None or row.material_id != material_id:

@@ -1,12 +1,12 @@
 """Schedule endpoints: cron (UTC) + campaign template, with a preview of upcoming firings."""
 from __future__ import annotations
 
-from fastapi import APIRouter, Depends, Query, Response
-from sqlalchemy.orm import Session
+from fastapi import APIRouter, Query, Response
 
 from service.api.openapi import errors
 from service.api.params import ScheduleId
-from service.db import get_session
+from service.api.responses.schedules import CronPreview, Firing, Schedule
+from service.db import DbSession
 from service.errors import Invalid
 from service.schedules.cron import CronError, parse_cron
 from service.schedules.scheduler import naive_utc
@@ -16,7 +16,8 @@ from service.schedules.store import (ScheduleIn, ScheduleUpdate, create_schedule
 router = APIRouter(prefix="/schedules", tags=["schedules"])
 
 
-@router.get("/cron-preview", summary="Check a cron expression and list its next firings (UTC)")
+@router.get("/cron-preview", summary="Check a cron expression and list its next firings (UTC)",
+            response_model=CronPreview)
 def cron_preview(expr: str = Query(..., max_length=200, description="e.g. '0 2 * * *'"), count: int = Query(5, ge=1, le=50)) -> dict:
     try:
         cron = parse_cron(expr)
@@ -25,33 +26,34 @@ def cron_preview(expr: str = Query(..., max_length=200, description="e.g. '0 2 *
     return {"expr": expr, "next": [t.isoformat() + "Z" for t in cron.upcoming(naive_utc(None), count)]}
 
 
-@router.post("", status_code=201, summary="Create a schedule",
+@router.post("", status_code=201, summary="Create a schedule", response_model=Schedule,
              responses=errors(404, c404="the template's material does not exist"))
-def create(body: ScheduleIn, session: Session = Depends(get_session)) -> dict:
+def create(body: ScheduleIn, session: DbSession) -> dict:
     return schedule_view(create_schedule(session, body))
 
 
-@router.get("", summary="List schedules")
-def list_all(session: Session = Depends(get_session)) -> list[dict]:
+@router.get("", summary="List schedules", response_model=list[Schedule])
+def list_all(session: DbSession) -> list[dict]:
     return [schedule_view(s, firings=3) for s in list_schedules(session)]
 
 
-@router.get("/{schedule_id}")
-def show(schedule_id: ScheduleId, session: Session = Depends(get_session)) -> dict:
+@router.get("/{schedule_id}", response_model=Schedule)
+def show(schedule_id: ScheduleId, session: DbSession) -> dict:
     return schedule_view(get_schedule(session, schedule_id))
 
 
-@router.patch("/{schedule_id}", summary="Change cron, enable/disable, policy")
-def patch(schedule_id: ScheduleId, body: ScheduleUpdate, session: Session = Depends(get_session)) -> dict:
+@router.patch("/{schedule_id}", summary="Change cron, enable/disable, policy", response_model=Schedule)
+def patch(schedule_id: ScheduleId, body: ScheduleUpdate, session: DbSession) -> dict:
     return schedule_view(update_schedule(session, schedule_id, body))
 
 
 @router.delete("/{schedule_id}", status_code=204)
-def delete(schedule_id: ScheduleId, session: Session = Depends(get_session)):
+def delete(schedule_id: ScheduleId, session: DbSession):
     delete_schedule(session, schedule_id)
     return Response(status_code=204)
 
 
-@router.get("/{schedule_id}/firings", summary="Every due time handled: campaign started or why skipped")
-def firings(schedule_id: ScheduleId, session: Session = Depends(get_session)) -> list[dict]:
+@router.get("/{schedule_id}/firings", summary="Every due time handled: campaign started or why skipped",
+            response_model=list[Firing])
+def firings(schedule_id: ScheduleId, session: DbSession) -> list[dict]:
     return [firing_view(f) for f in get_schedule(session, schedule_id).firings]

@@ -8,6 +8,7 @@ from typing import Any
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session, selectinload
 
+from calibration.keys import ResponseKey
 from service.api.jsonsafe import json_safe
 from service.errors import Conflict
 from service.materials.schemas import FieldError, MaterialIn, MeasurementIn
@@ -72,25 +73,28 @@ def find_by_name(session: Session, name: str) -> Material | None:
     return session.scalar(select(Material).where(Material.name == name))
 
 
-def measurement_key(test: str, quantity: str, condition: dict[str, float]) -> tuple:
-    """What a measurement is matched on against simulated values (engine.lab.result.BulkProperty.key)."""
-    return (test, quantity, tuple(sorted((k, float(v)) for k, v in condition.items())))
+def same_key(rows, record) -> Measurement | None:
+    """The row among ``rows`` whose measurement key (calibration.keys.ResponseKey: test, quantity, and the
+    condition within its tolerance) is ``record``'s. The calibration matches a measurement to a simulated
+    value by that key, so it also decides what counts as the same measurement in storage: 24 kPa
+    entered in kPa and 24,000 Pa entered in Pa are one condition."""
+    key = ResponseKey.from_record(record)
+    return next((row for row in rows if ResponseKey.from_record(row).matches(key)), None)
 
 
 def add_measurement(session: Session, material: Material, data: MeasurementIn) -> Measurement:
     """Converts to SI (raises schemas.FieldError on bad units or bounds) and attaches to the material.
 
-    A second measurement of the same (test, quantity, condition) is refused: the calibration matches one
-    measurement per key, and silently keeping one of two is losing data. Add replicates to the values of
-    the existing one instead (delete and re-add it with all of them)."""
+    A second measurement of the same key (``same_key``) is refused, naming the one stored: the
+    calibration matches one measurement per key, and silently keeping one of two is losing data. Add
+    replicates to the values of the existing one instead (delete and re-add it with all of them)."""
     fields = data.to_si()
-    key = measurement_key(fields["test"], fields["quantity"], fields["condition"])
-    for existing in material.measurements:
-        if measurement_key(existing.test, existing.quantity, existing.condition) == key:
-            where = f"measurement {existing.id}" if existing.id is not None else "an earlier measurement"
-            raise FieldError("condition", f"{where} already holds {fields['test']} {fields['quantity']} at "
-                             f"condition {fields['condition'] or '{}'}; put all replicates in one measurement's "
-                             "values")
+    existing = same_key(material.measurements, fields)
+    if existing is not None:
+        where = f"measurement {existing.id}" if existing.id is not None else "an earlier measurement"
+        raise FieldError("condition", f"{where} already holds {ResponseKey.from_record(existing).label} (SI), the "
+                         f"same measurement as {ResponseKey.from_record(fields).label}: put all replicates in one "
+                         "measurement's values")
     row = Measurement(**fields)
     material.measurements.append(row)
     return row
@@ -132,10 +136,9 @@ def seed_bundled_materials(session: Session) -> list[int]:
             existing = create_material(session, data, bundled=True)
         else:
             existing.bundled = True
-            have = {measurement_key(m.test, m.quantity, m.condition) for m in existing.measurements}
             for meas in data.measurements:
                 fields = meas.to_si()
-                if measurement_key(fields["test"], fields["quantity"], fields["condition"]) not in have:
+                if same_key(existing.measurements, fields) is None:
                     existing.measurements.append(Measurement(**fields))
         session.flush()
         ids.append(existing.id)

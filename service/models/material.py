@@ -73,9 +73,6 @@ class Measurement(Base):
         s = math.sqrt(sum((v - m) ** 2 for v in self.values) / (n - 1))
         return s / math.sqrt(n)
 
-    def key(self) -> tuple[str, str, tuple[tuple[str, float], ...]]:
-        return (self.test, self.quantity, tuple(sorted((k, float(v)) for k, v in self.condition.items())))
-
     def as_dict(self) -> dict[str, Any]:
         return {
             "id": self.id,

@@ -136,3 +136,40 @@ def test_quantities_lists_si_and_accepted_units(s2):
     table = client.get(f"{API}/materials/quantities").json()
     assert table["dst"]["residual_shear_stress_pa"]["si_unit"] == "Pa"
     assert "kPa" in table["dst"]["residual_shear_stress_pa"]["accepted_units"]
+
+
+def _shear(value: float, unit: str) -> dict:
+    return {"test": "dst", "quantity": "residual_shear_stress_pa", "unit": "kPa", "values": [17.0, 18.0],
+            "condition": {"normal_stress_pa": value}, "condition_units": {"normal_stress_pa": unit}}
+
+
+@pytest.mark.parametrize("first, second", [
+    ((24.0, "kPa"), (24000.0, "Pa")),
+    # 0.0243 kPa converts to 24.299999999999997 Pa: not the float 24.3, the same condition
+    ((24.3, "Pa"), (0.0243, "kPa")),
+])
+def test_a_measurement_with_the_key_of_a_stored_one_is_refused_naming_it(s2, first, second):
+    """One key (calibration.keys.ResponseKey, with its tolerance) decides what the calibration matches and
+    what storage holds once: the same test, quantity and condition in other units is the same measurement."""
+    client, _, _ = s2
+    material_id = client.post(f"{API}/materials", json={"name": "sand"}).json()["id"]
+    stored = client.post(f"{API}/materials/{material_id}/measurements", json=_shear(*first))
+    assert stored.status_code == 201, stored.text
+    again = client.post(f"{API}/materials/{material_id}/measurements", json=_shear(*second))
+    assert again.status_code == 422 and error_loc(again) == ["body", "condition"]
+    assert f"measurement {stored.json()['id']}" in again.json()["detail"][0]["msg"]
+    assert len(client.get(f"{API}/materials/{material_id}/measurements").json()) == 1
+    in_one_body = client.post(f"{API}/materials", json={"name": "gravel", "measurements": [_shear(*first),
+                                                                                        _shear(*second)]})
+    assert in_one_body.status_code == 422 and error_loc(in_one_body) == ["body", "measurements", "1", "condition"]
+
+
+def test_measurements_at_different_conditions_are_both_stored(s2):
+    client, _, _ = s2
+    material_id = client.post(f"{API}/materials", json={"name": "sand"}).json()["id"]
+    for value in (24.0, 25.0):
+        response = client.post(f"{API}/materials/{material_id}/measurements", json=_shear(value, "kPa"))
+        assert response.status_code == 201, response.text
+    stresses = sorted(m["condition"]["normal_stress_pa"]
+                      for m in client.get(f"{API}/materials/{material_id}/measurements").json())
+    assert stresses == [24000.0, 25000.0]

@@ -1,0 +1,90 @@
+"""The diagnosis of an iteration: which candidate effect explains the misfit the fitted parameters cannot
+absorb (calibration.attribute.Attribution.to_dict, with the lack of fit, seeds and batteries of
+calibration.analysis.diagnose)."""
+from __future__ import annotations
+
+from pydantic import Field
+
+from service.api.responses.common import LackOfFit, Out
+
+
+class RankedEffect(Out):
+    """One candidate effect's one-sided score test against the residuals."""
+
+    effect: str = Field(description="the candidate's registry name")
+    title: str
+    factor: str = Field(description="the micro-parameter path its strength is")
+    unit: str = Field(description="the strength's unit")
+    lm: float | None = Field(description="Lagrange-multiplier score statistic")
+    p_value: float | None
+    p_holm: float | None = Field(description="p after Holm over the candidates")
+    explained: float | None = Field(description="share of the misfit the effect explains, 0..1")
+    gamma: float | None = Field(description="the score's step along the signature")
+    strength: float | None = Field(description="the strength the data ask for, in its unit")
+    fraction_of_switch: float | None = Field(description="a switch-type effect: the fraction of its matched strength")
+    plausible_range: list[float] = Field(description="[low, high], in its unit")
+    plausible: bool
+    significant: bool = Field(description="p_holm below alpha")
+    alias_group: int | None = Field(description="the alias group it belongs to, from 1")
+
+
+class Separator(Out):
+    effects: list[str] = Field(description="the two effects")
+    cos: float = Field(description="cosine of their projected signatures")
+    separating_measurement: str = Field(description="the measurement that tells them apart best")
+
+
+class AliasGroup(Out):
+    group: int
+    effects: list[str]
+    separators: list[Separator]
+    message: str
+
+
+class Fingerprints(Out):
+    """Signs of the change each effect makes, and the signs the measurements show."""
+
+    columns: list[str]
+    observed: dict[str, str] = Field(description="per column: '+', '-', '0' or '' (not measured)")
+    effects: dict[str, dict[str, str]] = Field(description="per effect, per column: the sign it leaves")
+
+
+class DirectedTest(Out):
+    """The max-T score test over the candidates against its simulated null."""
+
+    lm: float | None
+    p_value: float | None
+    n_candidates: int
+
+
+class DiagnosisAdequacy(Out):
+    p_value: float | None = Field(description="Holm over the omnibus lack of fit and the directed test")
+    fails: bool
+    about: str
+
+
+class Diagnosis(Out):
+    """As stored in the report's ``diagnosis``."""
+
+    verdict: str = Field(description="effect indicated, inconclusive, no physical match or no misfit")
+    message: str
+    ranking: list[RankedEffect] = Field(description="plausible effects first, then by LM")
+    indicated: list[str] = Field(description="the effects to try, in ranking order")
+    alias_groups: list[AliasGroup]
+    fingerprints: Fingerprints
+    measure_next: list[str]
+    alpha: float
+    min_explained: float = Field(description="share of the misfit an indicated effect must explain")
+    critical_lm: float | None = Field(description="LM a single effect needs to clear Holm's first step")
+    directed: DirectedTest | None
+    adequacy: DiagnosisAdequacy
+    lack_of_fit: LackOfFit = Field(description="over every battery at the optimum together")
+    seeds: list[int] = Field(description="the confirmation's and the diagnosis batteries' seeds")
+    batteries: int = Field(description="diagnosis batteries run")
+
+
+class DiagnosisOut(Diagnosis):
+    """GET /campaigns/{id}/diagnosis."""
+
+    campaign_id: int
+    iteration: int

@@ -1,0 +1,46 @@
+"""The history of a campaign: per iteration the effects, optimum, weighted error overall and per test,
+verdict and the effect added next; per target its standardised residual in each iteration."""
+from __future__ import annotations
+
+from pydantic import Field
+
+from service.api.responses.common import CONDITION, PARAMETERS, Condition, Out, ParameterValues
+from service.api.responses.report import Decision
+
+
+class HistoryEntry(Out):
+    number: int = Field(description="iteration number")
+    effects: list[str] = Field(description="candidate effects in the iteration's model")
+    added_effect: list[str] | None = Field(description="effects added relative to the iteration it was built on")
+    optimum: ParameterValues | None = Field(description=PARAMETERS)
+    parameter_std: ParameterValues | None = Field(description="standard deviation per factor, its unit")
+    chi2: float | None = Field(description="lack-of-fit statistic")
+    chi2_per_dof: float | None
+    dof: int | None
+    noise_band: list[float | None] | None = Field(description="[low, high] of chi2 / dof by chance")
+    lack_of_fit_p: float | None
+    adequacy_p: float | None = Field(description="once diagnosed: Holm over lack of fit and directed test")
+    directed_p: float | None = Field(description="once diagnosed: the candidates' directed test")
+    per_test: dict[str, float] = Field(description="per lab test: its chi2")
+    weighted_rms: float | None = Field(description="RMS of the modelled targets' standardised residuals")
+    verdict: str | None
+    top_effect: str | None = Field(description="the diagnosis's first-ranked effect")
+    decision: Decision | None = Field(description="automatic mode: whether the added effect was kept")
+    stop_reason: str | None = Field(description="automatic mode: why the loop stopped here")
+    range_widened: bool = Field(description="the iteration redid its base on a wider strength range")
+    effect_added_next: list[str] | None = Field(description="what the next iteration added")
+
+
+class HistoryTarget(Out):
+    test: str
+    quantity: str
+    condition: Condition = Field(description=CONDITION)
+    residuals: dict[str, float | None] = Field(description="per iteration number (as text): standardised residual")
+
+
+class History(Out):
+    """GET /campaigns/{id}/history."""
+
+    campaign_id: int
+    iterations: list[HistoryEntry] = Field(description="the iterations with a report, in order")
+    targets: dict[str, HistoryTarget] = Field(description="per response name (or quantity) of a modelled target")

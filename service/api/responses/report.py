@@ -1,0 +1,217 @@
+"""The report of an iteration, per target and as one verdict (calibration.report.build_report, with
+the polish summary, the diagnosis and its adequacy test, and the automatic mode's record)."""
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import Field
+
+from service.api.responses.common import CONDITION, PARAMETERS, Condition, LackOfFit, Out, ParameterValues
+from service.api.responses.designs import DesignView
+from service.api.responses.diagnosis import Diagnosis, DirectedTest
+
+
+class TargetRow(Out):
+    """One measurement against the model. Which keys are present depends on ``status``: a target that was
+    not simulated has no ``response`` or ``confirmed``; one that was not modelled no prediction."""
+
+    measurement_id: int
+    test: str
+    quantity: str
+    condition: Condition = Field(description=CONDITION)
+    unit: str
+    measured: float = Field(description="mean of the replicates, in the unit (SI)")
+    n: int = Field(description="replicates")
+    status: str = Field(description="modelled, not_modelled or not_simulated")
+    note: str | None = Field(None, description="why a target is not modelled or not simulated")
+    response: str | None = Field(None, description="the matched response name")
+    confirmed: float | None = Field(None, description="mean of the confirmation batteries, in the unit")
+    confirmed_per_seed: list[float | None] | None = None
+    measured_uncertainty: float | None = Field(None, description="standard uncertainty, in the unit")
+    uncertainty_assumed: bool | None = Field(None, description="from the default relative uncertainty")
+    predicted: float | None = Field(None, description="the surfaces' prediction at the optimum")
+    prediction_interval: list[float | None] | None = Field(None, description="[low, high] for the mean of the seeds")
+    predicted_standardised_residual: float | None = None
+    simulator_sd: float | None = Field(None, description="the simulator's scatter at the optimum, in the unit")
+    residual_sd: float | None = Field(None, description="sqrt(u^2 + simulator_sd^2 / seeds), in the unit")
+    standardised_residual: float | None = Field(None, description="(confirmed - measured) / residual_sd")
+    confirmation_in_interval: bool | None = None
+    reachability: float | None = Field(None, description="smallest |standardised misfit| in the design box")
+    reachable: bool | None = Field(None, description="reachability below the report's reachable_limit")
+
+
+class TestShare(Out):
+    """One test's share of the misfit, Holm-corrected."""
+
+    test: str = Field(description="a lab test, or 'prior'")
+    n: int
+    chi2: float
+    share: float = Field(description="chi2 / total chi2")
+    p_value: float | None
+    p_holm: float | None = None
+    fails: bool | None = None
+
+
+class ActiveBound(Out):
+    parameter: str
+    side: str = Field(description="'low' or 'high'")
+    value: float | None
+    pushes: str = Field(description="'higher' or 'lower'")
+    meaning: str
+
+
+class PriorPulled(Out):
+    """A prior the calibration pulls more than 2 sd off its measured value."""
+
+    parameter: str
+    value: float = Field(description="the prior's value, in the parameter's unit")
+    uncertainty: float = Field(description="the prior's standard uncertainty, same unit")
+    source: str = ""
+    standardised_residual: float = Field(description="(calibrated - value) / uncertainty")
+    meaning: str
+
+
+class Conflicts(Out):
+    active_bounds: list[ActiveBound] = Field(default_factory=list)
+    priors_pulled: list[PriorPulled] = Field(default_factory=list)
+
+
+class SurfaceResponse(Out):
+    response: str
+    observed: float | None
+    predicted: float | None
+    pi_low: float | None
+    pi_high: float | None
+    inside: bool | None
+
+
+class SurrogateCheck(Out):
+    """The fitted response surfaces against the batteries at the optimum (doe.confirm): a check of the
+    surrogate, not of the model against the measurements."""
+
+    verdict: str = Field(description="confirmed, not confirmed or not testable")
+    confirmed: bool | None = None
+    reason: str | None = None
+    next_design_kind: str | None = Field(None, description="narrowed_factorial or augment_ccd")
+    responses: list[SurfaceResponse] | None = None
+    n_observations: int | None = Field(None, description="confirmation batteries averaged")
+    about: str | None = None
+    next_design: DesignView | None = Field(None, description="the design the check proposes")
+
+
+class Polish(Out):
+    """Gauss-Newton steps on the batteries after the surfaces' optimum (calibration.polish.summary)."""
+
+    steps: int
+    batteries: int
+    chi2_start: float | None = None
+    chi2: float | None = None
+    parameters: ParameterValues | None = Field(None, description=PARAMETERS)
+    skipped: str | None = Field(None, description="why no step was taken")
+
+
+class Adequacy(Out):
+    """The diagnosis's adequacy test: Holm over the omnibus lack of fit and the candidates' directed test."""
+
+    p_value: float | None
+    fails: bool
+    about: str | None = None
+    omnibus_p: float | None = None
+    directed: DirectedTest | None = None
+
+
+class Decision(Out):
+    """Whether an effect the automatic mode added earned its place (calibration.decisions.Decision)."""
+
+    effect: str
+    accepted: bool
+    chi2_before: float | None
+    chi2_after: float | None
+    lr: float | None = Field(description="likelihood-ratio statistic")
+    p_value: float | None = Field(description="boundary-corrected LR test; null for a switch")
+    delta_bic: float | None
+    lof_p_before: float | None
+    lof_p_after: float | None
+    strength: float | None
+
+
+class Automatic(Out):
+    """The automatic mode's record of an iteration: its decision and the next step or why it stopped."""
+
+    decision: Decision | None = None
+    base_iteration: int | None = None
+    next_effect: str | None = None
+    next_base: int | None = None
+    stop_reason: str | None = None
+    widened: bool | None = Field(None, description="the next iteration redoes this one on a wider range")
+    next_config: dict[str, Any] | None = Field(None, description="the next iteration's configuration (CampaignCreate)")
+
+
+class Trend(Out):
+    """A weighted straight line of residuals against the normal stress (calibration.localise.trends)."""
+
+    description: str
+    slope: float | None
+    slope_se: float | None
+    intercept: float | None
+    intercept_se: float | None
+    p_slope: float | None
+    p_intercept: float | None
+    x_centre: float | None
+    n: int
+    significant: bool | None = None
+    measured_slope: float | None = None
+    model_slope: float | None = None
+    significant_slope: bool | None = None
+    significant_intercept: bool | None = None
+    measured_cohesion_pa: float | None = None
+    measured_cohesion_se_pa: float | None = None
+    model_cohesion_pa: float | None = None
+    measured_friction_angle_deg: float | None = None
+    model_friction_angle_deg: float | None = None
+
+
+class Trends(Out):
+    modulus_log_slope: Trend | None = Field(None, description="log(E' measured / model) against log(stress)")
+    shear_stress: Trend | None = Field(None, description="shear stress residual (Pa) against normal stress (Pa)")
+    dilatancy: Trend | None = Field(None, description="dilatancy residual (deg) against normal stress (Pa)")
+
+
+class Report(Out):
+    """As stored on the iteration (GET /campaigns/{id}/iterations' ``report``)."""
+
+    optimum: ParameterValues | None = Field(None, description=PARAMETERS)
+    fixed_parameters: dict[str, Any] | None = None
+    confirmation_seed: int | None = None
+    confirmation_job_id: int | None = None
+    confirmation_seeds: list[int] | None = None
+    confirmation_job_ids: list[int | None] | None = None
+    targets: list[TargetRow] = Field(default_factory=list)
+    verdict: str | None = Field(None, description="targets out of reach, model misses the measurements, "
+                                                  "surrogate inadequate or calibrated")
+    meaning: str | None = None
+    unreachable: list[str] | None = Field(None, description="responses no parameter set in the box reaches")
+    confirmation_outside_interval: list[str] | None = None
+    max_abs_standardised_residual: float | None = None
+    lack_of_fit: LackOfFit | None = None
+    tests: list[TestShare] | None = None
+    trends: Trends | None = None
+    conflicts: Conflicts | None = None
+    suspect: bool | None = Field(None, description="conflicts or unreachable targets: diagnose even if the fit passes")
+    surrogate_check: SurrogateCheck | None = None
+    polish: Polish | None = None
+    diagnosis: Diagnosis | None = None
+    adequacy: Adequacy | None = None
+    automatic: Automatic | None = None
+
+
+class ReportOut(Report):
+    """GET /campaigns/{id}/report: the stored report with its campaign's fields."""
+
+    campaign_id: int
+    name: str
+    material_id: int
+    iteration: int
+    evaluator: str
+    fidelity: str
+    reachable_limit: float = Field(description="the reachability above which a target is out of reach")
