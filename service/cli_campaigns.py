@@ -7,6 +7,7 @@ one-line message on stderr and exit status 2, never a traceback.
 """
 from __future__ import annotations
 
+from calibration.evaluator_registry import names as evaluator_names
 from service.cli_http import CliError
 from service.cli_http import call as _call
 from service.cli_http import emit as _emit
@@ -275,7 +276,7 @@ def register(subparsers) -> None:
     create.add_argument("--file", help="JSON body (as POST /campaigns), '-' for stdin")
     create.add_argument("--name")
     create.add_argument("--material", dest="material_id", type=int)
-    create.add_argument("--evaluator", choices=["analytic", "dem"])
+    create.add_argument("--evaluator", choices=evaluator_names())
     create.add_argument("--fidelity", choices=["screening", "thesis"])
     create.add_argument("--factor", action="append", help="NAME:LOW:HIGH in SI (repeatable)")
     create.add_argument("--centre-runs", type=int)

@@ -17,6 +17,7 @@ from sqlalchemy import func, insert, literal, select, text, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
+from calibration import evaluator_registry
 from engine.lab.result import LabResult
 from engine.lab.spec import JobSpec
 from service.config import Settings, get_settings
@@ -25,7 +26,6 @@ from service.models.base import utcnow
 from service.models.job import Job
 from service.limits import check_limits
 
-EVALUATORS = ("dem", "analytic")
 CLAIM_CANDIDATES = 8  # queued ids tried per claim before giving up on this round
 
 
@@ -53,7 +53,7 @@ def submit_job_ex(
     session: Session,
     spec: JobSpec,
     *,
-    evaluator: str = "dem",
+    evaluator: str = evaluator_registry.DEM.name,
     priority: int = 0,
     idempotency_key: str | None = None,
     client_id: str = "anonymous",
@@ -63,8 +63,7 @@ def submit_job_ex(
 ) -> tuple[Job, bool]:
     """Queue a job; returns ``(job, created)``. Commits. Same idempotency key -> same job."""
     cfg = _settings(session, settings)
-    if evaluator not in EVALUATORS:
-        raise Invalid(f"unknown evaluator {evaluator!r}; choose one of {list(EVALUATORS)}", "evaluator")
+    _check_evaluator(evaluator, spec)
     spec_json = _spec_json(spec)
     if idempotency_key is not None:
         existing = _by_key(session, client_id, idempotency_key)
@@ -93,6 +92,17 @@ def submit_job_ex(
         raise TooMany(f"client {client_id!r} already has {unfinished} unfinished jobs "
                       f"(limit {cfg.max_queued_jobs_per_client})", ["header", "X-Client-Id"])
     return get_job(session, job_id), True
+
+
+def _check_evaluator(name: str, spec: JobSpec) -> None:
+    """A registered backend that covers the spec's test, or a 422 naming the field (the API's schema
+    checks the name too, but campaigns and schedules queue through here without it)."""
+    try:
+        evaluator_registry.get(name).check_test(spec.test)
+    except evaluator_registry.UnknownEvaluator as exc:
+        raise Invalid(str(exc), "evaluator") from None
+    except evaluator_registry.UncoveredTest as exc:
+        raise Invalid(str(exc), "test") from None
 
 
 def _unfinished(session: Session, client_id: str) -> int:

@@ -9,6 +9,7 @@ from fastapi import Path as PathParam
 from pydantic import BaseModel, ConfigDict, Field, field_serializer
 from sqlalchemy.orm import Session
 
+from calibration.evaluator_registry import DEM, EvaluatorName
 from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
 from engine.lab.spec import Fidelity, JobSpec, MicroParameters, TestName, TestOptions
 from service import queue
@@ -37,7 +38,7 @@ class JobSubmit(BaseModel):
     seed: int = Field(0, ge=0, le=MAX_SEED, description="random seed; same seed and thread count, same result")
     parameters: MicroParameters = Field(default_factory=MicroParameters)
     options: TestOptions = Field(default_factory=TestOptions)
-    evaluator: Literal["dem", "analytic"] = "dem"
+    evaluator: EvaluatorName = DEM.name
     priority: int = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="higher runs first")
     idempotency_key: str | None = Field(None, min_length=1, max_length=200,
                                         description="resubmitting the same key returns the same job")
@@ -140,7 +141,7 @@ def submit(body: JobSubmit, request: Request, response: Response, session: Sessi
 @router.get("", response_model=JobList, summary="List jobs, newest first, filtered")
 def list_jobs(session: Session = Depends(get_session), status_: JobStatus | None = Query(None, alias="status"),
               test: TestName | None = None, campaign_id: int | None = Query(None, ge=1, le=SQLITE_INT_MAX),
-              evaluator: Literal["dem", "analytic"] | None = None,
+              evaluator: EvaluatorName | None = None,
               limit: int = Query(100, ge=1, le=1000), offset: Offset = 0) -> JobList:
     rows, total = queue.list_jobs(session, status=status_, test=test, campaign_id=campaign_id,
                                   evaluator=evaluator, limit=limit, offset=offset)

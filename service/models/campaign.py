@@ -11,6 +11,7 @@ from typing import Any
 from sqlalchemy import JSON, DateTime, ForeignKey, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
+from calibration.evaluator_registry import ANALYTIC, NAME_MAX
 from service.models.base import Base, utcnow
 
 CAMPAIGN_STATUSES = ("draft", "running", "paused", "completed", "failed")
@@ -25,7 +26,7 @@ class Campaign(Base):
     name: Mapped[str] = mapped_column(String(200), nullable=False)
     material_id: Mapped[int] = mapped_column(ForeignKey("materials.id"), index=True, nullable=False)
     status: Mapped[str] = mapped_column(String(16), default="draft", index=True, nullable=False)
-    evaluator: Mapped[str] = mapped_column(String(16), default="analytic", nullable=False)
+    evaluator: Mapped[str] = mapped_column(String(NAME_MAX), default=ANALYTIC.name, nullable=False)
     fidelity: Mapped[str] = mapped_column(String(16), default="screening", nullable=False)
     # The validated CampaignConfig (factors, design, targets, options, seed ...).
     config: Mapped[dict[str, Any]] = mapped_column(JSON, nullable=False)

@@ -44,7 +44,7 @@ def run_on_dask(evaluator: str, spec_json: dict, job_id: int, attempt: int) -> d
     from distributed import Variable
 
     from engine.lab.spec import JobSpec
-    from service.evaluators import run_spec
+    from calibration.evaluator_registry import run_job
 
     progress_name, cancel_name = _names(job_id, attempt)
     progress_var, cancel_var = Variable(progress_name), Variable(cancel_name)
@@ -63,7 +63,7 @@ def run_on_dask(evaluator: str, spec_json: dict, job_id: int, attempt: int) -> d
             last["cancelled"] = bool(cancel_var.get(timeout=5))
         return last["cancelled"]
 
-    return run_spec(evaluator, JobSpec.model_validate(spec_json), progress, should_cancel).model_dump(mode="json")
+    return run_job(evaluator, JobSpec.model_validate(spec_json), progress, should_cancel).model_dump(mode="json")
 
 
 @dataclass

@@ -34,9 +34,10 @@ def default_worker_id(kind: str = "local") -> str:
 
 
 def _run_spec(evaluator, spec, progress, should_cancel):
-    from service.evaluators import run_spec
+    """The job's backend, looked up in the registry when the job runs (tests pass their own)."""
+    from calibration.evaluator_registry import run_job
 
-    return run_spec(evaluator, spec, progress, should_cancel)
+    return run_job(evaluator, spec, progress, should_cancel)
 
 
 class _Heartbeat(threading.Thread):
