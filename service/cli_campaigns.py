@@ -16,6 +16,7 @@ from service.cli_http import leaf as _leaf
 from service.cli_http import pairs as _pairs
 from service.cli_http import read_json as _read_json
 from service.cli_http import table as _table
+from service.vocabulary import CampaignStatus
 
 
 
@@ -298,7 +299,7 @@ def register(subparsers) -> None:
                              "surfaces did not predict")
     create.add_argument("--start", action="store_true", help="start it right away")
     list_parser = _leaf(csub, "list", campaign_list, "list campaigns")
-    list_parser.add_argument("--status", choices=["draft", "running", "paused", "completed", "failed"])
+    list_parser.add_argument("--status", choices=CampaignStatus.values())
     for action, text in (("start", "start a draft campaign"), ("pause", "pause a running campaign"),
                          ("resume", "resume a paused campaign"), ("status", "show a campaign's state")):
         _leaf(csub, action, campaign_action, text).add_argument("id", type=int)

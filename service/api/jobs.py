@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from datetime import datetime, timezone
-from typing import Any, Literal
+from typing import Any
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
 from fastapi import Path as PathParam
@@ -18,15 +18,12 @@ from service.api.openapi import errors
 from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, Offset
 from service.db import get_session
 from service.errors import Conflict, NotFound
-from service.models.job import JOB_STATUSES, Job
+from service.models.job import Job
 from service.security import client_id
+from service.vocabulary import JobStatus
 from service.workers.errors import scrub
 
 router = APIRouter(prefix="/jobs", tags=["jobs"])
-
-JobStatus = Literal["queued", "running", "succeeded", "failed", "cancelled"]
-assert set(JobStatus.__args__) == set(JOB_STATUSES)
-
 
 class JobSubmit(BaseModel):
     """A single test or a battery: the job spec plus how to queue it."""
@@ -107,13 +104,13 @@ def job_out(job: Job) -> JobOut:
         wall_time_s=job.wall_time_s, created_at=job.created_at, started_at=job.started_at,
         finished_at=job.finished_at, heartbeat_at=job.heartbeat_at, lease_owner=job.lease_owner,
         lease_expires_at=job.lease_expires_at, idempotency_key=job.idempotency_key, client_id=job.client_id,
-        campaign_id=job.campaign_id, result_available=job.status == "succeeded" and job.result is not None,
+        campaign_id=job.campaign_id, result_available=job.status == JobStatus.SUCCEEDED and job.result is not None,
         spec=json_safe(job.spec),
     )
 
 
 def _result(job: Job) -> dict[str, Any]:
-    if job.status != "succeeded" or job.result is None:
+    if job.status != JobStatus.SUCCEEDED or job.result is None:
         raise Conflict(f"job {job.id} is {job.status}; a result exists only for succeeded jobs", ["path", "job_id"])
     return job.result
 
@@ -186,7 +183,7 @@ def get_curve(job_id: JobId, name: str = PathParam(..., max_length=200),
                         **errors(409, c409="already finished")})
 def cancel(job_id: JobId, response: Response, session: Session = Depends(get_session)) -> JobOut:
     job = queue.cancel_job(session, job_id)
-    if job.status == "running":
+    if job.status == JobStatus.RUNNING:
         response.status_code = status.HTTP_202_ACCEPTED
     return job_out(job)
 

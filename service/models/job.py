@@ -14,9 +14,10 @@ from sqlalchemy.orm import Mapped, mapped_column
 
 from calibration.evaluator_registry import DEM, NAME_MAX
 from service.models.base import Base, utcnow
+from service.vocabulary import JobStatus
 
-JOB_STATUSES = ("queued", "running", "succeeded", "failed", "cancelled")
-FINISHED_STATUSES = ("succeeded", "failed", "cancelled")
+JOB_STATUSES = JobStatus.values()
+FINISHED_STATUSES = tuple(s.value for s in JobStatus.finished())
 
 
 class Job(Base):
@@ -28,7 +29,7 @@ class Job(Base):
     )
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    status: Mapped[str] = mapped_column(String(16), default="queued", nullable=False, index=True)
+    status: Mapped[str] = mapped_column(String(16), default=JobStatus.QUEUED, nullable=False, index=True)
     evaluator: Mapped[str] = mapped_column(String(NAME_MAX), default=DEM.name, nullable=False)
     test: Mapped[str] = mapped_column(String(16), nullable=False, index=True)
     fidelity: Mapped[str] = mapped_column(String(16), nullable=False)

@@ -24,6 +24,7 @@ from service.config import Settings
 from service.models.job import Job
 from service.workers.errors import public_error
 from service.queue import LeaseLost, claim_next, complete_job, finish_job, heartbeat, release_job
+from service.vocabulary import JobStatus
 
 log = logging.getLogger(__name__)
 MAX_BACKOFF_S = 30.0  # longest wait between claim attempts while the database fails
@@ -95,21 +96,21 @@ def execute_claimed(session_factory: sessionmaker[Session], job: Job, worker_id:
             if beat.lease_lost.is_set():
                 return "lost"
             if beat.cancel_requested.is_set():
-                finish_job(session, job.id, worker_id, "cancelled", "cancelled while running", elapsed)
-                return "cancelled"
+                finish_job(session, job.id, worker_id, JobStatus.CANCELLED, "cancelled while running", elapsed)
+                return JobStatus.CANCELLED
             if stopping.is_set() or isinstance(exc, (KeyboardInterrupt, SystemExit)):
                 release_job(session, job.id, worker_id)
                 return "released"
             reason = public_error(exc)
             # the traceback is for the operator (this log), not for whoever reads the job
             log.warning("job %s failed: %s\n%s", job.id, reason, traceback.format_exc())
-            finish_job(session, job.id, worker_id, "failed", reason, elapsed)
-            return "failed"
+            finish_job(session, job.id, worker_id, JobStatus.FAILED, reason, elapsed)
+            return JobStatus.FAILED
     beat.done.set()
     beat.join()
     with session_factory() as session:
         if complete_job(session, job.id, worker_id, result, time.perf_counter() - started):
-            return "succeeded"
+            return JobStatus.SUCCEEDED
     log.warning("job %s finished after its lease was lost; result discarded (it runs elsewhere)", job.id)
     return "lost"
 

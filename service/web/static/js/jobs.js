@@ -69,9 +69,9 @@ export async function jobsPage(view, params) {
   const query = new URLSearchParams({ limit: "100" });
   if (filter) query.set("status", filter);
   if (params.get("campaign_id")) query.set("campaign_id", params.get("campaign_id"));
-  const list = await api(`/jobs?${query}`);
+  const [list, defs] = await Promise.all([api(`/jobs?${query}`), schemas()]);
   const select = h("select", { onchange: (e) => { location.hash = `#/jobs${e.target.value ? "?status=" + e.target.value : ""}`; } },
-    ["", "queued", "running", "succeeded", "failed", "cancelled"].map((s) => h("option", { value: s, selected: s === filter }, s || "all")));
+    ["", ...defs.JobStatus.enum].map((s) => h("option", { value: s, selected: s === filter }, s || "all")));
   view.replaceChildren(h("h2", {}, `Jobs (${list.total})`), h("p", {}, "Status ", select, " ", h("a", { href: "#/submit" }, "submit a job")),
     h("div", { className: "scroll" }, table(["Id", "Test", "Evaluator", "Fidelity", "Seed", "Status", "Progress", "Campaign", "Created"],
       list.items.map((j) => [h("a", { href: `#/jobs/${j.id}` }, `#${j.id}`), j.test, j.evaluator, j.fidelity, String(j.seed),
