@@ -1,6 +1,7 @@
 """A local worker: claim a job, run it with a heartbeat thread, acknowledge late.
 
-The evaluator runs in the worker's main thread; a heartbeat thread renews the
+The evaluator (``calibration.evaluator_registry.run_job``: the backend the job
+names) runs in the worker's main thread; a heartbeat thread renews the
 lease, stores the latest progress and picks up cancellation, which the evaluator
 sees through ``should_cancel``. Engine kernels must return to Python (or release
 the GIL) more often than ``lease_s`` or the heartbeat stalls and the job is
@@ -19,6 +20,7 @@ from typing import Callable
 
 from sqlalchemy.orm import Session, sessionmaker
 
+from calibration.evaluator_registry import run_job
 from engine.lab.spec import JobSpec
 from service.config import Settings
 from service.models.job import Job
@@ -32,13 +34,6 @@ MAX_BACKOFF_S = 30.0  # longest wait between claim attempts while the database f
 
 def default_worker_id(kind: str = "local") -> str:
     return f"{kind}:{socket.gethostname()}:{os.getpid()}:{uuid.uuid4().hex[:6]}"
-
-
-def _run_spec(evaluator, spec, progress, should_cancel):
-    """The job's backend, looked up in the registry when the job runs (tests pass their own)."""
-    from calibration.evaluator_registry import run_job
-
-    return run_job(evaluator, spec, progress, should_cancel)
 
 
 class _Heartbeat(threading.Thread):
@@ -72,7 +67,7 @@ class _Heartbeat(threading.Thread):
 
 
 def execute_claimed(session_factory: sessionmaker[Session], job: Job, worker_id: str, settings: Settings,
-                    evaluate: Callable = _run_spec, stopping: threading.Event | None = None) -> str:
+                    evaluate: Callable = run_job, stopping: threading.Event | None = None) -> str:
     """Run a job this worker has claimed; returns the status it ended in (or 'lost'/'released')."""
     beat = _Heartbeat(session_factory, job.id, worker_id, settings)
     stopping = stopping or threading.Event()
@@ -119,7 +114,7 @@ class Worker:
     """Claims and runs jobs until ``stop`` is set."""
 
     def __init__(self, session_factory: sessionmaker[Session], settings: Settings, worker_id: str | None = None,
-                 evaluate: Callable = _run_spec):
+                 evaluate: Callable = run_job):
         self.session_factory, self.settings, self.evaluate = session_factory, settings, evaluate
         self.worker_id = worker_id or default_worker_id()
         self.stop = threading.Event()
