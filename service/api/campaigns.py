@@ -19,6 +19,7 @@ router = APIRouter(prefix="/campaigns", tags=["campaigns"])
 _STATE = errors(409, c409="the campaign's status does not allow this")
 _NOT_YET = errors(409, c409="the iteration has not produced this yet")
 
+
 @router.post("", status_code=201, summary="Create a campaign (draft) for a material",
              responses=errors(404, c404="the material does not exist"))
 def create(body: CampaignCreate, session: Session = Depends(get_session),

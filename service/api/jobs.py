@@ -25,6 +25,7 @@ from service.workers.errors import scrub
 
 router = APIRouter(prefix="/jobs", tags=["jobs"])
 
+
 class JobSubmit(BaseModel):
     """A single test or a battery: the job spec plus how to queue it."""
 
