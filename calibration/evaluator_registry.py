@@ -97,7 +97,8 @@ def register(backend: Backend) -> Backend:
         raise ValueError(f"evaluator name {backend.name!r} must have 1 to {NAME_MAX} characters (the stored column)")
     unknown = sorted(set(backend.tests) - set(LAB_TESTS))
     if unknown or not backend.tests:
-        raise ValueError(f"evaluator {backend.name!r} declares tests {unknown or '[]'}; lab tests are {list(LAB_TESTS)}")
+        raise ValueError(f"evaluator {backend.name!r} declares tests {unknown or '[]'}; "
+                         f"lab tests are {list(LAB_TESTS)}")
     if ":" not in backend.runner:
         raise ValueError(f"evaluator {backend.name!r}: runner {backend.runner!r} is not 'module:function'")
     REGISTRY[backend.name] = backend
@@ -149,5 +150,6 @@ DEM = register(Backend(
 ANALYTIC = register(Backend(
     name="analytic", title="closed-form stand-in", runner="calibration.standin_job:run_analytic", tests=LAB_TESTS,
     description="A closed-form battery with the thesis's trends, every candidate effect and the simulator's "
-                "scatter (milliseconds a battery): for tests, demonstrations and campaigns that must finish in seconds.",
+                "scatter (milliseconds a battery): for tests, demonstrations and campaigns that must finish "
+                "in seconds.",
 ))
