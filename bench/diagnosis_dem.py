@@ -65,6 +65,7 @@ sys.path.insert(0, ROOT)
 
 import httpx  # noqa: E402
 
+from calibration.evaluator_registry import DEM, names as evaluator_names  # noqa: E402
 from calibration.keys import ResponseKey, find_response, responses_of  # noqa: E402
 from calibration.stats import weighted_rms  # noqa: E402
 from calibration.testbed import measured_priors, measurement_sd  # noqa: E402
@@ -427,7 +428,7 @@ def criteria(outs: list[dict]) -> dict[str, Any]:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenarios", default=",".join(SCENARIOS), help="comma-separated: " + ", ".join(SCENARIOS))
-    ap.add_argument("--evaluator", choices=["dem", "analytic"], default="dem")
+    ap.add_argument("--evaluator", choices=evaluator_names(), default=DEM.name)
     ap.add_argument("--url", help="an existing service (default: start one in a temporary folder)")
     ap.add_argument("--data-dir", help="keep the local service's database (and serve.log) in this folder, so "
                                        "rerunning the same command resumes the jobs and campaigns there")

@@ -2,7 +2,10 @@
 
 The loop asks for batteries and is told their results (Optuna's pattern); it never knows whether
 they ran in this process, on the engine, on a queue or on Dask. A record is a dict with test,
-quantity, condition and value, SI, as ``engine.lab.result.BulkProperty`` dumps.
+quantity, condition and value, SI, as ``engine.lab.result.BulkProperty`` dumps. The backends a
+batch can run on (the DEM lab, the analytic stand-in) are declared in ``evaluator_registry``;
+``LabEvaluator`` runs any of them here, ``StandinEvaluator`` is the bare stand-in with adjustable
+gains and noise for the library's own tests.
 """
 from __future__ import annotations
 
@@ -10,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Sequence
 
 from . import standin
+from .evaluator_registry import DEM, Backend
 
 RunRequest = tuple[Mapping[str, Any], int]
 BatchEvaluator = Callable[[Sequence[RunRequest]], list[list[dict]]]
@@ -31,18 +35,21 @@ class StandinEvaluator:
 
 @dataclass
 class LabEvaluator:
-    """The DEM virtual lab in this process, one battery after another (a notebook's evaluator).
+    """A registered backend in this process, one battery after another (a notebook's evaluator):
+    by default the DEM virtual lab; ``evaluator_registry.get(name).batch(...)`` builds one for any.
 
-    ``options`` are TestOptions fields (e.g. the DST loads and E' stresses of the targets).
+    ``options`` are TestOptions fields (e.g. the DST loads and E' stresses of the targets). The job
+    spec is the one a queued job of the same parameters and seed carries, so a notebook and the
+    service run the same thing.
     """
 
     fidelity: str = "screening"
     test: str = "battery"
     options: dict[str, Any] = field(default_factory=dict)
+    backend: Backend = DEM
     runs: int = 0
 
     def __call__(self, requests: Sequence[RunRequest]) -> list[list[dict]]:
-        from engine.lab import run_job
         from engine.lab.spec import JobSpec, MicroParameters, TestOptions
 
         out = []
@@ -50,7 +57,7 @@ class LabEvaluator:
             spec = JobSpec(test=self.test, fidelity=self.fidelity, seed=int(seed),
                            parameters=MicroParameters.model_validate(dict(parameters)),
                            options=TestOptions.model_validate(self.options))
-            result = run_job(spec)
+            result = self.backend.run(spec)
             out.append([p.model_dump() for p in result.properties])
             self.runs += 1
         return out

@@ -7,6 +7,7 @@ one-line message on stderr and exit status 2, never a traceback.
 """
 from __future__ import annotations
 
+from calibration.evaluator_registry import names as evaluator_names
 from service.cli_http import CliError
 from service.cli_http import call as _call
 from service.cli_http import emit as _emit
@@ -15,6 +16,7 @@ from service.cli_http import leaf as _leaf
 from service.cli_http import pairs as _pairs
 from service.cli_http import read_json as _read_json
 from service.cli_http import table as _table
+from service.vocabulary import CampaignStatus
 
 
 
@@ -275,7 +277,7 @@ def register(subparsers) -> None:
     create.add_argument("--file", help="JSON body (as POST /campaigns), '-' for stdin")
     create.add_argument("--name")
     create.add_argument("--material", dest="material_id", type=int)
-    create.add_argument("--evaluator", choices=["analytic", "dem"])
+    create.add_argument("--evaluator", choices=evaluator_names())
     create.add_argument("--fidelity", choices=["screening", "thesis"])
     create.add_argument("--factor", action="append", help="NAME:LOW:HIGH in SI (repeatable)")
     create.add_argument("--centre-runs", type=int)
@@ -297,7 +299,7 @@ def register(subparsers) -> None:
                              "surfaces did not predict")
     create.add_argument("--start", action="store_true", help="start it right away")
     list_parser = _leaf(csub, "list", campaign_list, "list campaigns")
-    list_parser.add_argument("--status", choices=["draft", "running", "paused", "completed", "failed"])
+    list_parser.add_argument("--status", choices=CampaignStatus.values())
     for action, text in (("start", "start a draft campaign"), ("pause", "pause a running campaign"),
                          ("resume", "resume a paused campaign"), ("status", "show a campaign's state")):
         _leaf(csub, action, campaign_action, text).add_argument("id", type=int)

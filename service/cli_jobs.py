@@ -5,7 +5,9 @@ errors are one line on stderr and exit status 2 (service.cli_http).
 """
 from __future__ import annotations
 
+from calibration.evaluator_registry import names as evaluator_names
 from service.cli_http import CliError, call, emit, fmt, leaf, pairs, read_json, table
+from service.vocabulary import JobStatus
 
 TESTS = ("battery", "fill", "cct", "dst", "aor", "anchor")
 
@@ -70,12 +72,12 @@ def register(subparsers) -> None:
     submit.add_argument("--test", choices=TESTS)
     submit.add_argument("--fidelity", choices=["screening", "thesis"])
     submit.add_argument("--seed", type=int)
-    submit.add_argument("--evaluator", choices=["dem", "analytic"])
+    submit.add_argument("--evaluator", choices=evaluator_names())
     submit.add_argument("--priority", type=int)
     submit.add_argument("--param", action="append", help="NAME=VALUE micro parameter in SI, e.g. friction_pp=0.6")
     submit.add_argument("--idempotency-key", help="submitting twice with one key queues one job")
     lst = leaf(jsub, "list", job_list, "list jobs, newest first")
-    lst.add_argument("--status", choices=["queued", "running", "succeeded", "failed", "cancelled"])
+    lst.add_argument("--status", choices=JobStatus.values())
     lst.add_argument("--test", choices=TESTS)
     lst.add_argument("--campaign", type=int, help="only this campaign's jobs")
     lst.add_argument("--limit", type=int)

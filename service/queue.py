@@ -17,15 +17,16 @@ from sqlalchemy import func, insert, literal, select, text, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
+from calibration import evaluator_registry
 from engine.lab.result import LabResult
 from engine.lab.spec import JobSpec
 from service.config import Settings, get_settings
 from service.errors import Conflict, Invalid, NotFound, TooMany
 from service.models.base import utcnow
 from service.models.job import Job
+from service.vocabulary import JobStatus
 from service.limits import check_limits
 
-EVALUATORS = ("dem", "analytic")
 CLAIM_CANDIDATES = 8  # queued ids tried per claim before giving up on this round
 
 
@@ -53,7 +54,7 @@ def submit_job_ex(
     session: Session,
     spec: JobSpec,
     *,
-    evaluator: str = "dem",
+    evaluator: str = evaluator_registry.DEM.name,
     priority: int = 0,
     idempotency_key: str | None = None,
     client_id: str = "anonymous",
@@ -63,8 +64,7 @@ def submit_job_ex(
 ) -> tuple[Job, bool]:
     """Queue a job; returns ``(job, created)``. Commits. Same idempotency key -> same job."""
     cfg = _settings(session, settings)
-    if evaluator not in EVALUATORS:
-        raise Invalid(f"unknown evaluator {evaluator!r}; choose one of {list(EVALUATORS)}", "evaluator")
+    _check_evaluator(evaluator, spec)
     spec_json = _spec_json(spec)
     if idempotency_key is not None:
         existing = _by_key(session, client_id, idempotency_key)
@@ -72,7 +72,7 @@ def submit_job_ex(
             return _replay(existing, spec_json, evaluator), False
     check_limits(spec, cfg)
     values = dict(
-        status="queued", evaluator=evaluator, test=spec.test, fidelity=spec.fidelity, spec=spec_json,
+        status=JobStatus.QUEUED, evaluator=evaluator, test=spec.test, fidelity=spec.fidelity, spec=spec_json,
         seed=spec.seed, priority=priority, attempts=0, max_attempts=max_attempts or cfg.max_attempts,
         cancel_requested=False, progress_fraction=0.0, idempotency_key=idempotency_key,
         client_id=client_id, campaign_id=campaign_id, created_at=utcnow(),
@@ -95,9 +95,20 @@ def submit_job_ex(
     return get_job(session, job_id), True
 
 
+def _check_evaluator(name: str, spec: JobSpec) -> None:
+    """A registered backend that covers the spec's test, or a 422 naming the field (the API's schema
+    checks the name too, but campaigns and schedules queue through here without it)."""
+    try:
+        evaluator_registry.get(name).check_test(spec.test)
+    except evaluator_registry.UnknownEvaluator as exc:
+        raise Invalid(str(exc), "evaluator") from None
+    except evaluator_registry.UncoveredTest as exc:
+        raise Invalid(str(exc), "test") from None
+
+
 def _unfinished(session: Session, client_id: str) -> int:
     return int(session.scalar(select(func.count(Job.id)).where(
-        Job.client_id == client_id, Job.status.in_(("queued", "running")))) or 0)
+        Job.client_id == client_id, Job.status.in_(JobStatus.unfinished()))) or 0)
 
 
 def _insert_within_limit(session: Session, values: dict[str, Any], limit: int) -> int | None:
@@ -113,7 +124,7 @@ def _insert_within_limit(session: Session, values: dict[str, Any], limit: int) -
     table = Job.__table__
     columns = list(values)
     unfinished = (select(func.count()).select_from(table)
-                  .where(table.c.client_id == values["client_id"], table.c.status.in_(("queued", "running")))
+                  .where(table.c.client_id == values["client_id"], table.c.status.in_(JobStatus.unfinished()))
                   .scalar_subquery())
     source = select(*[literal(values[c], type_=table.c[c].type) for c in columns]).where(unfinished < limit)
     result = session.execute(insert(table).from_select(columns, source).returning(table.c.id))
@@ -162,12 +173,12 @@ def cancel_job(session: Session, job_id: int) -> Job:
     """Queued -> cancelled now; running -> flag the worker sees at its next heartbeat."""
     for _ in range(3):  # the job may be claimed between our read and our write
         job = get_job(session, job_id)
-        if job.status == "queued":
-            done = _update(session, job_id, [Job.status == "queued"],
-                           {"status": "cancelled", "cancel_requested": True, "finished_at": utcnow(),
+        if job.status == JobStatus.QUEUED:
+            done = _update(session, job_id, [Job.status == JobStatus.QUEUED],
+                           {"status": JobStatus.CANCELLED, "cancel_requested": True, "finished_at": utcnow(),
                             "error": "cancelled before it started"})
-        elif job.status == "running":
-            done = _update(session, job_id, [Job.status == "running"], {"cancel_requested": True})
+        elif job.status == JobStatus.RUNNING:
+            done = _update(session, job_id, [Job.status == JobStatus.RUNNING], {"cancel_requested": True})
         else:
             raise Conflict(f"job {job_id} is already {job.status}", ["path", "job_id"])
         session.commit()
@@ -179,8 +190,8 @@ def cancel_job(session: Session, job_id: int) -> Job:
 def retry_job(session: Session, job_id: int) -> Job:
     """Failed or cancelled -> queued again, same id, fresh attempt budget."""
     job = get_job(session, job_id)
-    done = _update(session, job_id, [Job.status.in_(("failed", "cancelled"))], {
-        "status": "queued", "attempts": 0, "cancel_requested": False, "lease_owner": None,
+    done = _update(session, job_id, [Job.status.in_(JobStatus.unsuccessful())], {
+        "status": JobStatus.QUEUED, "attempts": 0, "cancel_requested": False, "lease_owner": None,
         "lease_expires_at": None, "heartbeat_at": None, "progress_fraction": 0.0, "progress_phase": None,
         "result": None, "error": None, "started_at": None, "finished_at": None, "wall_time_s": None,
     })
@@ -203,20 +214,20 @@ def reclaim_expired(session: Session) -> int:
     now = utcnow()
     expired = session.execute(
         select(Job.id, Job.attempts, Job.max_attempts, Job.cancel_requested, Job.lease_owner,
-               Job.lease_expires_at).where(Job.status == "running", Job.lease_expires_at < now)
+               Job.lease_expires_at).where(Job.status == JobStatus.RUNNING, Job.lease_expires_at < now)
     ).all()
     changed = 0
     for job_id, attempts, max_attempts, cancel_requested, owner, expires in expired:
         reason = f"attempt {attempts}: lease of worker {owner} expired at {expires.isoformat()}Z"
         if cancel_requested:
-            values = {"status": "cancelled", "finished_at": now, "error": f"cancelled; {reason}"}
+            values = {"status": JobStatus.CANCELLED, "finished_at": now, "error": f"cancelled; {reason}"}
         elif attempts >= max_attempts:
-            values = {"status": "failed", "finished_at": now,
+            values = {"status": JobStatus.FAILED, "finished_at": now,
                       "error": f"lost its worker {attempts} times (max_attempts={max_attempts}); {reason}"}
         else:
-            values = {"status": "queued", "error": reason}
+            values = {"status": JobStatus.QUEUED, "error": reason}
         values.update(lease_owner=None, lease_expires_at=None)
-        changed += _update(session, job_id, [Job.status == "running", Job.lease_owner == owner,
+        changed += _update(session, job_id, [Job.status == JobStatus.RUNNING, Job.lease_owner == owner,
                                              Job.lease_expires_at == expires], values)
     session.commit()
     return changed
@@ -226,13 +237,14 @@ def claim_next(session: Session, worker_id: str, lease_s: float) -> Job | None:
     """Claim the highest-priority, oldest queued job for ``worker_id``, or None."""
     reclaim_expired(session)
     candidates = session.scalars(
-        select(Job.id).where(Job.status == "queued").order_by(Job.priority.desc(), Job.id).limit(CLAIM_CANDIDATES)
+        select(Job.id).where(Job.status == JobStatus.QUEUED).order_by(Job.priority.desc(), Job.id)
+        .limit(CLAIM_CANDIDATES)
     ).all()
     session.commit()  # end the read transaction so the write below waits on the lock, not a stale snapshot
     for job_id in candidates:
         now = utcnow()
-        won = _update(session, job_id, [Job.status == "queued"], {
-            "status": "running", "lease_owner": worker_id, "lease_expires_at": now + timedelta(seconds=lease_s),
+        won = _update(session, job_id, [Job.status == JobStatus.QUEUED], {
+            "status": JobStatus.RUNNING, "lease_owner": worker_id, "lease_expires_at": now + timedelta(seconds=lease_s),
             "heartbeat_at": now, "attempts": Job.attempts + 1, "started_at": now, "progress_fraction": 0.0,
             "progress_phase": "claimed",
         })
@@ -243,7 +255,7 @@ def claim_next(session: Session, worker_id: str, lease_s: float) -> Job | None:
 
 
 def _owned(worker_id: str) -> list:
-    return [Job.status == "running", Job.lease_owner == worker_id]
+    return [Job.status == JobStatus.RUNNING, Job.lease_owner == worker_id]
 
 
 def heartbeat(session: Session, job_id: int, worker_id: str, lease_s: float,
@@ -266,7 +278,7 @@ def heartbeat(session: Session, job_id: int, worker_id: str, lease_s: float,
 def complete_job(session: Session, job_id: int, worker_id: str, result: LabResult, wall_time_s: float) -> bool:
     """Store the result and mark success in one transaction; False if the lease was lost."""
     done = _update(session, job_id, _owned(worker_id), {
-        "status": "succeeded", "result": result.model_dump(mode="json"), "finished_at": utcnow(),
+        "status": JobStatus.SUCCEEDED, "result": result.model_dump(mode="json"), "finished_at": utcnow(),
         "engine_version": result.provenance.engine_version, "wall_time_s": wall_time_s,
         "progress_fraction": 1.0, "progress_phase": "done", "lease_expires_at": None,
     })
@@ -274,10 +286,10 @@ def complete_job(session: Session, job_id: int, worker_id: str, result: LabResul
     return done
 
 
-def finish_job(session: Session, job_id: int, worker_id: str, status: str, error: str,
+def finish_job(session: Session, job_id: int, worker_id: str, status: JobStatus, error: str,
                wall_time_s: float | None = None) -> bool:
-    """End a job the worker owns as 'failed' or 'cancelled', keeping the reason."""
-    assert status in ("failed", "cancelled")
+    """End a job the worker owns as failed or cancelled, keeping the reason."""
+    assert status in JobStatus.unsuccessful()
     done = _update(session, job_id, _owned(worker_id), {
         "status": status, "error": error[:20000], "finished_at": utcnow(), "wall_time_s": wall_time_s,
         "lease_expires_at": None,
@@ -289,7 +301,7 @@ def finish_job(session: Session, job_id: int, worker_id: str, status: str, error
 def release_job(session: Session, job_id: int, worker_id: str) -> bool:
     """Hand an unfinished job back (graceful shutdown): queued again, this attempt not counted."""
     done = _update(session, job_id, _owned(worker_id), {
-        "status": "queued", "lease_owner": None, "lease_expires_at": None, "attempts": Job.attempts - 1,
+        "status": JobStatus.QUEUED, "lease_owner": None, "lease_expires_at": None, "attempts": Job.attempts - 1,
         "progress_fraction": 0.0, "progress_phase": None,
     })
     session.commit()
@@ -300,14 +312,14 @@ def requeue_job(session: Session, job_id: int, worker_id: str, reason: str) -> b
     """The executor lost this attempt (its Dask worker or scheduler is gone): queued again with the
     attempt counted, or failed once ``max_attempts`` claims are used up. Only the owner can do it."""
     job = get_job(session, job_id)
-    if job.status != "running" or job.lease_owner != worker_id:
+    if job.status != JobStatus.RUNNING or job.lease_owner != worker_id:
         session.commit()
         return False
     if job.attempts >= job.max_attempts:
-        values = {"status": "failed", "finished_at": utcnow(),
+        values = {"status": JobStatus.FAILED, "finished_at": utcnow(),
                   "error": f"lost its executor {job.attempts} times (max_attempts={job.max_attempts}); {reason}"}
     else:
-        values = {"status": "queued", "error": f"attempt {job.attempts}: {reason}", "progress_fraction": 0.0,
+        values = {"status": JobStatus.QUEUED, "error": f"attempt {job.attempts}: {reason}", "progress_fraction": 0.0,
                   "progress_phase": None}
     done = _update(session, job_id, _owned(worker_id), {**values, "lease_owner": None, "lease_expires_at": None})
     session.commit()

@@ -1,29 +1,57 @@
-"""The service's status words, each spelt once: jobs, campaigns and a campaign's runs.
+"""The service's status words as enums: one spelling per state, checked by the interpreter.
 
-``str`` enums so the stored strings and the JSON stay the plain words they were. The loop's own
-words (phases, run kinds, verdicts, stop reasons) are ``calibration.vocabulary``'s.
+Why: the states of a job and of a campaign were string literals written in the queue, the workers,
+the routers, the CLI and the models; a typo was a state nobody handles. Each enum mixes in ``str``,
+so a member *is* its stored string: it compares equal to what the database holds, binds as that
+string, and serialises to it in JSON, and the tables, the API and the page stay as they were.
+
+``str()`` and f-strings give the value too ("failed", not "JobStatus.FAILED", which Python 3.11
+made the default for mixed-in enums), so a member can go into a message or a log line as it is.
 """
 from __future__ import annotations
 
-from enum import Enum
+import enum
 
 
-class JobStatus(str, Enum):
+class _Word(str, enum.Enum):
+    """A ``(str, Enum)`` whose text is its value on every Python from 3.10."""
+
+    def __str__(self) -> str:
+        return self.value
+
+    __format__ = str.__format__
+
+    @classmethod
+    def values(cls) -> tuple[str, ...]:
+        return tuple(member.value for member in cls)
+
+
+class JobStatus(_Word):
+    """A queued job's state (``service.queue`` moves it; only the owner of the lease ends it)."""
+
     QUEUED = "queued"
     RUNNING = "running"
     SUCCEEDED = "succeeded"
     FAILED = "failed"
     CANCELLED = "cancelled"
 
-    def __str__(self) -> str:
-        return self.value
+    @classmethod
+    def unfinished(cls) -> tuple[JobStatus, ...]:
+        """States a worker may still change (they count against a client's queue limit)."""
+        return (cls.QUEUED, cls.RUNNING)
+
+    @classmethod
+    def finished(cls) -> tuple[JobStatus, ...]:
+        return (cls.SUCCEEDED, cls.FAILED, cls.CANCELLED)
+
+    @classmethod
+    def unsuccessful(cls) -> tuple[JobStatus, ...]:
+        """The ends without a result: what a worker gives up with, and what ``retry`` queues again."""
+        return (cls.FAILED, cls.CANCELLED)
 
 
-FINISHED_JOB = frozenset({JobStatus.SUCCEEDED, JobStatus.FAILED, JobStatus.CANCELLED})
-
-
-class CampaignStatus(str, Enum):
-    """draft -start-> running -pause-> paused -resume-> running -> completed | failed."""
+class CampaignStatus(_Word):
+    """A campaign's state: draft until started, running or paused, then completed or failed."""
 
     DRAFT = "draft"
     RUNNING = "running"
@@ -31,12 +59,9 @@ class CampaignStatus(str, Enum):
     COMPLETED = "completed"
     FAILED = "failed"
 
-    def __str__(self) -> str:
-        return self.value
 
-
-class RunStatus(str, Enum):
-    """A campaign run: pending until its job is queued, then its job's status."""
+class RunStatus(_Word):
+    """A campaign run's state: pending until its job is queued, then its job's status."""
 
     PENDING = "pending"
     QUEUED = "queued"
@@ -44,6 +69,3 @@ class RunStatus(str, Enum):
     SUCCEEDED = "succeeded"
     FAILED = "failed"
     CANCELLED = "cancelled"
-
-    def __str__(self) -> str:
-        return self.value

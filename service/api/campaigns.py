@@ -1,8 +1,6 @@
 """Campaign endpoints: create, start/pause/resume (409 when illegal), and every product of a run."""
 from __future__ import annotations
 
-from typing import Literal
-
 from fastapi import APIRouter, Depends, Query
 from sqlalchemy.orm import Session
 
@@ -20,13 +18,12 @@ from service.api.responses.report import ReportOut
 from service.db import DbSession
 from service.errors import Conflict, NotFound
 from service.security import client_id
+from service.vocabulary import CampaignStatus
 
 router = APIRouter(prefix="/campaigns", tags=["campaigns"])
 
 _STATE = errors(409, c409="the campaign's status does not allow this")
 _NOT_YET = errors(409, c409="the iteration has not produced this yet")
-
-Status = Literal["draft", "running", "paused", "completed", "failed"]
 
 
 @router.post("", status_code=201, summary="Create a campaign (draft) for a material", **typed(CampaignSummary),
@@ -37,7 +34,7 @@ def create(body: CampaignCreate, session: DbSession,
 
 
 @router.get("", summary="List campaigns, newest first", **typed(list[CampaignSummary]))
-def list_all(session: DbSession, status: Status | None = Query(None)) -> list[dict]:
+def list_all(session: DbSession, status: CampaignStatus | None = Query(None)) -> list[dict]:
     return [campaign_summary(c) for c in list_campaigns(session, status)]
 
 

@@ -1,12 +1,13 @@
 """DEM job endpoints: submit, list, status/progress, result and curves, cancel, retry."""
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
 from fastapi import Path as PathParam
 from pydantic import BaseModel, ConfigDict, Field
 
+from calibration.evaluator_registry import DEM, EvaluatorName
 from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
 from engine.lab.spec import Fidelity, JobSpec, MicroParameters, TestName, TestOptions
 from service import queue
@@ -14,14 +15,16 @@ from service.api.jsonsafe import json_safe
 from service.api.openapi import errors
 from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, Offset
 from service.api.responses.common import typed
-from service.api.responses.jobs import Curve, CurveIndex, JobList, JobOut, JobResult, JobStatus, Progress
+from service.api.responses.jobs import Curve, CurveIndex, JobList, JobOut, JobResult, Progress
 from service.db import DbSession
 from service.errors import Conflict, NotFound
 from service.models.job import Job
 from service.security import client_id
+from service.vocabulary import JobStatus
 from service.workers.errors import scrub
 
 router = APIRouter(prefix="/jobs", tags=["jobs"])
+
 
 class JobSubmit(BaseModel):
     """A single test or a battery: the job spec plus how to queue it."""
@@ -33,7 +36,7 @@ class JobSubmit(BaseModel):
     seed: int = Field(0, ge=0, le=MAX_SEED, description="random seed; same seed and thread count, same result")
     parameters: MicroParameters = Field(default_factory=MicroParameters)
     options: TestOptions = Field(default_factory=TestOptions)
-    evaluator: Literal["dem", "analytic"] = "dem"
+    evaluator: EvaluatorName = DEM.name
     priority: int = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="higher runs first")
     idempotency_key: str | None = Field(None, min_length=1, max_length=200,
                                         description="resubmitting the same key returns the same job")
@@ -55,13 +58,13 @@ def job_out(job: Job) -> JobOut:
         wall_time_s=job.wall_time_s, created_at=job.created_at, started_at=job.started_at,
         finished_at=job.finished_at, heartbeat_at=job.heartbeat_at, lease_owner=job.lease_owner,
         lease_expires_at=job.lease_expires_at, idempotency_key=job.idempotency_key, client_id=job.client_id,
-        campaign_id=job.campaign_id, result_available=job.status == "succeeded" and job.result is not None,
+        campaign_id=job.campaign_id, result_available=job.status == JobStatus.SUCCEEDED and job.result is not None,
         spec=json_safe(job.spec),
     )
 
 
 def _result(job: Job) -> dict[str, Any]:
-    if job.status != "succeeded" or job.result is None:
+    if job.status != JobStatus.SUCCEEDED or job.result is None:
         raise Conflict(f"job {job.id} is {job.status}; a result exists only for succeeded jobs", ["path", "job_id"])
     return job.result
 
@@ -89,7 +92,7 @@ def submit(body: JobSubmit, request: Request, response: Response, session: DbSes
 @router.get("", response_model=JobList, summary="List jobs, newest first, filtered")
 def list_jobs(session: DbSession, status_: JobStatus | None = Query(None, alias="status"),
               test: TestName | None = None, campaign_id: int | None = Query(None, ge=1, le=SQLITE_INT_MAX),
-              evaluator: Literal["dem", "analytic"] | None = None,
+              evaluator: EvaluatorName | None = None,
               limit: int = Query(100, ge=1, le=1000), offset: Offset = 0) -> JobList:
     rows, total = queue.list_jobs(session, status=status_, test=test, campaign_id=campaign_id,
                                   evaluator=evaluator, limit=limit, offset=offset)
@@ -135,7 +138,7 @@ def get_curve(session: DbSession, job_id: JobId, name: str = PathParam(..., max_
                         **errors(409, c409="already finished")})
 def cancel(job_id: JobId, response: Response, session: DbSession) -> JobOut:
     job = queue.cancel_job(session, job_id)
-    if job.status == "running":
+    if job.status == JobStatus.RUNNING:
         response.status_code = status.HTTP_202_ACCEPTED
     return job_out(job)
 

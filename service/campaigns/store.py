@@ -20,8 +20,11 @@ from service.limits import check_campaign_limits
 from service.materials.store import get_material
 from service.models.base import utcnow
 from service.models.campaign import Campaign, CampaignIteration
+from service.vocabulary import CampaignStatus, RunStatus
 
-TRANSITIONS = {"start": ({"draft"}, "running"), "pause": ({"running"}, "paused"), "resume": ({"paused"}, "running")}
+TRANSITIONS = {"start": ({CampaignStatus.DRAFT}, CampaignStatus.RUNNING),
+               "pause": ({CampaignStatus.RUNNING}, CampaignStatus.PAUSED),
+               "resume": ({CampaignStatus.PAUSED}, CampaignStatus.RUNNING)}
 
 
 def _settings(session: Session) -> Settings:
@@ -34,7 +37,7 @@ def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = 
         raise NotFound(f"material {body.material_id} not found", "material_id")
     # the design doe/ builds and the limits of every run: a 422 now, not a failure on start
     check_campaign_limits(body, _settings(session))
-    campaign = Campaign(name=body.name, material_id=body.material_id, status="draft", evaluator=body.evaluator,
+    campaign = Campaign(name=body.name, material_id=body.material_id, status=CampaignStatus.DRAFT, evaluator=body.evaluator,
                         fidelity=body.fidelity, config=body.model_dump(mode="json"), current_iteration=0,
                         schedule_id=schedule_id, client_id=client_id)
     session.add(campaign)
@@ -77,7 +80,7 @@ def transition(session: Session, campaign_id: int, action: str) -> Campaign:
 def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> Campaign:
     """Completed campaign -> running again with a new iteration using the changed configuration."""
     campaign = get_campaign(session, campaign_id)
-    if campaign.status != "completed":
+    if campaign.status != CampaignStatus.COMPLETED:
         raise Conflict(f"campaign {campaign_id} is {campaign.status}; a next iteration starts only after "
                        "the current one completed", ["path", "campaign_id"])
     config = dict(campaign.config)
@@ -98,8 +101,8 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
     check_campaign_limits(validated, _settings(session))
     config = validated.model_dump(mode="json")
-    won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == "completed")
-                          .values(config=config, status="running", finished_at=None, updated_at=utcnow())
+    won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == CampaignStatus.COMPLETED)
+                          .values(config=config, status=CampaignStatus.RUNNING, finished_at=None, updated_at=utcnow())
                           .execution_options(synchronize_session=False)).rowcount
     session.commit()
     if not won:
@@ -137,13 +140,13 @@ def iteration(session: Session, campaign: Campaign, number: int | None = None) -
 def campaign_summary(campaign: Campaign) -> dict[str, Any]:
     current = next((it for it in campaign.iterations if it.number == campaign.current_iteration), None)
     runs = current.runs if current else []
-    done = sum(1 for r in runs if r.status == "succeeded")
+    done = sum(1 for r in runs if r.status == RunStatus.SUCCEEDED)
     return {
         "id": campaign.id, "name": campaign.name, "material_id": campaign.material_id, "status": campaign.status,
         "evaluator": campaign.evaluator, "fidelity": campaign.fidelity,
         "current_iteration": campaign.current_iteration, "phase": current.phase if current else None,
         "runs_total": len(runs), "runs_succeeded": done,
-        "runs_failed": sum(1 for r in runs if r.status in ("failed", "cancelled")),
+        "runs_failed": sum(1 for r in runs if r.status in (RunStatus.FAILED, RunStatus.CANCELLED)),
         "error": campaign.error, "schedule_id": campaign.schedule_id,
         "created_at": _iso(campaign.created_at), "started_at": _iso(campaign.started_at),
         "finished_at": _iso(campaign.finished_at), "config": campaign.config,

@@ -11,9 +11,11 @@ from typing import Any
 from sqlalchemy import JSON, DateTime, ForeignKey, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
+from calibration.evaluator_registry import ANALYTIC, NAME_MAX
 from service.models.base import Base, utcnow
+from service.vocabulary import CampaignStatus
 
-CAMPAIGN_STATUSES = ("draft", "running", "paused", "completed", "failed")
+CAMPAIGN_STATUSES = CampaignStatus.values()
 # Phases of one iteration, in order.
 ITERATION_PHASES = ("design", "batteries", "analysis", "confirmation", "report", "done")
 
@@ -24,8 +26,8 @@ class Campaign(Base):
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     name: Mapped[str] = mapped_column(String(200), nullable=False)
     material_id: Mapped[int] = mapped_column(ForeignKey("materials.id"), index=True, nullable=False)
-    status: Mapped[str] = mapped_column(String(16), default="draft", index=True, nullable=False)
-    evaluator: Mapped[str] = mapped_column(String(16), default="analytic", nullable=False)
+    status: Mapped[str] = mapped_column(String(16), default=CampaignStatus.DRAFT, index=True, nullable=False)
+    evaluator: Mapped[str] = mapped_column(String(NAME_MAX), default=ANALYTIC.name, nullable=False)
     fidelity: Mapped[str] = mapped_column(String(16), default="screening", nullable=False)
     # The validated CampaignConfig (factors, design, targets, options, seed ...).
     config: Mapped[dict[str, Any]] = mapped_column(JSON, nullable=False)

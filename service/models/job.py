@@ -12,10 +12,12 @@ from typing import Any
 from sqlalchemy import JSON, Boolean, DateTime, Float, Index, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
+from calibration.evaluator_registry import DEM, NAME_MAX
 from service.models.base import Base, utcnow
+from service.vocabulary import JobStatus
 
-JOB_STATUSES = ("queued", "running", "succeeded", "failed", "cancelled")
-FINISHED_STATUSES = ("succeeded", "failed", "cancelled")
+JOB_STATUSES = JobStatus.values()
+FINISHED_STATUSES = tuple(s.value for s in JobStatus.finished())
 
 
 class Job(Base):
@@ -27,8 +29,8 @@ class Job(Base):
     )
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    status: Mapped[str] = mapped_column(String(16), default="queued", nullable=False, index=True)
-    evaluator: Mapped[str] = mapped_column(String(16), default="dem", nullable=False)
+    status: Mapped[str] = mapped_column(String(16), default=JobStatus.QUEUED, nullable=False, index=True)
+    evaluator: Mapped[str] = mapped_column(String(NAME_MAX), default=DEM.name, nullable=False)
     test: Mapped[str] = mapped_column(String(16), nullable=False, index=True)
     fidelity: Mapped[str] = mapped_column(String(16), nullable=False)
     spec: Mapped[dict[str, Any]] = mapped_column(JSON, nullable=False)

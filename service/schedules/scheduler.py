@@ -25,6 +25,7 @@ from service.models.base import utcnow
 from service.models.campaign import Campaign
 from service.models.schedule import Schedule, ScheduleFiring
 from service.schedules.cron import parse_cron
+from service.vocabulary import CampaignStatus
 
 log = logging.getLogger(__name__)
 
@@ -124,7 +125,7 @@ class Scheduler:
         # over them is skipped with the reason, not a campaign that fails on its first run
         check_campaign_limits(config, self.settings)
         campaign = create_campaign_nocommit(session, config, schedule.id)
-        campaign.status = "running"
+        campaign.status = CampaignStatus.RUNNING
         campaign.started_at = now
         schedule.last_measurement_id = latest_measurement_id(session, config.material_id)
         session.flush()
@@ -133,7 +134,7 @@ class Scheduler:
 
 def create_campaign_nocommit(session: Session, config: CampaignCreate, schedule_id: int) -> Campaign:
     """Same row as the API creates, in the firing's transaction (firing and campaign commit together)."""
-    campaign = Campaign(name=config.name, material_id=config.material_id, status="draft",
+    campaign = Campaign(name=config.name, material_id=config.material_id, status=CampaignStatus.DRAFT,
                         evaluator=config.evaluator, fidelity=config.fidelity, config=config.model_dump(mode="json"),
                         current_iteration=0, schedule_id=schedule_id, client_id=f"schedule:{schedule_id}")
     session.add(campaign)

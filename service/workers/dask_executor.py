@@ -29,6 +29,7 @@ from service.workers.errors import public_error
 from service.config import Settings
 from service.queue import (LeaseLost, claim_next, complete_job, count_attempt, finish_job, heartbeat, release_job,
                            requeue_job)
+from service.vocabulary import JobStatus
 from service.workers.local import default_worker_id
 
 log = logging.getLogger(__name__)
@@ -44,7 +45,7 @@ def run_on_dask(evaluator: str, spec_json: dict, job_id: int, attempt: int) -> d
     from distributed import Variable
 
     from engine.lab.spec import JobSpec
-    from service.evaluators import run_spec
+    from calibration.evaluator_registry import run_job
 
     progress_name, cancel_name = _names(job_id, attempt)
     progress_var, cancel_var = Variable(progress_name), Variable(cancel_name)
@@ -63,7 +64,7 @@ def run_on_dask(evaluator: str, spec_json: dict, job_id: int, attempt: int) -> d
             last["cancelled"] = bool(cancel_var.get(timeout=5))
         return last["cancelled"]
 
-    return run_spec(evaluator, JobSpec.model_validate(spec_json), progress, should_cancel).model_dump(mode="json")
+    return run_job(evaluator, JobSpec.model_validate(spec_json), progress, should_cancel).model_dump(mode="json")
 
 
 @dataclass
@@ -210,7 +211,7 @@ class DaskDispatcher:
             job = session.get(self._job_model(), entry.job_id)
             if attempts > job.max_attempts:
                 entry.future.cancel()
-                finish_job(session, entry.job_id, self.worker_id, "failed",
+                finish_job(session, entry.job_id, self.worker_id, JobStatus.FAILED,
                            f"lost its Dask worker {attempts - 1} times (max_attempts={job.max_attempts})")
                 self._forget(entry)
                 return False
@@ -259,13 +260,14 @@ class DaskDispatcher:
                     if not complete_job(session, entry.job_id, self.worker_id, result, elapsed):
                         log.warning("job %s: lease lost before its result arrived; discarded", entry.job_id)
                 elif entry.cancel_requested:
-                    finish_job(session, entry.job_id, self.worker_id, "cancelled", "cancelled while running", elapsed)
+                    finish_job(session, entry.job_id, self.worker_id, JobStatus.CANCELLED, "cancelled while running",
+                               elapsed)
                 elif future.status == "error":
                     exc = future.exception()
                     tb = "".join(traceback.format_tb(future.traceback())) if future.traceback() else ""
                     reason = public_error(exc)
                     log.warning("job %s failed on dask: %s\n%s", entry.job_id, reason, tb)
-                    finish_job(session, entry.job_id, self.worker_id, "failed", reason, elapsed)
+                    finish_job(session, entry.job_id, self.worker_id, JobStatus.FAILED, reason, elapsed)
                 else:  # cancelled or lost by Dask itself (e.g. scheduler restart): run it again, counted
                     requeue_job(session, entry.job_id, self.worker_id, f"the Dask task ended {future.status}")
             self._forget(entry)

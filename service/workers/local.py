@@ -1,6 +1,7 @@
 """A local worker: claim a job, run it with a heartbeat thread, acknowledge late.
 
-The evaluator runs in the worker's main thread; a heartbeat thread renews the
+The evaluator (``calibration.evaluator_registry.run_job``: the backend the job
+names) runs in the worker's main thread; a heartbeat thread renews the
 lease, stores the latest progress and picks up cancellation, which the evaluator
 sees through ``should_cancel``. Engine kernels must return to Python (or release
 the GIL) more often than ``lease_s`` or the heartbeat stalls and the job is
@@ -19,11 +20,13 @@ from typing import Callable
 
 from sqlalchemy.orm import Session, sessionmaker
 
+from calibration.evaluator_registry import run_job
 from engine.lab.spec import JobSpec
 from service.config import Settings
 from service.models.job import Job
 from service.workers.errors import public_error
 from service.queue import LeaseLost, claim_next, complete_job, finish_job, heartbeat, release_job
+from service.vocabulary import JobStatus
 
 log = logging.getLogger(__name__)
 MAX_BACKOFF_S = 30.0  # longest wait between claim attempts while the database fails
@@ -31,12 +34,6 @@ MAX_BACKOFF_S = 30.0  # longest wait between claim attempts while the database f
 
 def default_worker_id(kind: str = "local") -> str:
     return f"{kind}:{socket.gethostname()}:{os.getpid()}:{uuid.uuid4().hex[:6]}"
-
-
-def _run_spec(evaluator, spec, progress, should_cancel):
-    from service.evaluators import run_spec
-
-    return run_spec(evaluator, spec, progress, should_cancel)
 
 
 class _Heartbeat(threading.Thread):
@@ -70,7 +67,7 @@ class _Heartbeat(threading.Thread):
 
 
 def execute_claimed(session_factory: sessionmaker[Session], job: Job, worker_id: str, settings: Settings,
-                    evaluate: Callable = _run_spec, stopping: threading.Event | None = None) -> str:
+                    evaluate: Callable = run_job, stopping: threading.Event | None = None) -> str:
     """Run a job this worker has claimed; returns the status it ended in (or 'lost'/'released')."""
     beat = _Heartbeat(session_factory, job.id, worker_id, settings)
     stopping = stopping or threading.Event()
@@ -94,21 +91,21 @@ def execute_claimed(session_factory: sessionmaker[Session], job: Job, worker_id:
             if beat.lease_lost.is_set():
                 return "lost"
             if beat.cancel_requested.is_set():
-                finish_job(session, job.id, worker_id, "cancelled", "cancelled while running", elapsed)
-                return "cancelled"
+                finish_job(session, job.id, worker_id, JobStatus.CANCELLED, "cancelled while running", elapsed)
+                return JobStatus.CANCELLED
             if stopping.is_set() or isinstance(exc, (KeyboardInterrupt, SystemExit)):
                 release_job(session, job.id, worker_id)
                 return "released"
             reason = public_error(exc)
             # the traceback is for the operator (this log), not for whoever reads the job
             log.warning("job %s failed: %s\n%s", job.id, reason, traceback.format_exc())
-            finish_job(session, job.id, worker_id, "failed", reason, elapsed)
-            return "failed"
+            finish_job(session, job.id, worker_id, JobStatus.FAILED, reason, elapsed)
+            return JobStatus.FAILED
     beat.done.set()
     beat.join()
     with session_factory() as session:
         if complete_job(session, job.id, worker_id, result, time.perf_counter() - started):
-            return "succeeded"
+            return JobStatus.SUCCEEDED
     log.warning("job %s finished after its lease was lost; result discarded (it runs elsewhere)", job.id)
     return "lost"
 
@@ -117,7 +114,7 @@ class Worker:
     """Claims and runs jobs until ``stop`` is set."""
 
     def __init__(self, session_factory: sessionmaker[Session], settings: Settings, worker_id: str | None = None,
-                 evaluate: Callable = _run_spec):
+                 evaluate: Callable = run_job):
         self.session_factory, self.settings, self.evaluate = session_factory, settings, evaluate
         self.worker_id = worker_id or default_worker_id()
         self.stop = threading.Event()

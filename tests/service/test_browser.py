@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from calibration.evaluator_registry import names
 from browser_support import REQUIRE_ENV, launch, missing_browser_reason, screenshot_dir, start_service, stop_service, watch_page
 
 _REASON = missing_browser_reason()
@@ -90,6 +91,7 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     form = page.locator("form#new-campaign")
     form.locator("input[name=name]").fill("browser loop")
     form.locator("select[name=material_id]").select_option(label="thesis-coarse-aggregate")
+    assert form.locator("select[name=evaluator]").input_value() == "analytic"  # CampaignCreate's default
     form.locator("select[name=evaluator]").select_option("analytic")
     form.locator("select[name=fidelity]").select_option("thesis")
     form.locator("input[name=seed]").fill("11")
@@ -158,7 +160,11 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
 def test_job_submission_with_an_effect_shows_its_curves(page, service, shots):
     open_view(page, service, "#/submit")
     form = page.locator("form#submit-job")
-    form.locator("select[name=evaluator]").select_option("analytic")
+    evaluator = form.locator("select[name=evaluator]")
+    # the options are the registry's (GET /evaluators), the default is JobSubmit's (OpenAPI)
+    assert evaluator.locator("option").evaluate_all("options => options.map((o) => o.value)") == names()
+    assert evaluator.input_value() == "dem"
+    evaluator.select_option("analytic")
     form.locator("select[name=fidelity]").select_option("thesis")
     form.locator("input[name=effect][value=rolling_epsd2]").check()
     form.locator("input[name='effect:rolling_epsd2:rolling_friction']").fill("0.3")

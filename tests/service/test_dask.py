@@ -46,16 +46,16 @@ def test_serve_with_dask_scheduler_runs_jobs(settings, cluster):
 
 def test_dask_progress_cancellation_and_failure(session_factory, settings, cluster, monkeypatch):
     monkeypatch.setenv("DEMCAL_ANALYTIC_DURATION_S", "20")  # the in-process Dask worker sees it
-    import service.evaluators as evaluators
+    import calibration.evaluator_registry as evaluators
 
-    real_run_spec = evaluators.run_spec
+    real_run_job = evaluators.run_job
 
-    def run_spec(evaluator, spec, progress=None, should_cancel=None):
+    def run_job(evaluator, spec, progress=None, should_cancel=None):
         if spec.seed == 2:
             raise RuntimeError("wall servo lost contact")
-        return real_run_spec(evaluator, spec, progress, should_cancel)
+        return real_run_job(evaluator, spec, progress, should_cancel)
 
-    monkeypatch.setattr(evaluators, "run_spec", run_spec)
+    monkeypatch.setattr(evaluators, "run_job", run_job)
     with session_factory() as s:
         slow = queue.submit_job(s, JobSpec(seed=1), evaluator="analytic").id
         bad = queue.submit_job(s, JobSpec(seed=2), evaluator="analytic").id

@@ -4,11 +4,11 @@ import pytest
 
 from engine.lab import Cancelled
 from engine.lab.spec import JobSpec
-from service.evaluators import run_spec
+from calibration.evaluator_registry import run_job
 
 
 def _run(seed=0, fidelity="thesis", **params):
-    return run_spec("analytic", JobSpec(seed=seed, fidelity=fidelity, parameters=params))
+    return run_job("analytic", JobSpec(seed=seed, fidelity=fidelity, parameters=params))
 
 
 def test_bulk_density_slope_matches_table_4_6():
@@ -36,7 +36,7 @@ def test_same_seed_same_result_and_replicates_scatter():
 def test_round_particles_cannot_reach_measured_friction_angle_without_rolling_resistance():
     # The thesis aggregate: phi = 60.6 deg (DST, Table 4.10); spheres without rolling resistance saturate well below.
     best = _run(friction_pp=5.0).value("dst", "friction_angle_deg")
-    with_rr = run_spec("analytic", JobSpec(fidelity="thesis", parameters={
+    with_rr = run_job("analytic", JobSpec(fidelity="thesis", parameters={
         "friction_pp": 0.86, "effects": {"rolling_epsd2": {"rolling_friction": 0.3}}}))
     assert best < 50.0 < with_rr.value("dst", "friction_angle_deg")
 
@@ -44,9 +44,9 @@ def test_round_particles_cannot_reach_measured_friction_angle_without_rolling_re
 def test_cancellation_is_honoured(monkeypatch):
     monkeypatch.setenv("DEMCAL_ANALYTIC_DURATION_S", "5")
     with pytest.raises(Cancelled):
-        run_spec("analytic", JobSpec(), should_cancel=lambda: True)
+        run_job("analytic", JobSpec(), should_cancel=lambda: True)
 
 
 def test_unknown_evaluator_is_refused():
     with pytest.raises(ValueError, match="unknown evaluator"):
-        run_spec("magic", JobSpec())
+        run_job("magic", JobSpec())

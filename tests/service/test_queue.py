@@ -102,9 +102,9 @@ def test_stale_worker_cannot_heartbeat_or_complete(session_factory):
         queue.claim_next(s, "fresh", 30)
         with pytest.raises(queue.LeaseLost):
             queue.heartbeat(s, job_id, "slow", 30)
-        from service.evaluators import run_spec
+        from calibration.evaluator_registry import run_job
 
-        result = run_spec("analytic", JobSpec())
+        result = run_job("analytic", JobSpec())
         assert queue.complete_job(s, job_id, "slow", result, 1.0) is False
         job = queue.get_job(s, job_id)
         assert job.status == "running" and job.result is None and job.lease_owner == "fresh"
@@ -174,7 +174,7 @@ def test_worker_runs_reports_progress_and_acknowledges_late(session_factory, set
     seen_phases: list[str] = []
 
     def slow_analytic(evaluator, spec, progress, should_cancel):
-        from service.evaluators import run_spec
+        from calibration.evaluator_registry import run_job
 
         for i in range(5):
             progress(i / 5, "shearing")
@@ -182,7 +182,7 @@ def test_worker_runs_reports_progress_and_acknowledges_late(session_factory, set
             if i == 3:
                 seen_phases.append(_job(session_factory, job_id).progress_phase)
                 assert _job(session_factory, job_id).status == "running"  # no result before the end
-        return run_spec(evaluator, spec)
+        return run_job(evaluator, spec)
 
     worker = Worker(session_factory, settings, "w-test", evaluate=slow_analytic)
     assert worker.run_one() == "succeeded"

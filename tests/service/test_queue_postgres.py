@@ -108,8 +108,8 @@ def test_lease_expiry_idempotency_and_late_ack_on_postgres(pg_sessions):
         with pytest.raises(queue.LeaseLost):
             queue.heartbeat(s, job_id, "dead", 30)
         assert queue.heartbeat(s, job_id, "alive", 30, 0.5, "shearing") is False
-        from service.evaluators import run_spec
+        from calibration.evaluator_registry import run_job
 
-        assert queue.complete_job(s, job_id, "alive", run_spec("analytic", JobSpec(seed=3)), 0.1)
+        assert queue.complete_job(s, job_id, "alive", run_job("analytic", JobSpec(seed=3)), 0.1)
         job = queue.get_job(s, job_id)
     assert job.status == "succeeded" and job.attempts == 2 and job.result["provenance"]["seed"] == 3

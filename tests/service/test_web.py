@@ -60,7 +60,7 @@ def test_pages_call_only_existing_api_endpoints(s2):
             # `/jobs/${id}/cancel` -> /jobs/1/cancel; a query string is not part of the path
             calls.add(re.sub(r"\$\{[^}]*\}", "1", literal[0] or literal[1]).split("?")[0])
     assert {"/jobs", "/jobs/1/cancel", "/materials/1/measurements", "/campaigns/1/report", "/schedules/1",
-            "/campaigns/1/start", "/campaigns/1/models", "/campaigns/1/iterations", "/campaigns/1/history", "/effects", "/jobs/1/result",
+            "/campaigns/1/start", "/campaigns/1/models", "/campaigns/1/iterations", "/campaigns/1/history", "/effects", "/evaluators", "/jobs/1/result",
             "/openapi.json"} <= calls
     for call in calls - {"/openapi.json"}:
         assert any(t.match(call) for t in templates), call

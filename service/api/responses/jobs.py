@@ -2,15 +2,12 @@
 from __future__ import annotations
 
 from datetime import datetime, timezone
-from typing import Any, Literal
+from typing import Any
 
 from pydantic import BaseModel, Field, field_serializer
 
 from service.api.responses.common import CONDITION, Condition, Out
-from service.models.job import JOB_STATUSES
-
-JobStatus = Literal["queued", "running", "succeeded", "failed", "cancelled"]
-assert set(JobStatus.__args__) == set(JOB_STATUSES)
+from service.vocabulary import JobStatus
 
 
 class Progress(BaseModel):

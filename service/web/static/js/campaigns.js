@@ -2,18 +2,14 @@
 // picked from the material's measurements, factors (micro parameters or effect strengths), design,
 // fixed parameters and contact effects, options, priors, constraints, automatic mode (the loop adds
 // the indicated effects by itself, up to max_iterations).
-import { api, condition, h, status, submitForm, table } from "./core.js";
+import { api, condition, h, schemas, status, submitForm, table } from "./core.js";
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
+import { evaluatorSelect, evaluators } from "./evaluators.js";
 
 const DEFAULT_FACTORS = [["particle_density_kg_m3", 2300, 2700], ["particle_stiffness_n_per_m", 1.0e6, 3.0e6], ["friction_pp", 0.3, 1.0]];
 
-let microCache = null;
-async function microNames() {
-  if (!microCache) {
-    const props = (await api("/openapi.json")).components.schemas.MicroParameters.properties;
-    microCache = Object.entries(props).filter(([n, p]) => n !== "effects" && (p.type === "number" || (p.anyOf || []).some((a) => a.type === "number"))).map(([n]) => n);
-  }
-  return microCache;
+function microNames(defs) {
+  return Object.entries(defs.MicroParameters.properties).filter(([n, p]) => n !== "effects" && (p.type === "number" || (p.anyOf || []).some((a) => a.type === "number"))).map(([n]) => n);
 }
 
 function options(names, chosen) {
@@ -35,7 +31,8 @@ function rowList(list, makeRow, initial) {
 function field(label, input) { return h("label", {}, label, input); }
 
 export async function campaignsPage(view, params) {
-  const [campaigns, materials, effects, micro] = await Promise.all([api("/campaigns"), api("/materials"), catalogue(), microNames()]);
+  const [campaigns, materials, effects, defs, backends] = await Promise.all([api("/campaigns"), api("/materials"), catalogue(), schemas(), evaluators()]);
+  const micro = microNames(defs);
   const factorNames = [...micro, ...effects.effects.flatMap((e) => e.parameters.map((p) => `effects.${e.name}.${p.name}`))];
   const chosen = params.get("material") || (materials.find((m) => m.bundled) || materials[0] || {}).id;
   const targetsBox = h("div", { className: "targets" });
@@ -70,7 +67,7 @@ export async function campaignsPage(view, params) {
     h("div", {},
       field("Name", h("input", { name: "name", value: "calibration", "data-loc": "name" })),
       field("Material", materialSelect),
-      field("Evaluator", h("select", { name: "evaluator", "data-loc": "evaluator" }, h("option", { value: "analytic" }, "analytic (closed-form stand-in)"), h("option", { value: "dem" }, "dem (simulation)"))),
+      field("Evaluator", evaluatorSelect(backends, defs.CampaignCreate)),
       field("Fidelity", h("select", { name: "fidelity", "data-loc": "fidelity" }, h("option", {}, "screening"), h("option", {}, "thesis"))),
       field("Each run simulates", h("select", { name: "test", "data-loc": "test" }, ["battery", "fill", "cct", "dst", "aor", "anchor"].map((t) => h("option", {}, t)))),
       field("Seed", h("input", { name: "seed", type: "number", value: 0, "data-loc": "seed" })),

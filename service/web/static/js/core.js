@@ -23,6 +23,13 @@ export async function api(path, { method = "GET", body } = {}) {
   return data;
 }
 
+// The OpenAPI document's component schemas (fetched once): forms read their fields' defaults and bounds there.
+let schemaCache = null;
+export async function schemas() {
+  if (!schemaCache) schemaCache = (await api("/openapi.json")).components.schemas;
+  return schemaCache;
+}
+
 // h("tag", {attr: value, onclick: fn}, child...) builds elements; strings become text nodes (never HTML).
 export function h(tag, attrs = {}, ...children) {
   const el = document.createElement(tag);

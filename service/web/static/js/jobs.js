@@ -1,15 +1,10 @@
 // Jobs: the submission form (micro parameters from the OpenAPI schema, effects from the catalogue),
 // the list with progress, and a job's page (status, one-line error, properties, engineering curves).
-import { api, attempt, condition, h, oneLine, status, submitForm, table } from "./core.js";
+import { api, attempt, condition, h, oneLine, schemas, status, submitForm, table } from "./core.js";
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
+import { evaluatorSelect, evaluators } from "./evaluators.js";
 import { curveViews } from "./jobcurves.js";
 import { refresh } from "./live.js";
-
-let schemaCache = null;
-async function schemas() {
-  if (!schemaCache) schemaCache = (await api("/openapi.json")).components.schemas;
-  return schemaCache;
-}
 
 function numberField(name, prop, loc) {
   const value = prop.default ?? "";
@@ -20,7 +15,7 @@ function numberField(name, prop, loc) {
 const isNumber = (p) => p.type === "number" || p.type === "integer" || (p.anyOf || []).some((a) => a.type === "number" || a.type === "integer");
 
 export async function submitPage(view) {
-  const [defs, effects] = await Promise.all([schemas(), catalogue()]);
+  const [defs, effects, backends] = await Promise.all([schemas(), catalogue(), evaluators()]);
   const micro = defs.MicroParameters.properties;
   const numeric = Object.entries(micro).filter(([, p]) => isNumber(p));
   const form = h("form", { className: "card", id: "submit-job", novalidate: true },
@@ -29,7 +24,7 @@ export async function submitPage(view) {
     h("div", {},
       h("label", {}, "Test", h("select", { name: "test", "data-loc": "test" }, ["battery", "fill", "cct", "dst", "aor", "anchor"].map((t) => h("option", {}, t)))),
       h("label", {}, "Fidelity", h("select", { name: "fidelity", "data-loc": "fidelity" }, h("option", {}, "screening"), h("option", {}, "thesis"))),
-      h("label", {}, "Evaluator", h("select", { name: "evaluator", "data-loc": "evaluator" }, h("option", { value: "dem" }, "dem (simulation)"), h("option", { value: "analytic" }, "analytic (closed-form stand-in)"))),
+      h("label", {}, "Evaluator", evaluatorSelect(backends, defs.JobSubmit)),
       h("label", {}, "Seed", h("input", { name: "seed", type: "number", value: 0, "data-loc": "seed" })),
       h("label", {}, "Priority", h("input", { name: "priority", type: "number", value: 0, "data-loc": "priority" }))),
     h("h3", {}, "Micro parameters (SI)"),
@@ -74,9 +69,9 @@ export async function jobsPage(view, params) {
   const query = new URLSearchParams({ limit: "100" });
   if (filter) query.set("status", filter);
   if (params.get("campaign_id")) query.set("campaign_id", params.get("campaign_id"));
-  const list = await api(`/jobs?${query}`);
+  const [list, defs] = await Promise.all([api(`/jobs?${query}`), schemas()]);
   const select = h("select", { onchange: (e) => { location.hash = `#/jobs${e.target.value ? "?status=" + e.target.value : ""}`; } },
-    ["", "queued", "running", "succeeded", "failed", "cancelled"].map((s) => h("option", { value: s, selected: s === filter }, s || "all")));
+    ["", ...defs.JobStatus.enum].map((s) => h("option", { value: s, selected: s === filter }, s || "all")));
   view.replaceChildren(h("h2", {}, `Jobs (${list.total})`), h("p", {}, "Status ", select, " ", h("a", { href: "#/submit" }, "submit a job")),
     h("div", { className: "scroll" }, table(["Id", "Test", "Evaluator", "Fidelity", "Seed", "Status", "Progress", "Campaign", "Created"],
       list.items.map((j) => [h("a", { href: `#/jobs/${j.id}` }, `#${j.id}`), j.test, j.evaluator, j.fidelity, String(j.seed),

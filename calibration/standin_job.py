@@ -1,10 +1,11 @@
-"""The closed-form stand-in battery (``calibration.standin``) as a job evaluator.
+"""The closed-form stand-in battery (``calibration.standin``) as a lab job: the 'analytic' evaluator.
 
 Why: the calibration loop (designs, fits, optimiser, campaigns, the diagnosis, the web pages)
 must be testable in milliseconds and demonstrable on data with a hidden effect. The physics of
 the stand-in, every candidate effect included, lives in calibration/standin.py; this module only
-turns a JobSpec into a LabResult: the spec's conditions (DST loads, E' stresses, AoR, anchor), the
-seed's packing scatter, the test filter.
+turns a JobSpec into a LabResult, as ``engine.lab.run_job`` does for the DEM lab: the spec's conditions
+(DST loads, E' stresses, AoR, anchor), the seed's packing scatter, the test filter. It is declared
+as a backend in ``calibration.evaluator_registry``, which is how workers and notebooks reach it.
 
 ``DEMCAL_ANALYTIC_DURATION_S`` (environment) makes a job take that long in wall time, reporting
 progress and honouring cancellation, for queue fault tests.
