@@ -9,7 +9,7 @@ from calibration import parameters as factor_paths
 from doe.constraints import parse_constraint
 from doe.factors import DoeError
 from engine.lab.bounds import SQLITE_INT_MAX, CONDITION_BOUNDS
-from engine.lab.result import known_quantity, known_test
+from engine.lab.registry import BATTERY, JobTestName, known_quantity, known_test
 from engine.lab.spec import MicroParameters, TestOptions
 from service.materials.units import UnitError, condition_si_unit
 
@@ -120,8 +120,8 @@ class CampaignCreate(BaseModel):
     material_id: int = Field(..., ge=1, le=SQLITE_INT_MAX)
     evaluator: Literal["analytic", "dem"] = "analytic"
     fidelity: Literal["screening", "thesis"] = "screening"
-    test: Literal["battery", "fill", "cct", "dst", "aor", "anchor"] = Field(
-        "battery", description="what each run simulates: the fill -> CCT -> DST battery, or one test alone"
+    test: JobTestName = Field(
+        BATTERY, description="what each run simulates: the fill -> CCT -> DST battery, or one test alone"
     )
     factors: list[FactorIn] = Field(..., min_length=1, max_length=8)
     design: DesignIn = Field(default_factory=DesignIn)

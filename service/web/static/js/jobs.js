@@ -3,6 +3,7 @@
 import { api, attempt, condition, h, oneLine, status, submitForm, table } from "./core.js";
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
 import { curveViews } from "./jobcurves.js";
+import { batteryChecks, batteryOptions, labTests, testSelect } from "./labtests.js";
 import { refresh } from "./live.js";
 
 let schemaCache = null;
@@ -20,14 +21,14 @@ function numberField(name, prop, loc) {
 const isNumber = (p) => p.type === "number" || p.type === "integer" || (p.anyOf || []).some((a) => a.type === "number" || a.type === "integer");
 
 export async function submitPage(view) {
-  const [defs, effects] = await Promise.all([schemas(), catalogue()]);
+  const [defs, effects, tests] = await Promise.all([schemas(), catalogue(), labTests()]);
   const micro = defs.MicroParameters.properties;
   const numeric = Object.entries(micro).filter(([, p]) => isNumber(p));
   const form = h("form", { className: "card", id: "submit-job", novalidate: true },
     h("h2", {}, "Submit a job"),
     h("div", { className: "form-errors" }),
     h("div", {},
-      h("label", {}, "Test", h("select", { name: "test", "data-loc": "test" }, ["battery", "fill", "cct", "dst", "aor", "anchor"].map((t) => h("option", {}, t)))),
+      h("label", {}, "Test", testSelect(tests, "test")),
       h("label", {}, "Fidelity", h("select", { name: "fidelity", "data-loc": "fidelity" }, h("option", {}, "screening"), h("option", {}, "thesis"))),
       h("label", {}, "Evaluator", h("select", { name: "evaluator", "data-loc": "evaluator" }, h("option", { value: "dem" }, "dem (simulation)"), h("option", { value: "analytic" }, "analytic (closed-form stand-in)"))),
       h("label", {}, "Seed", h("input", { name: "seed", type: "number", value: 0, "data-loc": "seed" })),
@@ -38,8 +39,7 @@ export async function submitPage(view) {
     h("h3", {}, "Options"),
     h("div", {},
       h("label", {}, "DST normal stresses (kPa, comma-separated)", h("input", { name: "dst_kpa", placeholder: "fidelity default", "data-loc": "options.dst_normal_stresses_pa" })),
-      h("label", { className: "check" }, h("input", { name: "include_aor", type: "checkbox", "data-loc": "options.include_aor" }), " include angle of repose"),
-      h("label", { className: "check" }, h("input", { name: "include_anchor", type: "checkbox", "data-loc": "options.include_anchor" }), " include anchor pull-out")),
+      batteryChecks(tests, (option) => `options.${option}`)),
     h("p", {}, h("button", { type: "submit" }, "Queue job")));
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
@@ -51,7 +51,7 @@ export async function submitPage(view) {
     }
     const effectsPicked = pickedEffects(form);
     if (Object.keys(effectsPicked).length) parameters.effects = effectsPicked;
-    const options = { include_aor: data.get("include_aor") === "on", include_anchor: data.get("include_anchor") === "on" };
+    const options = batteryOptions(tests, data);
     const dst = String(data.get("dst_kpa") || "").trim();
     if (dst) options.dst_normal_stresses_pa = dst.split(",").map((v) => Number(v) * 1000);
     const body = { test: data.get("test"), fidelity: data.get("fidelity"), evaluator: data.get("evaluator"),
