@@ -30,7 +30,7 @@ def _run(bench: Bench, lo: float, hi: float) -> Run:
     props = [TEST.property("angle_of_repose_deg", aor.reduction.angle_of_repose_deg)]
     props += [TEST.property("angle_of_repose_deg", angle, sector=k + 1)
               for k, angle in enumerate(aor.reduction.sector_angles_deg)
-              if angle == angle]  # sectors without a measurable flank (NaN) are left out
+              if not math.isnan(angle)]  # sectors without a measurable flank are left out
     return Run(aor, props, aor.curves)
 
 

@@ -8,10 +8,10 @@ import numpy as np
 
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
-from engine.lab.stops import RAIN_SETTLE_MAX_S
 from engine.lab.geometry import ANCHOR, anchor_bin_walls
 from engine.lab.procedures.fill import COLUMN_SOLID_FRACTION, largest_radius_m, level_and_measure, shape_mix
 from engine.lab.reducers.anchor import AnchorReduction, reduce_anchor
+from engine.lab.stops import RAIN_SETTLE_MAX_S
 from engine.particles.generation import BoxRegion, Packing, generate
 
 FLOOR_GAP_M = 0.001  # the plate stands just clear of the bin floor

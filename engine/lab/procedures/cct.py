@@ -7,10 +7,10 @@ import numpy as np
 
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
-from engine.lab.stops import LID_MAX_TRAVEL_FRACTION
 from engine.lab.procedures.fill import FillOutcome, smallest_radius_m
 from engine.lab.procedures.lid import LidRecord, load_to, precompress, unload
 from engine.lab.reducers.cct import CctReduction, reduce_cct
+from engine.lab.stops import LID_MAX_TRAVEL_FRACTION
 
 
 @dataclass

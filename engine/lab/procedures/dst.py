@@ -14,10 +14,10 @@ import numpy as np
 from engine.config import ServoSpec
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
-from engine.lab.stops import DST_STABILISE_MAX_S, LID_MAX_TRAVEL_FRACTION
 from engine.lab.geometry import BOTTOM_HALF
 from engine.lab.procedures.lid import LidRecord, load_to
 from engine.lab.reducers.dst import DstReduction, MohrCoulombFit, mohr_coulomb_fit, reduce_dst
+from engine.lab.stops import DST_STABILISE_MAX_S, LID_MAX_TRAVEL_FRACTION
 
 SAMPLES_PER_RUN = 800  # shear samples over the shear distance (the 8-10 % window gets ~150)
 SHEAR_BAND_DIAMETERS = 10.0  # shear band thickness for the inertial number, in mean diameters

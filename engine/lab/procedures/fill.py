@@ -14,10 +14,10 @@ import numpy as np
 
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
-from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
 from engine.lab.geometry import lid_wall, shear_box_walls
 from engine.lab.presets import Fidelity
 from engine.lab.reducers.packing import PackingState, bulk_properties
+from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
 from engine.particles.distributions import ConstantSize, ShapeComponent, ShapeMix, TruncatedGaussian
 from engine.particles.generation import CylinderRegion, generate
 

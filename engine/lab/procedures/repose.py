@@ -9,10 +9,10 @@ import numpy as np
 
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
-from engine.lab.stops import AOR_MAX_LIFT_BUCKET_HEIGHTS, PILE_REST_MAX_S, RAIN_SETTLE_MAX_S
 from engine.lab.geometry import bucket_walls
 from engine.lab.procedures.fill import largest_radius_m, level_and_measure, rain_packing
 from engine.lab.reducers.repose import ReposeReduction, angle_of_repose
+from engine.lab.stops import AOR_MAX_LIFT_BUCKET_HEIGHTS, PILE_REST_MAX_S, RAIN_SETTLE_MAX_S
 
 
 @dataclass
