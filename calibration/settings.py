@@ -9,6 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from calibration import parameters as factor_paths
 from doe.constraints import parse_constraint
 from doe.factors import DoeError
+from engine.lab.registry import BATTERY, JobTestName
 from engine.lab.spec import MicroParameters, TestOptions
 
 # Every schema here refuses NaN and infinities: stored, they come back as null and the campaign fails later
@@ -89,8 +90,8 @@ class LoopSettings(BaseModel):
     model_config = _FINITE
 
     fidelity: Literal["screening", "thesis"] = "screening"
-    test: Literal["battery", "fill", "cct", "dst", "aor", "anchor"] = Field(
-        "battery", description="what each run simulates: the fill -> CCT -> DST battery, or one test alone"
+    test: JobTestName = Field(
+        BATTERY, description="what each run simulates: the fill -> CCT -> DST battery, or one test alone"
     )
     factors: list[FactorIn] = Field(..., min_length=1, max_length=8)
     design: DesignIn = Field(default_factory=DesignIn)

@@ -36,7 +36,7 @@ import numpy as np
 
 from engine.effects import get as get_effect
 from engine.effects.hertz_mindlin import MATCH_STRESS_PA
-from engine.lab.result import QUANTITIES
+from engine.lab.registry import quantity
 
 G_M_S2 = 9.81
 E_REF_STRESS_PA = 30.0e3          # E'(sigma) is written about this stress
@@ -224,7 +224,7 @@ def bulk_values(parameters: Mapping[str, Any], conditions: Conditions, gains: Ga
         shear = g.anchor_shear_factor * math.tan(math.radians(min(phi_peak(5.0e3), 85.0)))
         force = wedge_n * (1.0 + shear) + cohesion_pa * g.anchor_surface_m2
         out.append(("anchor", "peak_pull_force_n", force, {}))
-    return [{"test": t, "quantity": q, "value": float(v), "unit": QUANTITIES[t][q], "condition": dict(c)}
+    return [{"test": t, "quantity": q, "value": float(v), "unit": quantity(t, q).unit, "condition": dict(c)}
             for t, q, v, c in out]
 
 

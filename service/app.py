@@ -21,7 +21,7 @@ from service.errors import install_error_handlers
 from service.security import check_bind, install_token_guard
 
 API_PREFIX = "/api/v1"
-ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules", "effects", "evaluators")
+ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules", "effects", "evaluators", "tests")
 
 
 def _seed(session_factory) -> None:

@@ -6,10 +6,9 @@ errors are one line on stderr and exit status 2 (service.cli_http).
 from __future__ import annotations
 
 from calibration.evaluator_registry import names as evaluator_names
+from engine.lab.registry import job_test_names
 from service.cli_http import CliError, call, emit, fmt, leaf, pairs, read_json, table
 from service.vocabulary import JobStatus
-
-TESTS = ("battery", "fill", "cct", "dst", "aor", "anchor")
 
 
 def _status_line(j: dict) -> str:
@@ -69,7 +68,7 @@ def register(subparsers) -> None:
     jsub = job.add_subparsers(dest="job_command", required=True)
     submit = leaf(jsub, "submit", job_submit, "queue a job from a JSON body (as POST /jobs) and/or flags")
     submit.add_argument("--file", help="JSON body, '-' for stdin")
-    submit.add_argument("--test", choices=TESTS)
+    submit.add_argument("--test", choices=job_test_names())
     submit.add_argument("--fidelity", choices=["screening", "thesis"])
     submit.add_argument("--seed", type=int)
     submit.add_argument("--evaluator", choices=evaluator_names())
@@ -78,7 +77,7 @@ def register(subparsers) -> None:
     submit.add_argument("--idempotency-key", help="submitting twice with one key queues one job")
     lst = leaf(jsub, "list", job_list, "list jobs, newest first")
     lst.add_argument("--status", choices=JobStatus.values())
-    lst.add_argument("--test", choices=TESTS)
+    lst.add_argument("--test", choices=job_test_names())
     lst.add_argument("--campaign", type=int, help="only this campaign's jobs")
     lst.add_argument("--limit", type=int)
     leaf(jsub, "status", job_status, "a job's state and progress").add_argument("id", type=int)

@@ -1,18 +1,17 @@
-"""Physical bounds of every measured quantity and of the micro parameters: one table, used everywhere.
+"""Physical bounds of measured quantities, test conditions and micro parameters: one set of ceilings.
 
 Why: a porosity of 1.7 or a 400 deg friction angle is not a measurement a calibration can match;
 accepted, it turns into "targets out of reach", the verdict that should mean missing physics. The
 bounds are definitions (a porosity is a volume fraction, an angle of a slope lies between flat and
 vertical, an R^2 lies in [0, 1]) or ceilings from the densest and stiffest solids known, so a value
 outside them is a typo or a unit mistake, never an unusual material. The API refuses such a value
-with a 422 naming the field; the JSON schema shows the same numbers.
+with a 422 naming the field; the JSON schema shows the same numbers. Each quantity's bound is declared with
+the quantity, by its test (``engine.lab.registry``), from the intervals and ceilings here.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-
-from engine.lab.result import QUANTITIES
 
 # Osmium, the densest element at room conditions: 22,590 kg/m3. No particle (and no bulk packing of
 # particles, which holds voids) is denser.
@@ -64,48 +63,22 @@ class Bound:
             raise ValueError(f"{what} = {value:g} is outside {self.describe()}")
 
 
-_POSITIVE = Bound(0.0, math.inf, why="positive and finite")
-_NON_NEGATIVE = Bound(0.0, math.inf, low_open=False, why="non-negative and finite")
-_SLOPE_ANGLE = Bound(0.0, 90.0, why="an angle between flat and vertical, degrees")
-_STRESS = Bound(0.0, STIFFEST_SOLID_PA, low_open=False, why="a stress in a granular test, below diamond's modulus")
-
-# (test, quantity) -> bounds of a measured (or simulated) value, SI.
-QUANTITY_BOUNDS: dict[tuple[str, str], Bound] = {
-    ("fill", "bulk_density_kg_m3"): Bound(0.0, DENSEST_SOLID_KG_M3, high_open=False,
-                                          why="below the densest solid, osmium"),
-    ("fill", "porosity"): Bound(0.0, 1.0, why="a void volume fraction"),
-    ("fill", "voids_ratio"): _POSITIVE,  # e = n / (1 - n): any positive number for n in (0, 1)
-    ("fill", "packing_height_m"): _POSITIVE,
-    ("fill", "bulk_mass_kg"): _POSITIVE,
-    ("fill", "particle_count"): Bound(1.0, float(SQLITE_INT_MAX), low_open=False, why="a count of particles"),
-    ("cct", "confined_modulus_pa"): Bound(0.0, STIFFEST_SOLID_PA, high_open=False, why="below diamond's modulus"),
-    ("cct", "bulk_stiffness_n_per_m"): _POSITIVE,
-    ("dst", "residual_shear_stress_pa"): _STRESS,
-    # Negative dilatancy is contraction, physical for loose packings: the whole open range about zero.
-    ("dst", "dilatancy_angle_deg"): Bound(-90.0, 90.0, why="an angle between -90 and 90 degrees"),
-    ("dst", "friction_angle_deg"): _SLOPE_ANGLE,
-    # A Mohr-Coulomb intercept; a fit through scattered points may put it slightly below zero.
-    ("dst", "cohesion_pa"): Bound(-STIFFEST_SOLID_PA, STIFFEST_SOLID_PA, why="a Mohr-Coulomb intercept"),
-    ("dst", "mohr_coulomb_r2"): Bound(0.0, 1.0, low_open=False, high_open=False, why="a coefficient of determination"),
-    ("aor", "angle_of_repose_deg"): _SLOPE_ANGLE,
-    ("anchor", "peak_pull_force_n"): _POSITIVE,
-}
-assert set(QUANTITY_BOUNDS) == {(t, q) for t, qs in QUANTITIES.items() for q in qs}, "every quantity has bounds"
+# Shared by the quantity declarations (engine/lab/labtests/) and the condition table below.
+POSITIVE = Bound(0.0, math.inf, why="positive and finite")
+NON_NEGATIVE = Bound(0.0, math.inf, low_open=False, why="non-negative and finite")
+SLOPE_ANGLE = Bound(0.0, 90.0, why="an angle between flat and vertical, degrees")
+STRESS = Bound(0.0, STIFFEST_SOLID_PA, low_open=False, why="a stress in a granular test, below diamond's modulus")
 
 # Test conditions by the SI-unit suffix of their name (normal_stress_pa, pull_speed_m_s, ...).
 CONDITION_BOUNDS: dict[str, Bound] = {
-    "Pa": _STRESS,
+    "Pa": STRESS,
     "m": Bound(0.0, 100.0, why="a laboratory length, metres"),
     "m/s": Bound(0.0, 100.0, why="a laboratory speed, m/s"),
-    "N": _NON_NEGATIVE,
-    "kg": _NON_NEGATIVE,
+    "N": NON_NEGATIVE,
+    "kg": NON_NEGATIVE,
     "deg": Bound(-360.0, 360.0, low_open=False, high_open=False, why="an angle, degrees"),
-    "1": _NON_NEGATIVE,
+    "1": NON_NEGATIVE,
 }
-
-
-def quantity_bound(test: str, quantity: str) -> Bound:
-    return QUANTITY_BOUNDS[(test, quantity)]
 
 
 def check_finite_tree(value, path: str = "") -> None:

@@ -6,6 +6,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable
 
+from engine.lab.errors import SpecFieldError
 from engine.lab.presets import Fidelity, fidelity
 from engine.lab.result import Cancelled
 from engine.lab.spec import JobSpec
@@ -66,10 +67,10 @@ class RunContext:
         o = self.spec.options.dst_normal_stresses_pa
         stresses = list(o) if o else list(self.preset.dst_normal_stresses_pa)
         if any(not (math.isfinite(s) and s > 0) for s in stresses):
-            raise ValueError("options.dst_normal_stresses_pa: every normal stress must be a finite number > 0 Pa")
+            raise SpecFieldError("options.dst_normal_stresses_pa", "every normal stress must be a finite number > 0 Pa")
         if len(set(stresses)) != len(stresses):
             # each load's results are keyed by its stress: two runs under one key could not be told apart
-            raise ValueError(f"options.dst_normal_stresses_pa: the stresses must be distinct, got {stresses}")
+            raise SpecFieldError("options.dst_normal_stresses_pa", f"the stresses must be distinct, got {stresses}")
         return stresses
 
     @property
@@ -83,28 +84,33 @@ class RunContext:
         return float(o) if o is not None else self.preset.rain_drop_height_m
 
     def validate(self) -> None:
-        """Refuse, before any simulation, what the options make impossible (ValueError names the field)."""
+        """Refuse, before any simulation, what the options make impossible (``SpecFieldError`` names the
+        field): the checks every test shares, then each planned test's own (``LabTest.check``)."""
+        from engine.lab.registry import plan
+
         self.dst_normal_stresses_pa  # noqa: B018  (raises on a non-positive stress)
         o = self.spec.options
         lo, hi = o.residual_window_strain
         if not 0 <= lo < hi:
-            raise ValueError("options.residual_window_strain: need 0 <= lower < upper")
+            raise SpecFieldError("options.residual_window_strain", "need 0 <= lower < upper")
         if hi * self.preset.container_diameter_m > self.shear_distance_m:
-            raise ValueError(
-                f"options.shear_distance_m: {self.shear_distance_m * 1000:.1f} mm does not reach the residual window's "
+            raise SpecFieldError(
+                "options.shear_distance_m",
+                f"{self.shear_distance_m * 1000:.1f} mm does not reach the residual window's "
                 f"upper strain {hi:.3f} (= {hi * self.preset.container_diameter_m * 1000:.1f} mm)")
         if o.moving_average_span % 2 == 0:
-            raise ValueError("options.moving_average_span must be odd")
+            raise SpecFieldError("options.moving_average_span", "must be odd")
         if self.cct_max_stress_pa <= 0:
-            raise ValueError("options.cct_max_stress_pa must be positive")
+            raise SpecFieldError("options.cct_max_stress_pa", "must be positive")
         windows = o.cct_window_stresses_pa
         if windows and max(windows) >= self.cct_max_stress_pa:
-            raise ValueError(
-                f"options.cct_window_stresses_pa: every stress must be below the CCT maximum stress "
+            raise SpecFieldError(
+                "options.cct_window_stresses_pa",
+                f"every stress must be below the CCT maximum stress "
                 f"({self.cct_max_stress_pa:.6g} Pa; options.cct_max_stress_pa), got {max(windows):.6g} Pa")
-        if self.spec.test in ("dst", "battery") and max(self.dst_normal_stresses_pa) > self.cct_max_stress_pa:
-            raise ValueError("options.dst_normal_stresses_pa: the DST preparation compresses to the CCT maximum "
-                             "first, so every DST stress must be at most options.cct_max_stress_pa")
+        for test, _ in plan(self.spec):
+            if test.check is not None:
+                test.check(self)
 
     # ----------------------------------------------------------------- callbacks
     def phase(self, lo: float, hi: float) -> None:

@@ -18,6 +18,8 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from engine.lab.errors import SpecFieldError
+
 
 @dataclass(frozen=True)
 class ShapeFraction:
@@ -175,17 +177,18 @@ def fidelity(name: str, particle_radius_m: float | None = None, clump_aspect_rat
     try:
         preset = FIDELITIES[name]
     except KeyError:
-        raise ValueError(f"unknown fidelity {name!r}; choose one of {sorted(FIDELITIES)}") from None
+        raise SpecFieldError("fidelity", f"unknown fidelity {name!r}; choose one of {sorted(FIDELITIES)}") from None
     if particle_radius_m is not None:
         if name != "screening":
-            raise ValueError("particle_radius_m applies to the screening fidelity only")
+            raise SpecFieldError("parameters.particle_radius_m", "particle_radius_m applies to the screening fidelity only")
         half = 0.5 * particle_radius_m
         preset = replace(preset, shapes=(ShapeFraction("sphere", particle_radius_m, particle_radius_m, 1.0),),
                          aor_shapes=(ShapeFraction("pyramid", half, half, 1.0),))
     if clump_aspect_ratio != 1.0:
         if name != "screening":
-            raise ValueError(
-                f"parameters.clump_aspect_ratio {clump_aspect_ratio:g}: the thesis fidelity has its own clump mix "
+            raise SpecFieldError(
+                "parameters.clump_aspect_ratio",
+                f"{clump_aspect_ratio:g}: the thesis fidelity has its own clump mix "
                 "(Table 4.2: pyramids, elongated clumps and spheres); clump_aspect_ratio applies to the screening "
                 "fidelity only (leave it at 1)")
         from engine.lab.shape import screening_shapes

@@ -2,53 +2,14 @@
 
 The record is the contract between the virtual lab, the service (which stores
 it as JSON) and the calibration loop (which matches measurements to simulated
-values one to one by ``(test, quantity, condition)``). Everything is SI.
+values one to one by ``(test, quantity, condition)``). Everything is SI. The quantity names and units
+each test reports are declared with the test (``engine.lab.registry``).
 """
 from __future__ import annotations
 
 from typing import Any
 
 from pydantic import BaseModel, Field
-
-# Canonical quantity names per test. Measurements and simulated values meet on
-# these names, so they are listed once here and nowhere else.
-QUANTITIES: dict[str, dict[str, str]] = {
-    "fill": {
-        "bulk_density_kg_m3": "kg/m3",
-        "porosity": "1",
-        "voids_ratio": "1",
-        "packing_height_m": "m",
-        "bulk_mass_kg": "kg",
-        "particle_count": "1",
-    },
-    "cct": {
-        "confined_modulus_pa": "Pa",
-        "bulk_stiffness_n_per_m": "N/m",
-    },
-    "dst": {
-        "residual_shear_stress_pa": "Pa",
-        "dilatancy_angle_deg": "deg",
-        "friction_angle_deg": "deg",
-        "cohesion_pa": "Pa",
-        "mohr_coulomb_r2": "1",
-    },
-    "aor": {"angle_of_repose_deg": "deg"},
-    "anchor": {"peak_pull_force_n": "N"},
-}
-
-
-def known_test(test: str) -> str:
-    """The test name if QUANTITIES has it; else a ValueError listing the names (API 422 messages)."""
-    if test not in QUANTITIES:
-        raise ValueError(f"unknown test {test!r}; one of {sorted(QUANTITIES)}")
-    return test
-
-
-def known_quantity(test: str | None, quantity: str) -> str:
-    """The quantity if ``test`` reports it (``test`` None: its own error was raised already)."""
-    if test is not None and quantity not in QUANTITIES[test]:
-        raise ValueError(f"quantity {quantity!r} is not reported by {test!r}; one of {sorted(QUANTITIES[test])}")
-    return quantity
 
 
 class BulkProperty(BaseModel):

@@ -13,12 +13,13 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 from engine.lab.bounds import (DENSEST_SOLID_KG_M3, MAX_CONTACT_STIFFNESS_N_PER_M, MAX_FRICTION_COEFFICIENT,
                                MAX_PARTICLE_RADIUS_M, MAX_SEED, MIN_PARTICLE_RADIUS_M, STIFFEST_SOLID_PA,
                                check_finite_tree)
+from engine.lab.registry import BATTERY, JobTestName
 
 # Every model here refuses NaN and infinities (``allow_inf_nan=False``): JSON cannot carry them back,
 # so a stored infinity would come back as null and a job "succeed" with a null result.
 _FINITE = ConfigDict(extra="forbid", allow_inf_nan=False)
 # Speeds, lengths and counts of a laboratory test: ceilings well above any lab set-up, so that the
-# cost model (service.limits) rather than an overflow decides what is too big.
+# cost model (engine.lab.cost) rather than an overflow decides what is too big.
 _MAX_LAB_LENGTH_M = 100.0
 _MAX_LAB_SPEED_M_S = 100.0
 _MIN_LAB_SPEED_M_S = 1e-6  # 1 um/s, a creep test; slower divides the lab's times into infinities
@@ -26,7 +27,6 @@ _MIN_SPEED_FACTOR, _MAX_SPEED_FACTOR = 1e-3, 1e4
 _MAX_CCT_CYCLES = 1000
 _MAX_DST_STRESSES = 20
 
-TestName = Literal["fill", "cct", "dst", "aor", "anchor", "battery"]
 Fidelity = Literal["screening", "thesis"]
 
 
@@ -191,7 +191,7 @@ class TestOptions(BaseModel):
 class JobSpec(BaseModel):
     model_config = _FINITE
 
-    test: TestName = "battery"
+    test: JobTestName = BATTERY
     fidelity: Fidelity = "screening"
     seed: int = Field(0, ge=0, le=MAX_SEED)
     parameters: MicroParameters = Field(default_factory=MicroParameters)

@@ -9,7 +9,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from calibration.evaluator_registry import DEM, EvaluatorName
 from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
-from engine.lab.spec import Fidelity, JobSpec, MicroParameters, TestName, TestOptions
+from engine.lab.registry import BATTERY, JobTestName
+from engine.lab.spec import Fidelity, JobSpec, MicroParameters, TestOptions
 from service import queue
 from service.api.jsonsafe import json_safe
 from service.api.openapi import errors
@@ -31,7 +32,7 @@ class JobSubmit(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    test: TestName = "battery"
+    test: JobTestName = BATTERY
     fidelity: Fidelity = "screening"
     seed: int = Field(0, ge=0, le=MAX_SEED, description="random seed; same seed and thread count, same result")
     parameters: MicroParameters = Field(default_factory=MicroParameters)
@@ -91,7 +92,7 @@ def submit(body: JobSubmit, request: Request, response: Response, session: DbSes
 
 @router.get("", response_model=JobList, summary="List jobs, newest first, filtered")
 def list_jobs(session: DbSession, status_: JobStatus | None = Query(None, alias="status"),
-              test: TestName | None = None, campaign_id: int | None = Query(None, ge=1, le=SQLITE_INT_MAX),
+              test: JobTestName | None = None, campaign_id: int | None = Query(None, ge=1, le=SQLITE_INT_MAX),
               evaluator: EvaluatorName | None = None,
               limit: int = Query(100, ge=1, le=1000), offset: Offset = 0) -> JobList:
     rows, total = queue.list_jobs(session, status=status_, test=test, campaign_id=campaign_id,

@@ -13,10 +13,8 @@ from service.errors import Conflict, NotFound
 from service.materials.schemas import MaterialCopy, MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
 from service.materials.store import (add_measurement, copy_material, create_material, find_by_name, get_material,
                                      list_materials, material_dict, measurement_dict, require_editable)
-from service.materials.units import accepted_units
-from engine.lab.bounds import quantity_bound
-from engine.lab.result import QUANTITIES
-from service.api.jsonsafe import json_safe
+from engine.lab.registry import tests
+from service.api.tests import quantity_out
 from service.models.campaign import Campaign
 from service.models.material import Measurement
 
@@ -35,16 +33,10 @@ def _material_or_404(session: Session, material_id: int):
             summary="Canonical tests, quantities, SI units, accepted input units and physical bounds (SI)",
             response_model=Quantities)
 def quantities() -> dict:
-    return {test: {q: {"si_unit": u, "accepted_units": accepted_units(u), "bounds": _bounds(test, q)}
-                   for q, u in qs.items()}
-            for test, qs in QUANTITIES.items()}
-
-
-def _bounds(test: str, quantity: str) -> dict:
-    """The interval a measured value must lie in (SI); an infinite end is null."""
-    b = quantity_bound(test, quantity)
-    return {"low": json_safe(b.low), "high": json_safe(b.high), "low_inclusive": not b.low_open,
-            "high_inclusive": not b.high_open, "why": b.why}
+    """The lab-test registry's quantities by test and name (GET /tests has the whole catalogue)."""
+    return {name: {q.name: quantity_out(q).model_dump(include={"si_unit", "accepted_units", "bounds"})
+                   for q in test.quantities}
+            for name, test in tests().items()}
 
 
 @router.get("", response_model=list[MaterialOut], summary="List materials with their measurements")

@@ -5,14 +5,14 @@ campaign adds what the service needs to run them: a name, a material and which o
 targets, an evaluator and a queue priority."""
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator, model_validator
 
 from calibration.evaluator_registry import ANALYTIC, EvaluatorName
 from calibration.settings import _FINITE, DesignIn, DesignPreviewIn, FactorIn, LoopSettings, PriorIn  # noqa: F401
 from engine.lab.bounds import SQLITE_INT_MAX, CONDITION_BOUNDS
-from engine.lab.result import known_quantity, known_test
+from engine.lab.registry import known_quantity, known_test
 from engine.lab.spec import MicroParameters, TestOptions
 from service.materials.units import UnitError, condition_si_unit
 

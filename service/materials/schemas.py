@@ -6,8 +6,8 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
-from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree, quantity_bound
-from engine.lab.result import QUANTITIES, known_quantity, known_test
+from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree
+from engine.lab.registry import known_quantity, known_test, quantity
 from service.errors import Invalid
 from service.materials.units import UnitError, condition_si_unit, to_si
 
@@ -22,10 +22,10 @@ class MeasurementIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    test: str = Field(..., max_length=32, description=f"one of {sorted(QUANTITIES)}")
+    test: str = Field(..., max_length=32, description="a test that reports quantities (GET /api/v1/tests)")
     quantity: str = Field(..., max_length=64,
-                          description="canonical quantity name of the test (engine.lab.result.QUANTITIES); "
-                                      "its physical bounds: engine.lab.bounds.QUANTITY_BOUNDS")
+                          description="canonical quantity name of the test, with its SI unit and physical bounds "
+                                      "(GET /api/v1/tests; engine.lab.registry)")
     unit: str | None = Field(None, max_length=16, description="unit of `values`; default the quantity's SI unit")
     values: list[float] = Field(..., min_length=1, max_length=MAX_REPLICATES,
                                 description="replicate values (at least one), each within the quantity's bounds")
@@ -59,7 +59,8 @@ class MeasurementIn(BaseModel):
 
     def to_si(self) -> dict[str, Any]:
         """SI fields for the ORM row; UnitError names the offending field in its args."""
-        si_unit = QUANTITIES[self.test][self.quantity]
+        declared = quantity(self.test, self.quantity)
+        si_unit = declared.unit
         unit = self.unit or si_unit
         try:
             values = [to_si(v, unit, si_unit) for v in self.values]
@@ -67,7 +68,7 @@ class MeasurementIn(BaseModel):
         except UnitError as exc:
             raise FieldError("unit", str(exc)) from exc
         # Bounds apply in SI, after conversion: 1e300 GPa overflows to infinity here, not in a listing.
-        bound = quantity_bound(self.test, self.quantity)
+        bound = declared.bound
         for index, value in enumerate(values):
             try:
                 bound.check(value, f"{self.test} {self.quantity} [{si_unit}]")

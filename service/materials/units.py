@@ -1,6 +1,6 @@
 """Unit conversion at the API edge: users send kPa, MPa, deg, %, mm; we store SI.
 
-Each canonical quantity has one SI unit (``engine.lab.result.QUANTITIES``);
+Each canonical quantity has one SI unit, declared with its test (``engine.lab.registry``);
 a condition's SI unit is read from its name's suffix (``normal_stress_pa``).
 """
 from __future__ import annotations

@@ -7,7 +7,7 @@ import math
 import pytest
 
 from engine.lab import run_job
-from engine.lab.result import QUANTITIES
+from engine.lab.registry import units
 from engine.lab.spec import JobSpec
 from lab_runs import AOR_FRICTIONS, AOR_STAGES, aor_pile
 
@@ -18,7 +18,7 @@ def test_example_battery_runs_as_is(example_battery):
     r = example_battery
     got = {(p.test, p.quantity) for p in r.properties}
     for test in ("fill", "cct", "dst"):
-        for quantity in QUANTITIES[test]:
+        for quantity in units()[test]:
             assert (test, quantity) in got, (test, quantity)
     area = math.pi * 0.2**2
     for force in (1885.0, 3495.0, 5105.0, 6760.0):  # Table A.7 loads, as stresses

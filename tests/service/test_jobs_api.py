@@ -203,7 +203,7 @@ def test_refuses_public_bind_without_token(settings):
 
 def test_limits_follow_settings(settings):
     from engine.lab.spec import JobSpec
-    from service.limits import estimated_particles, estimated_simulated_time_s
+    from engine.lab.cost import estimated_particles, estimated_simulated_time_s
 
     spec = JobSpec()
     particles, sim_s = estimated_particles(spec), estimated_simulated_time_s(spec)
@@ -221,7 +221,7 @@ def test_particle_estimate_matches_appendix_a():
     """Table A.7's screening set-up holds ~840 spheres of 20 mm below the levelling height."""
     from engine.lab.presets import SCREENING
     from engine.lab.spec import JobSpec
-    from service.limits import estimated_particles
+    from engine.lab.cost import estimated_particles
 
     below_level = estimated_particles(JobSpec()) / SCREENING.fill_margin
     assert abs(below_level - 840) / 840 < 0.10
@@ -231,7 +231,7 @@ def test_elongated_clumps_cost_two_spheres_each():
     """The screening clumps have the sphere's volume (engine/lab/shape.py): as many bodies fill the box,
     each of two spheres, and a step's cost follows the spheres."""
     from engine.lab.spec import JobSpec, MicroParameters
-    from service.limits import estimated_particles
+    from engine.lab.cost import estimated_particles
 
     spheres = estimated_particles(JobSpec())
     clumps = estimated_particles(JobSpec(parameters=MicroParameters(clump_aspect_ratio=1.5)))

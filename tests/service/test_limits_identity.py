@@ -42,7 +42,10 @@ def test_every_cct_cycle_counts(client):
 
 def test_cost_model_counts_every_stage():
     from engine.lab.spec import JobSpec
-    from service.limits import FILL_SETTLE_S, estimate
+    from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
+    from service.limits import estimate
+
+    FILL_SETTLE_S = RAIN_SETTLE_MAX_S + LEVEL_SETTLE_MAX_S  # fill.py: rain and settle, level and settle
 
     cct = estimate(JobSpec(test="cct"))
     assert cct.stages_s == pytest.approx({"fill": FILL_SETTLE_S, "cct": SCREENING.cct_cycles * 2 * stroke_s()})

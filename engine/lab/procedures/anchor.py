@@ -11,6 +11,7 @@ from engine.lab.context import RunContext
 from engine.lab.geometry import ANCHOR, anchor_bin_walls
 from engine.lab.procedures.fill import COLUMN_SOLID_FRACTION, largest_radius_m, level_and_measure, shape_mix
 from engine.lab.reducers.anchor import AnchorReduction, reduce_anchor
+from engine.lab.stops import RAIN_SETTLE_MAX_S
 from engine.particles.generation import BoxRegion, Packing, generate
 
 FLOOR_GAP_M = 0.001  # the plate stands just clear of the bin floor
@@ -61,7 +62,7 @@ def run_anchor(ctx: RunContext) -> AnchorOutcome:
     walls = anchor_bin_walls(a, width, column_top + 2 * r_max, params.wall_stiffness_n_per_m, a.bin_friction,
                              mu_anchor, FLOOR_GAP_M)
     sim = labsim.new_simulation(params, walls, packing)
-    labsim.settle(ctx, sim, "anchor: filling the bin", threshold=1e-4, min_time_s=0.2, max_time_s=6.0)
+    labsim.settle(ctx, sim, "anchor: filling the bin", threshold=1e-4, min_time_s=0.2, max_time_s=RAIN_SETTLE_MAX_S)
     level_and_measure(ctx, sim, height, "anchor: levelling")
 
     for name in ANCHOR:

@@ -10,6 +10,7 @@ from engine.lab.context import RunContext
 from engine.lab.procedures.fill import FillOutcome, smallest_radius_m
 from engine.lab.procedures.lid import LidRecord, load_to, precompress, unload
 from engine.lab.reducers.cct import CctReduction, reduce_cct
+from engine.lab.stops import LID_MAX_TRAVEL_FRACTION
 
 
 @dataclass
@@ -28,8 +29,8 @@ def run_cct(ctx: RunContext, fill: FillOutcome) -> CctOutcome:
     precompressed = sim.checkpoint()
     for cycle in range(2, ctx.cct_cycles + 1):
         load_to(ctx, sim, ctx.cct_max_stress_pa, ctx.lid_speed_m_s, record, cycle, f"cct: cycle {cycle} loading",
-                height, 0.5 * height)
-        unload(ctx, sim, ctx.lid_speed_m_s, record, cycle, f"cct: cycle {cycle} unloading", 0.5 * height)
+                height, LID_MAX_TRAVEL_FRACTION * height)
+        unload(ctx, sim, ctx.lid_speed_m_s, record, cycle, f"cct: cycle {cycle} unloading", LID_MAX_TRAVEL_FRACTION * height)
     z = np.asarray(record.lid_z_m)
     stress = np.asarray(record.normal_stress_pa)
     touching = np.nonzero(stress > 0)[0]

@@ -17,6 +17,7 @@ from engine.lab.context import RunContext
 from engine.lab.geometry import BOTTOM_HALF
 from engine.lab.procedures.lid import LidRecord, load_to
 from engine.lab.reducers.dst import DstReduction, MohrCoulombFit, mohr_coulomb_fit, reduce_dst
+from engine.lab.stops import DST_STABILISE_MAX_S, LID_MAX_TRAVEL_FRACTION
 
 SAMPLES_PER_RUN = 800  # shear samples over the shear distance (the 8-10 % window gets ~150)
 SHEAR_BAND_DIAMETERS = 10.0  # shear band thickness for the inertial number, in mean diameters
@@ -40,7 +41,7 @@ class DstOutcome:
     fit: MohrCoulombFit | None
 
 
-def _stabilise(ctx: RunContext, sim, target_pa: float, phase: str, min_time_s=0.05, max_time_s=0.5) -> None:
+def _stabilise(ctx: RunContext, sim, target_pa: float, phase: str, min_time_s=0.05, max_time_s=DST_STABILISE_MAX_S) -> None:
     """Hold the servo until the stress is within 2 % of the target and the packing is nearly at rest
     (kinetic energy ratio 1e-4: mean speed ~9 mm/s for 40 mm grains, a fraction of the shear speed)."""
     area = ctx.preset.container_area_m2
@@ -65,7 +66,7 @@ def run_one(ctx: RunContext, precompressed: dict, packing_height_m: float, targe
     sim = labsim.restore(precompressed)
     area = ctx.preset.container_area_m2
     load_to(ctx, sim, target_pa, ctx.lid_speed_m_s, LidRecord(), 0, f"{tag}: reloading", packing_height_m,
-            0.5 * packing_height_m)
+            LID_MAX_TRAVEL_FRACTION * packing_height_m)
     v = ctx.shear_speed_m_s
     sim.set_wall_servo("lid", ServoSpec(axis=(0.0, 0.0, -1.0), target_stress_pa=target_pa, area_m2=area,
                                         max_speed_m_s=max(v, ctx.lid_speed_m_s), gain_fraction=SERVO_GAIN))

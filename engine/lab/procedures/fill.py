@@ -17,6 +17,7 @@ from engine.lab.context import RunContext
 from engine.lab.geometry import lid_wall, shear_box_walls
 from engine.lab.presets import Fidelity
 from engine.lab.reducers.packing import PackingState, bulk_properties
+from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
 from engine.particles.distributions import ConstantSize, ShapeComponent, ShapeMix, TruncatedGaussian
 from engine.particles.generation import CylinderRegion, generate
 
@@ -68,7 +69,7 @@ def level_and_measure(ctx: RunContext, sim, level_m: float, phase: str) -> None:
     above = sim.positions_m()[:, 2] > level_m
     if np.any(above):
         sim.remove_bodies(above)
-    labsim.settle(ctx, sim, phase, min_time_s=0.02, max_time_s=2.0)
+    labsim.settle(ctx, sim, phase, min_time_s=0.02, max_time_s=LEVEL_SETTLE_MAX_S)
 
 
 def solid_volume_m3(sim) -> float:
@@ -104,7 +105,7 @@ def run_fill(ctx: RunContext) -> FillOutcome:
     record: list = []
     # the first settle only has to bring the heap near rest before levelling (ratio 1e-4); the
     # levelled packing then settles to the 1e-5 criterion
-    labsim.settle(ctx, sim, "fill: rainfall and settling", threshold=1e-4, min_time_s=0.2, max_time_s=6.0,
+    labsim.settle(ctx, sim, "fill: rainfall and settling", threshold=1e-4, min_time_s=0.2, max_time_s=RAIN_SETTLE_MAX_S,
                   record=record)
     level_and_measure(ctx, sim, preset.packing_height_m, "fill: levelling")
     height = float(np.max(labsim.sphere_tops_m(sim)))

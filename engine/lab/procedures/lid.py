@@ -8,6 +8,7 @@ import numpy as np
 
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
+from engine.lab.stops import LID_MAX_TRAVEL_FRACTION
 
 # lid travel per control step; the stress overshoot at a turning point is k_b times this
 LID_TRAVEL_PER_SAMPLE_M = 2e-5
@@ -94,7 +95,7 @@ def precompress(ctx: RunContext, sim, packing_height_m: float, r_min_m: float, r
     battery runs it once: from the same state, a deterministic engine gives the same packing.
     """
     place_lid(sim, r_min_m)
-    travel = 0.5 * packing_height_m
+    travel = LID_MAX_TRAVEL_FRACTION * packing_height_m
     load_to(ctx, sim, ctx.cct_max_stress_pa, ctx.lid_speed_m_s, record, 1, "cct: cycle 1 loading",
             packing_height_m, travel)
     unload(ctx, sim, ctx.lid_speed_m_s, record, 1, "cct: cycle 1 unloading", travel)

@@ -12,6 +12,7 @@ from engine.lab.context import RunContext
 from engine.lab.geometry import bucket_walls
 from engine.lab.procedures.fill import largest_radius_m, level_and_measure, rain_packing
 from engine.lab.reducers.repose import ReposeReduction, angle_of_repose
+from engine.lab.stops import AOR_MAX_LIFT_BUCKET_HEIGHTS, PILE_REST_MAX_S, RAIN_SETTLE_MAX_S
 
 
 @dataclass
@@ -46,7 +47,7 @@ def run_aor(ctx: RunContext) -> AorOutcome:
                                        column_solid_fraction=0.12)  # narrow column: wall-excluded volume
     sim = labsim.new_simulation(params, bucket_walls(aor, column_top + 2 * r_max, params.wall_stiffness_n_per_m,
                                                      mu_bucket, mu_floor), packing)
-    labsim.settle(ctx, sim, "aor: filling the bucket", threshold=1e-4, min_time_s=0.2, max_time_s=6.0)
+    labsim.settle(ctx, sim, "aor: filling the bucket", threshold=1e-4, min_time_s=0.2, max_time_s=RAIN_SETTLE_MAX_S)
     level_and_measure(ctx, sim, fill_height, "aor: levelling")
 
     chunk = labsim.steps_for(sim, 0.02)
@@ -62,13 +63,13 @@ def run_aor(ctx: RunContext) -> AorOutcome:
         ctx.report(0.1 + 0.8 * min((z_rim - z_start) / h, 1.0), "aor: lifting the bucket")
         if z_rim > float(np.max(labsim.sphere_tops_m(sim))) + 0.5 * r_max:
             break
-        if z_rim - z_start > 3.0 * h:  # a plug wedged in the bucket rides up with it: no pile to measure
+        if z_rim - z_start > AOR_MAX_LIFT_BUCKET_HEIGHTS * h:  # a plug wedged in the bucket rides up with it: no pile to measure
             ctx.warn("aor: grains still above the bucket rim after lifting it three bucket heights (jammed in "
                      "the bucket); the angle is read from a pile that is not all on the floor")
             break
     for name in ("bucket", "bucket_extension"):
         sim.set_wall_velocity(name, (0.0, 0.0, 0.0))
-    labsim.settle(ctx, sim, "aor: pile coming to rest", min_time_s=0.1, max_time_s=5.0)
+    labsim.settle(ctx, sim, "aor: pile coming to rest", min_time_s=0.1, max_time_s=PILE_REST_MAX_S)
     red = angle_of_repose(sim.sphere_positions_m(), sim.sphere_radii_m(), centre_xy_m=(0.0, 0.0), floor_z_m=0.0,
                           sectors=8, bin_width_m=2.0 * float(np.mean(sim.sphere_radii_m())),
                           toe_height_m=1.5 * labsim.mean_diameter_m(sim))

@@ -23,7 +23,7 @@ class PackingState:
 
 
 def bulk_properties(state: PackingState) -> dict[str, float]:
-    """Thesis Eqs. 4.2, 4.4, 4.7 on one packing; keys are result.QUANTITIES['fill'] names."""
+    """Thesis Eqs. 4.2, 4.4, 4.7 on one packing; keys are the fill's declared quantity names (engine/lab/labtests/fill.py)."""
     if state.packing_height_m <= 0 or state.container_area_m2 <= 0:
         raise ValueError("packing height and container area must be positive")
     bulk_volume_m3 = state.container_area_m2 * state.packing_height_m

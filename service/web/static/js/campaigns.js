@@ -5,6 +5,7 @@
 import { api, condition, h, schemas, status, submitForm, table } from "./core.js";
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
 import { evaluatorSelect, evaluators } from "./evaluators.js";
+import { batteryChecks, batteryOptions, labTests, testSelect } from "./labtests.js";
 
 const DEFAULT_FACTORS = [["particle_density_kg_m3", 2300, 2700], ["particle_stiffness_n_per_m", 1.0e6, 3.0e6], ["friction_pp", 0.3, 1.0]];
 
@@ -31,7 +32,7 @@ function rowList(list, makeRow, initial) {
 function field(label, input) { return h("label", {}, label, input); }
 
 export async function campaignsPage(view, params) {
-  const [campaigns, materials, effects, defs, backends] = await Promise.all([api("/campaigns"), api("/materials"), catalogue(), schemas(), evaluators()]);
+  const [campaigns, materials, effects, defs, backends, tests] = await Promise.all([api("/campaigns"), api("/materials"), catalogue(), schemas(), evaluators(), labTests()]);
   const micro = microNames(defs);
   const factorNames = [...micro, ...effects.effects.flatMap((e) => e.parameters.map((p) => `effects.${e.name}.${p.name}`))];
   const chosen = params.get("material") || (materials.find((m) => m.bundled) || materials[0] || {}).id;
@@ -69,7 +70,7 @@ export async function campaignsPage(view, params) {
       field("Material", materialSelect),
       field("Evaluator", evaluatorSelect(backends, defs.CampaignCreate)),
       field("Fidelity", h("select", { name: "fidelity", "data-loc": "fidelity" }, h("option", {}, "screening"), h("option", {}, "thesis"))),
-      field("Each run simulates", h("select", { name: "test", "data-loc": "test" }, ["battery", "fill", "cct", "dst", "aor", "anchor"].map((t) => h("option", {}, t)))),
+      field("Each run simulates", testSelect(tests, "test")),
       field("Seed", h("input", { name: "seed", type: "number", value: 0, "data-loc": "seed" })),
       field("Priority", h("input", { name: "priority", type: "number", value: 0, "data-loc": "priority" }))),
     h("h4", {}, "Targets"), h("p", { className: "muted" }, "None ticked: every measurement the runs simulate."), targetsBox,
@@ -85,8 +86,7 @@ export async function campaignsPage(view, params) {
     h("h4", {}, "Options"),
     h("div", {},
       field("DST normal stresses (kPa, comma-separated)", h("input", { name: "dst_kpa", placeholder: "fidelity default", "data-loc": "options" })),
-      h("label", { className: "check" }, h("input", { type: "checkbox", name: "include_aor", "data-loc": "options" }), " include angle of repose"),
-      h("label", { className: "check" }, h("input", { type: "checkbox", name: "include_anchor", "data-loc": "options" }), " include anchor pull-out"),
+      batteryChecks(tests, () => "options"),
       field("Assumed relative uncertainty", h("input", { name: "default_relative_uncertainty", type: "number", step: "any", value: 0.05, "data-loc": "default_relative_uncertainty" })),
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "allow_extrapolation", "data-loc": "allow_extrapolation" }), " allow the optimum outside the box"),
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "diagnose", checked: true, "data-loc": "diagnose" }), " diagnose a missing effect when the model misses"),
@@ -104,7 +104,7 @@ export async function campaignsPage(view, params) {
 
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
-    const body = campaignBody(form, materials.find((m) => String(m.id) === materialSelect.value));
+    const body = campaignBody(form, materials.find((m) => String(m.id) === materialSelect.value), tests);
     const made = await submitForm(form, () => api("/campaigns", { method: "POST", body }));
     if (made) location.hash = `#/campaigns/${made.id}`;
   });
@@ -117,7 +117,7 @@ export async function campaignsPage(view, params) {
 
 // The request body, field by field as CampaignCreate names them; numbers stay as typed (the API
 // validates and names the field), empty optional inputs are left out.
-function campaignBody(form, material) {
+function campaignBody(form, material, tests) {
   const data = new FormData(form);
   const all = (name) => data.getAll(name).map(String);
   const num = (v) => (v === "" || v === null ? null : Number(v));
@@ -130,9 +130,7 @@ function campaignBody(form, material) {
   const priors = all("prior_parameter").map((parameter, i) => ({ parameter, value: num(all("prior_value")[i]),
     uncertainty: num(all("prior_uncertainty")[i]), source: all("prior_source")[i] })).filter((p) => p.parameter);
   const generators = String(data.get("generators") || "").split(",").map((g) => g.trim()).filter(Boolean);
-  const options = {};
-  if (data.get("include_aor") === "on") options.include_aor = true;
-  if (data.get("include_anchor") === "on") options.include_anchor = true;
+  const options = batteryOptions(tests, data);
   const dst = String(data.get("dst_kpa") || "").trim();
   if (dst) options.dst_normal_stresses_pa = dst.split(",").map((v) => Number(v) * 1000);
   const ticked = all("target").map(Number);

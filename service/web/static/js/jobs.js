@@ -4,6 +4,7 @@ import { api, attempt, condition, h, oneLine, schemas, status, submitForm, table
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
 import { evaluatorSelect, evaluators } from "./evaluators.js";
 import { curveViews } from "./jobcurves.js";
+import { batteryChecks, batteryOptions, labTests, testSelect } from "./labtests.js";
 import { refresh } from "./live.js";
 
 function numberField(name, prop, loc) {
@@ -15,14 +16,14 @@ function numberField(name, prop, loc) {
 const isNumber = (p) => p.type === "number" || p.type === "integer" || (p.anyOf || []).some((a) => a.type === "number" || a.type === "integer");
 
 export async function submitPage(view) {
-  const [defs, effects, backends] = await Promise.all([schemas(), catalogue(), evaluators()]);
+  const [defs, effects, backends, tests] = await Promise.all([schemas(), catalogue(), evaluators(), labTests()]);
   const micro = defs.MicroParameters.properties;
   const numeric = Object.entries(micro).filter(([, p]) => isNumber(p));
   const form = h("form", { className: "card", id: "submit-job", novalidate: true },
     h("h2", {}, "Submit a job"),
     h("div", { className: "form-errors" }),
     h("div", {},
-      h("label", {}, "Test", h("select", { name: "test", "data-loc": "test" }, ["battery", "fill", "cct", "dst", "aor", "anchor"].map((t) => h("option", {}, t)))),
+      h("label", {}, "Test", testSelect(tests, "test")),
       h("label", {}, "Fidelity", h("select", { name: "fidelity", "data-loc": "fidelity" }, h("option", {}, "screening"), h("option", {}, "thesis"))),
       h("label", {}, "Evaluator", evaluatorSelect(backends, defs.JobSubmit)),
       h("label", {}, "Seed", h("input", { name: "seed", type: "number", value: 0, "data-loc": "seed" })),
@@ -33,8 +34,7 @@ export async function submitPage(view) {
     h("h3", {}, "Options"),
     h("div", {},
       h("label", {}, "DST normal stresses (kPa, comma-separated)", h("input", { name: "dst_kpa", placeholder: "fidelity default", "data-loc": "options.dst_normal_stresses_pa" })),
-      h("label", { className: "check" }, h("input", { name: "include_aor", type: "checkbox", "data-loc": "options.include_aor" }), " include angle of repose"),
-      h("label", { className: "check" }, h("input", { name: "include_anchor", type: "checkbox", "data-loc": "options.include_anchor" }), " include anchor pull-out")),
+      batteryChecks(tests, (option) => `options.${option}`)),
     h("p", {}, h("button", { type: "submit" }, "Queue job")));
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
@@ -46,7 +46,7 @@ export async function submitPage(view) {
     }
     const effectsPicked = pickedEffects(form);
     if (Object.keys(effectsPicked).length) parameters.effects = effectsPicked;
-    const options = { include_aor: data.get("include_aor") === "on", include_anchor: data.get("include_anchor") === "on" };
+    const options = batteryOptions(tests, data);
     const dst = String(data.get("dst_kpa") || "").trim();
     if (dst) options.dst_normal_stresses_pa = dst.split(",").map((v) => Number(v) * 1000);
     const body = { test: data.get("test"), fidelity: data.get("fidelity"), evaluator: data.get("evaluator"),

@@ -1,0 +1,57 @@
+"""Confined compression test (thesis sections 3.4 and 4.6.2): load-unload cycles of the lid on the fill."""
+from __future__ import annotations
+
+from engine.lab.bounds import POSITIVE, STIFFEST_SOLID_PA, Bound
+from engine.lab.registry import ALWAYS, Bench, LabTest, Quantity, Run, StageCost
+
+
+def _cost(ctx, planned: frozenset[str]) -> StageCost:
+    from engine.lab.cost import lid_stroke_s
+
+    cycles = ctx.spec.options.cct_cycles
+    more_than_preset = cycles is not None and cycles > ctx.preset.cct_cycles
+    return StageCost(ctx.cct_cycles * 2 * lid_stroke_s(ctx),
+                     "options.cct_cycles" if more_than_preset else "options.speed_factor")
+
+
+def _run(bench: Bench, lo: float, hi: float) -> Run:
+    from engine.lab.procedures.cct import run_cct
+
+    cct = run_cct(bench.ctx, bench.ran["fill"].outcome)
+    red = cct.reduction
+    props = [TEST.property("confined_modulus_pa", red.confined_modulus_pa),
+             TEST.property("bulk_stiffness_n_per_m", red.bulk_stiffness_n_per_m)]
+    props += [TEST.property("confined_modulus_pa", modulus, normal_stress_pa=mid)
+              for mid, modulus in zip(red.window_stress_mid_pa, red.window_modulus_pa)]
+    curves = {
+        "cct": {"time_s": cct.record.time_s, "lid_z_m": cct.record.lid_z_m, "normal_strain": cct.strain.tolist(),
+                "normal_stress_pa": cct.record.normal_stress_pa, "cycle": cct.record.cycle},
+        "cct_modulus_vs_stress": {"normal_stress_pa": red.window_stress_mid_pa,
+                                  "confined_modulus_pa": red.window_modulus_pa},
+        "cct_modulus_per_cycle": {"cycle": [float(i + 1) for i in range(len(red.modulus_per_cycle_pa))],
+                                  "confined_modulus_pa": red.modulus_per_cycle_pa},
+    }
+    return Run(cct, props, curves)
+
+
+TEST = LabTest(
+    name="cct",
+    title="Confined compression: confined modulus and bulk stiffness",
+    quantities=(
+        Quantity("confined_modulus_pa", "Pa", Bound(0.0, STIFFEST_SOLID_PA, high_open=False,
+                                                    why="below diamond's modulus"),
+                 conditions=("normal_stress_pa",),
+                 description="mean of cycles 2..N; with normal_stress_pa, the tangent E' at that stress"),
+        Quantity("bulk_stiffness_n_per_m", "N/m", POSITIVE),
+    ),
+    options=("cct_max_stress_pa", "cct_cycles", "cct_window_stresses_pa", "speed_factor", "max_inertial_number",
+             "inertial_number_action"),
+    procedure="engine.lab.procedures.cct:run_cct",
+    reducer="engine.lab.reducers.cct:reduce_cct",
+    cost=_cost,
+    run=_run,
+    needs=("fill",),
+    battery=ALWAYS,
+    progress_weight=0.18,
+    description="Lid cycles to the CCT maximum stress on the filled packing; its first cycle is the DST's preparation.",
+)

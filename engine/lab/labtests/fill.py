@@ -1,0 +1,46 @@
+"""Fill (thesis section 4.5.4): rain the shear box, settle, level, settle; the packing the CCT and DST start from."""
+from __future__ import annotations
+
+from engine.lab.bounds import DENSEST_SOLID_KG_M3, POSITIVE, SQLITE_INT_MAX, Bound
+from engine.lab.registry import ALWAYS, Bench, LabTest, Quantity, Run, StageCost
+from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
+
+
+def _cost(ctx, planned: frozenset[str]) -> StageCost:
+    from engine.lab.cost import packing_spheres
+
+    preset = ctx.preset
+    solids_m3 = preset.container_area_m2 * preset.packing_height_m * preset.expected_solid_fraction
+    return StageCost(RAIN_SETTLE_MAX_S + LEVEL_SETTLE_MAX_S, "options.speed_factor",
+                     packing_spheres(solids_m3, preset.fill_margin, preset.shapes),
+                     "parameters.particle_radius_m" if ctx.spec.fidelity == "screening" else "fidelity")
+
+
+def _run(bench: Bench, lo: float, hi: float) -> Run:
+    from engine.lab.procedures.fill import run_fill
+
+    fill = run_fill(bench.ctx)
+    return Run(fill, [TEST.property(q, v) for q, v in fill.properties.items()], fill.curves)
+
+
+TEST = LabTest(
+    name="fill",
+    title="Fill: bulk density and porosity of the levelled packing",
+    quantities=(
+        Quantity("bulk_density_kg_m3", "kg/m3", Bound(0.0, DENSEST_SOLID_KG_M3, high_open=False,
+                                                       why="below the densest solid, osmium")),
+        Quantity("porosity", "1", Bound(0.0, 1.0, why="a void volume fraction")),
+        Quantity("voids_ratio", "1", POSITIVE),  # e = n / (1 - n): any positive number for n in (0, 1)
+        Quantity("packing_height_m", "m", POSITIVE),
+        Quantity("bulk_mass_kg", "kg", POSITIVE),
+        Quantity("particle_count", "1", Bound(1.0, float(SQLITE_INT_MAX), low_open=False, why="a count of particles")),
+    ),
+    options=("fill_drop_height_m", "fill_friction_pp", "shear_distance_m"),  # the ring is as wide as the shear
+    procedure="engine.lab.procedures.fill:run_fill",
+    reducer="engine.lab.reducers.packing:bulk_properties",
+    cost=_cost,
+    run=_run,
+    battery=ALWAYS,
+    progress_weight=0.12,
+    description="Rainfall into the shear box, settling, levelling at the packing height (thesis Eqs. 4.2, 4.4, 4.7).",
+)
