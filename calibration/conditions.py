@@ -6,9 +6,14 @@ otherwise measured values are silently left out (or, worse, compared with anothe
 """
 from __future__ import annotations
 
-from typing import Any, Iterable
+from typing import TYPE_CHECKING, Any, Iterable, Mapping
 
 from .keys import ResponseKey
+
+if TYPE_CHECKING:
+    from engine.lab.spec import JobSpec
+
+    from .settings import LoopSettings
 
 STRESS = "normal_stress_pa"
 
@@ -29,6 +34,25 @@ def battery_options(keys: Iterable[ResponseKey], base: dict[str, Any] | None = N
     if cct and out.get("cct_window_stresses_pa") is None:
         out["cct_window_stresses_pa"] = cct
     return out
+
+
+def job_spec(test: str, fidelity: str, seed: int, parameters: Mapping[str, Any], options: Mapping[str, Any]) -> "JobSpec":
+    """The job one battery is: the one place a run's ``JobSpec`` is built (a queued job, a notebook's
+    batch, the cost check), so all three run and cost the same thing."""
+    from engine.lab.spec import JobSpec, MicroParameters, TestOptions
+
+    return JobSpec(test=test, fidelity=fidelity, seed=int(seed), parameters=MicroParameters.model_validate(dict(parameters)),
+                   options=TestOptions.model_validate(dict(options)))
+
+
+def run_spec(settings: "LoopSettings", natural: Mapping[str, float], seed: int, keys: Iterable[ResponseKey] = ()) -> "JobSpec":
+    """The job of one run of the loop: the settings' fixed parameters with the run's factor values
+    (dotted effect paths applied), and options that make the battery compute every target's condition
+    (``keys``: the targets')."""
+    from . import parameters as factor_paths
+
+    return job_spec(settings.test, settings.fidelity, seed, factor_paths.apply(settings.fixed_parameters, dict(natural)),
+                    battery_options(keys, settings.options))
 
 
 def standin_conditions(options: dict[str, Any], cct_max_stress_pa: float = 65.6e3):

@@ -22,11 +22,11 @@ from __future__ import annotations
 
 import importlib
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Annotated, Any, Callable, Mapping, get_args
+from typing import TYPE_CHECKING, Annotated, Any, Callable, Mapping
 
 from pydantic import AfterValidator
 
-from engine.lab.spec import TestName
+from engine.lab.registry import job_test_names
 
 if TYPE_CHECKING:
     from engine.lab.result import LabResult
@@ -39,7 +39,7 @@ CancelFn = Callable[[], bool]
 
 # The jobs and campaigns tables store the name in a String(16) column.
 NAME_MAX = 16
-LAB_TESTS: tuple[str, ...] = get_args(TestName)
+LAB_TESTS: tuple[str, ...] = tuple(job_test_names())  # the lab's tests (engine.lab.registry), battery included
 
 
 class UnknownEvaluator(ValueError):

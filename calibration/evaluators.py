@@ -50,13 +50,11 @@ class LabEvaluator:
     runs: int = 0
 
     def __call__(self, requests: Sequence[RunRequest]) -> list[list[dict]]:
-        from engine.lab.spec import JobSpec, MicroParameters, TestOptions
+        from .conditions import job_spec
 
         out = []
         for parameters, seed in requests:
-            spec = JobSpec(test=self.test, fidelity=self.fidelity, seed=int(seed),
-                           parameters=MicroParameters.model_validate(dict(parameters)),
-                           options=TestOptions.model_validate(self.options))
+            spec = job_spec(self.test, self.fidelity, seed, parameters, self.options)
             result = self.backend.run(spec)
             out.append([p.model_dump() for p in result.properties])
             self.runs += 1

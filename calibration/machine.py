@@ -31,7 +31,7 @@ from .errors import LoopFailed, SettingsError
 from .records import Measured
 from .report import build_report
 from .settings import LoopSettings
-from .vocabulary import MISFIT_VERDICTS, Phase, PolishRule, RunKind
+from .vocabulary import MISFIT_VERDICTS, Phase, PolishRule, PolishStage, RunKind
 
 SEED_MAX = 2**31 - 1
 DESIGN_SEED_STRIDE = 7919          # the design's seeds of iteration n start at seed + 7919 (n - 1)
@@ -112,7 +112,7 @@ def awaited(it) -> list:
         return runs_of(it, RunKind.DIAGNOSIS)
     if phase == Phase.POLISH:
         state = (it.optimum or {}).get("polish")
-        if state and state["stage"] != "done":
+        if state and state["stage"] != PolishStage.DONE:
             return polish.round_runs(it, state)
     return []
 
@@ -166,7 +166,7 @@ def _polish(ctx: Context, it) -> Transition:
     """Start, continue or end the polishing on the batteries (``calibration.polish``)."""
     s = ctx.settings
     state = (it.optimum or {}).get("polish")
-    if s.polish_steps == 0 or (state and state["stage"] == "done"):
+    if s.polish_steps == 0 or (state and state["stage"] == PolishStage.DONE):
         return Transition(Phase.POLISH, Phase.REPORT)
     design, models = analysis.fit(it.design["doe"], runs_of(it, RunKind.DESIGN), ctx.targets)
     modelled = [m for m in models if m.fit is not None]

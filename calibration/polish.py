@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from calibration import calibrate as cal
-from calibration.vocabulary import RunKind
+from calibration.vocabulary import PolishStage, RunKind
 
 CODED_STEP = 0.1
 SHRINKS = (1.0, 0.5, 0.25)
@@ -65,7 +65,7 @@ def start(config, design, modelled, theta: dict, run_ids: list[int], records: li
     """State at the surfaces' optimum (its confirmation runs ``run_ids``, their ``records`` at ``seeds``)
     and the Jacobian round's points (natural, coded); each point is queued once per seed."""
     res = _residuals(config, design, modelled, theta, records, seeds)
-    state = {"round": 0, "stage": "jacobian", "theta": dict(theta), "run_ids": list(run_ids), "seeds": list(seeds),
+    state = {"round": 0, "stage": PolishStage.JACOBIAN.value, "theta": dict(theta), "run_ids": list(run_ids), "seeds": list(seeds),
              "chi2_start": res.chi2(), "chi2": res.chi2(), "r": res.r.tolist(), "J": res.J.tolist(),
              "free": list(res.free), "n_targets": len(res.keys), "steps": 0, "batteries": 0, "h": []}
     points = []
@@ -80,7 +80,7 @@ def start(config, design, modelled, theta: dict, run_ids: list[int], records: li
 def skipped(check: dict) -> dict:
     """The state of an iteration that does not polish (``polish_when="surrogate_misses"``): the surfaces
     predicted its confirmation batteries, whose reason is kept for the report."""
-    return {"stage": "done", "skipped": check.get("reason") or check.get("verdict"), "steps": 0, "batteries": 0}
+    return {"stage": PolishStage.DONE.value, "skipped": check.get("reason") or check.get("verdict"), "steps": 0, "batteries": 0}
 
 
 def std_order(state: dict, point: int, seed_index: int) -> int:
@@ -99,7 +99,7 @@ def advance(config, design, modelled, state: dict, round_runs: list, max_steps: 
     m = len(seeds)
     points = [round_runs[i:i + m] for i in range(0, len(round_runs), m)]
     records = [[list((run.responses or {}).values()) for run in runs] for runs in points]
-    if state["stage"] == "jacobian":
+    if state["stage"] == PolishStage.JACOBIAN:
         J = np.array(state["J"])
         r0 = np.array(state["r"])
         for j, (runs, recs) in enumerate(zip(points, records)):
@@ -131,13 +131,13 @@ def advance(config, design, modelled, state: dict, round_runs: list, max_steps: 
     points = _step_points(design, state)
     if not points:
         return _done(state), []
-    state.update(stage="step", round=state["round"] + 1)
+    state.update(stage=PolishStage.STEP.value, round=state["round"] + 1)
     return state, points
 
 
 def _done(state: dict) -> dict:
     state = dict(state)
-    state.update(stage="done")
+    state.update(stage=PolishStage.DONE.value)
     return state
 
 

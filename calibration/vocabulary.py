@@ -69,6 +69,17 @@ class StopReason(str, Enum):
         return self.value
 
 
+class PolishStage(str, Enum):
+    """Where a polishing round is: the Jacobian's points, a Gauss-Newton step's trial lengths, or done."""
+
+    JACOBIAN = "jacobian"
+    STEP = "step"
+    DONE = "done"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 class PolishRule(str, Enum):
     """When an iteration polishes its optimum on the batteries (``LoopSettings.polish_when``)."""
 

@@ -62,16 +62,19 @@ def check_design_size(n_factors: int, n_generators: int, replicates: int, centre
     return runs
 
 
-def check_campaign_limits(config, settings: Settings, field_prefix: str = "") -> None:
+def check_campaign_limits(config, settings: Settings, field_prefix: str = "", target_keys=()) -> None:
     """A campaign (or a schedule's template) is checked at creation for every run of its design, with
     the same model as a job: a draft that could never queue its runs is a 422 now, not a failure on start.
+    Each run's job is built as the runner will queue it (``calibration.conditions.run_spec``), with the
+    options its targets derive (``target_keys``: the DST loads and E' stresses of the measurements).
 
     Particle counts and times depend on the micro parameters only through ``particle_radius_m`` (and on the
     options), each monotonically, so the design's runs include the worst case of any point in the factor
     box, including the confirmation run at the optimum. Factors that are not scalar micro parameters
     (e.g. an effect's strength) do not change the cost and are not applied here.
     """
-    from engine.lab.spec import MicroParameters, TestOptions
+    from engine.lab.spec import MicroParameters
+    from calibration.conditions import run_spec
     from calibration.design import build_design
     from calibration.errors import SettingsError
     from service.errors import from_settings_error
@@ -83,7 +86,7 @@ def check_campaign_limits(config, settings: Settings, field_prefix: str = "") ->
         built = build_design(config.factors, design, config.seed, field_prefix=f"{field_prefix}design.")
     except SettingsError as exc:
         raise from_settings_error(exc) from exc
-    options = TestOptions.model_validate(config.options)
+    target_keys = list(target_keys)
     seen: set[tuple] = set()
     scalar = set(MicroParameters.model_fields) - {"effects"}
     for record in built.records("std"):
@@ -94,8 +97,7 @@ def check_campaign_limits(config, settings: Settings, field_prefix: str = "") ->
         if key in seen:
             continue
         seen.add(key)
-        spec = JobSpec(test=config.test, fidelity=config.fidelity, seed=0, options=options,
-                       parameters=MicroParameters.model_validate({**config.fixed_parameters, **natural}))
+        spec = run_spec(config, natural, 0, target_keys)
         try:
             check_limits(spec, settings)
         except Invalid as exc:
@@ -109,4 +111,8 @@ def check_campaign_limits(config, settings: Settings, field_prefix: str = "") ->
                 where = f"{field_prefix}fixed_parameters.{parameter}"
             else:
                 where = field_prefix + field
-            raise Invalid(f"design run at {point}: {exc.message}", where) from None
+            derived = [k for k in ("dst_normal_stresses_pa", "cct_window_stresses_pa")
+                       if field.endswith(k) and (config.options.get(k) is None) and getattr(spec.options, k)]
+            why = " (the stresses of the material's measurements; set options." + derived[0] + \
+                " or choose fewer targets)" if derived else ""
+            raise Invalid(f"design run at {point}: {exc.message}{why}", where) from None

@@ -18,6 +18,7 @@ from service.api.responses.report import ReportOut
 from service.db import DbSession
 from service.errors import Conflict, NotFound
 from service.security import client_id
+from calibration.vocabulary import Phase, Verdict
 from service.vocabulary import CampaignStatus
 
 router = APIRouter(prefix="/campaigns", tags=["campaigns"])
@@ -158,7 +159,7 @@ def diagnosis(session: DbSession, campaign_id: CampaignId, number: int | None = 
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     if "diagnosis" not in value:
         reason = ("the model reproduces the measurements; nothing to diagnose"
-                  if value.get("verdict") == "calibrated" and it.phase != "diagnosis"
+                  if value.get("verdict") == Verdict.CALIBRATED and it.phase != Phase.DIAGNOSIS
                   else f"the diagnosis batteries are not done (phase {it.phase})")
         raise Conflict(f"campaign {campaign_id} iteration {it.number} has no diagnosis: {reason}",
                        ["path", "campaign_id"])

@@ -20,11 +20,11 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from calibration import machine
+from calibration.conditions import run_spec
 from calibration.errors import LoopFailed
 from calibration.keys import responses_of
 from calibration.records import Measured
 from calibration.vocabulary import Phase
-from engine.lab.spec import JobSpec, MicroParameters, TestOptions
 from service.campaigns.schemas import CampaignCreate
 from service.errors import ApiError, TooMany
 from service.vocabulary import CampaignStatus, JobStatus, RunStatus
@@ -93,11 +93,14 @@ class CampaignRunner:
     def _validate(self, raw: dict) -> dict:
         """The next iteration's configuration as the automatic mode proposes it, checked as a campaign's
         (with the cost limits of every run)."""
+        from service.campaigns.store import campaign_targets
         from service.limits import check_campaign_limits
 
         validated = CampaignCreate.model_validate(raw)
         if self.settings is not None:
-            check_campaign_limits(validated, self.settings)
+            with self.session_factory() as session:
+                keys = [t.key for t in campaign_targets(session, validated)]
+            check_campaign_limits(validated, self.settings, target_keys=keys)
         return validated.model_dump(mode="json")
 
     def _new_iteration(self, session: Session, campaign: Campaign, config: CampaignCreate) -> None:
@@ -140,24 +143,11 @@ class CampaignRunner:
         return True
 
     # -- batteries ---------------------------------------------------------------------------
-    def _spec(self, config: CampaignCreate, run: CampaignRun, targets=()) -> JobSpec:
-        """The run's job: fixed parameters with the run's factor values (dotted effect paths applied),
-        and options that make the battery compute every target's condition (DST loads, E' stresses)."""
-        from calibration import parameters as factor_paths
-        from calibration.conditions import battery_options
-        from calibration.keys import ResponseKey
-
-        parameters = MicroParameters.model_validate(factor_paths.apply(config.fixed_parameters, run.natural))
-        options = battery_options([ResponseKey.from_record(t) for t in targets], config.options)
-        options = {k: v for k, v in options.items() if k in TestOptions.model_fields}
-        return JobSpec(test=config.test, fidelity=config.fidelity, seed=run.seed, parameters=parameters,
-                       options=TestOptions.model_validate(options))
-
     def _submit(self, session, campaign, config, run) -> bool:
         from service.queue import submit_job
 
         try:
-            spec = self._spec(config, run, self._targets(session, campaign, config))
+            spec = run_spec(config, run.natural, run.seed, [t.key for t in self._targets(session, campaign, config)])
             job = submit_job(session, spec, evaluator=config.evaluator,
                              priority=config.priority, idempotency_key=f"campaign:{campaign.id}:run:{run.id}",
                              client_id=campaign.client_id, campaign_id=campaign.id)
@@ -204,15 +194,10 @@ class CampaignRunner:
             session.commit()
         return progressed, all(r.status == RunStatus.SUCCEEDED for r in runs)
 
-    # -- what the runs are calibrated against -------------------------------------------------
     def _targets(self, session, campaign, config) -> list[Measured]:
-        """The campaign's targets: the material's measurements it calibrates against."""
-        from calibration.keys import select
-        from service.materials.store import get_material
+        from service.campaigns.store import campaign_targets
 
-        material = get_material(session, campaign.material_id)
-        wanted = [t.model_dump() for t in config.targets] if config.targets is not None else None
-        return [Measured.from_record(m) for m in select(material.measurements if material else [], wanted)]
+        return campaign_targets(session, config)
 
     def _complete(self, session, campaign) -> bool:
         campaign.status = CampaignStatus.COMPLETED.value

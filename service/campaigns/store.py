@@ -13,6 +13,8 @@ from sqlalchemy.orm import Session
 
 from calibration.adding import effect_hints, with_effect_factor
 from calibration.errors import SettingsError
+from calibration.keys import select as select_targets
+from calibration.records import Measured
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.config import Settings, get_settings
 from service.errors import Conflict, NotFound, from_settings_error
@@ -31,12 +33,26 @@ def _settings(session: Session) -> Settings:
     return session.info.get("settings") or get_settings()
 
 
+def campaign_targets(session: Session, config: CampaignCreate) -> list[Measured]:
+    """The measurements a campaign calibrates against: its material's, those ``config.targets`` names
+    (all when None), as the loop's records."""
+    material = get_material(session, config.material_id)
+    wanted = [t.model_dump() for t in config.targets] if config.targets is not None else None
+    return [Measured.from_record(m) for m in select_targets(material.measurements if material else [], wanted)]
+
+
+def check_limits_with_targets(session: Session, config: CampaignCreate, field_prefix: str = "") -> None:
+    """``check_campaign_limits`` with the options the material's measurements derive, as queued later."""
+    check_campaign_limits(config, _settings(session), field_prefix,
+                          [t.key for t in campaign_targets(session, config)])
+
+
 def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = "anonymous",
                     schedule_id: int | None = None) -> Campaign:
     if get_material(session, body.material_id) is None:
         raise NotFound(f"material {body.material_id} not found", "material_id")
     # the design doe/ builds and the limits of every run: a 422 now, not a failure on start
-    check_campaign_limits(body, _settings(session))
+    check_limits_with_targets(session, body)
     campaign = Campaign(name=body.name, material_id=body.material_id, status=CampaignStatus.DRAFT, evaluator=body.evaluator,
                         fidelity=body.fidelity, config=body.model_dump(mode="json"), current_iteration=0,
                         schedule_id=schedule_id, client_id=client_id)
@@ -99,7 +115,7 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
         except SettingsError as exc:
             raise from_settings_error(exc) from exc
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
-    check_campaign_limits(validated, _settings(session))
+    check_limits_with_targets(session, validated)
     config = validated.model_dump(mode="json")
     won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == CampaignStatus.COMPLETED)
                           .values(config=config, status=CampaignStatus.RUNNING, finished_at=None, updated_at=utcnow())

@@ -18,6 +18,7 @@ from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from service.campaigns.schemas import CampaignCreate
+from service.campaigns.store import campaign_targets
 from service.limits import check_campaign_limits
 from service.errors import ApiError
 from service.materials.store import get_material, latest_measurement_id
@@ -123,7 +124,7 @@ class Scheduler:
         config = CampaignCreate.model_validate(body)
         # the limits in force now (they may have been lowered since the schedule was created): a firing
         # over them is skipped with the reason, not a campaign that fails on its first run
-        check_campaign_limits(config, self.settings)
+        check_campaign_limits(config, self.settings, target_keys=[t.key for t in campaign_targets(session, config)])
         campaign = create_campaign_nocommit(session, config, schedule.id)
         campaign.status = CampaignStatus.RUNNING
         campaign.started_at = now

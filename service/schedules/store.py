@@ -9,9 +9,8 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from service.campaigns.schemas import CampaignCreate
-from service.config import get_settings
 from service.errors import Invalid, NotFound
-from service.limits import check_campaign_limits
+from service.campaigns.store import check_limits_with_targets
 from service.materials.store import get_material
 from service.models.schedule import Schedule, ScheduleFiring
 from service.schedules.cron import CronError, parse_cron
@@ -50,7 +49,7 @@ def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = N
     if get_material(session, body.template.material_id) is None:
         raise NotFound(f"material {body.template.material_id} not found", "template.material_id")
     # every campaign a firing creates must be able to queue its runs: the same limits as a campaign
-    check_campaign_limits(body.template, session.info.get("settings") or get_settings(), "template.")
+    check_limits_with_targets(session, body.template, "template.")
     schedule = Schedule(name=body.name, cron=body.cron, template=body.template.model_dump(mode="json"),
                         only_if_new_measurements=body.only_if_new_measurements, enabled=body.enabled,
                         missed_run_policy=body.missed_run_policy, next_run_at=cron.next_after(naive_utc(now)))
