@@ -151,15 +151,15 @@ def surrogate_check(config, modelled, optimum: dict, confirmation_records: list[
 
 
 def active_effects(iteration_parameters: dict) -> set[str]:
-    """Candidate names already in the model: fixed effects, effect factors, a shape factor."""
-    active = set((iteration_parameters.get("effects") or {}))
-    for f in iteration_parameters.get("factors") or []:
-        if f["name"].startswith("effects."):
-            active.add(f["name"].split(".")[1])
-        if f["name"] == "clump_aspect_ratio":
-            active.add("particle_shape")
-    if (iteration_parameters.get("fixed") or {}).get("clump_aspect_ratio", 1.0) != 1.0:
-        active.add("particle_shape")
+    """Names of the effects already in an iteration's model (``iteration_parameters``: its factors, fixed
+    parameters and fixed contact effects): every fixed contact effect, and every candidate that says it
+    is active there (``Candidate.active_in``: its strength a factor, or fixed away from "off")."""
+    from engine.candidates import candidates
+
+    factors = iteration_parameters.get("factors") or []
+    fixed = {**(iteration_parameters.get("fixed") or {}), "effects": iteration_parameters.get("effects") or {}}
+    active = set(fixed["effects"])
+    active |= {name for name, c in candidates().items() if c.active_in(factors, fixed)}
     return active
 
 

@@ -34,7 +34,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from engine.candidates import candidates
 from engine.effects import get as get_effect
+from engine.effects.base import STANDIN_TERMS
 from engine.effects.hertz_mindlin import MATCH_STRESS_PA
 from engine.lab.registry import quantity
 
@@ -133,13 +135,28 @@ def _rational(x: float, half: float) -> float:
     return x / (x + half) if x > 0 else 0.0
 
 
-def _effect_strengths(effects: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
-    """Validated effect parameters by effect name (the engine's own models do the checking)."""
-    out = {}
-    for name, params in (effects or {}).items():
+def standin_terms(parameters: Mapping[str, Any]) -> dict[str, float]:
+    """The stand-in's physical terms (``engine.effects.base.STANDIN_TERMS``) in a parameter set.
+
+    Why through declarations: each contact effect says how the stand-in represents it
+    (``Effect.standin``, its parameters validated by the engine's own model), and a candidate that is a
+    micro parameter names its term (``Candidate.standin_term``, its strength above the value at which
+    it vanishes), so the stand-in names no effect. Terms of several effects add (two rolling models);
+    an effect without a closed form here (SJKR cohesion on a linear spring gives no intercept) feeds none.
+    """
+    terms: dict[str, float] = {}
+    for name, params in (parameters.get("effects") or {}).items():
         effect = get_effect(name)            # ValueError naming the known effects
-        out[name] = effect.params_model.model_validate(dict(params))
-    return out
+        if effect.standin is not None:
+            for term, value in effect.standin(effect.params_model.model_validate(dict(params))).items():
+                terms[term] = terms.get(term, 0.0) + value
+    for c in candidates().values():
+        if c.standin_term is not None and c.factor in parameters:
+            terms[c.standin_term] = terms.get(c.standin_term, 0.0) + float(parameters[c.factor]) - (c.off_value or 0.0)
+    unknown = set(terms) - set(STANDIN_TERMS)
+    if unknown:
+        raise ValueError(f"the stand-in has no term {sorted(unknown)} (it knows {', '.join(STANDIN_TERMS)})")
+    return terms
 
 
 def _hertz_equivalent_stiffness(young_modulus_pa: float, poisson_ratio: float, radius_m: float) -> float:
@@ -161,14 +178,11 @@ def bulk_values(parameters: Mapping[str, Any], conditions: Conditions, gains: Ga
     mu_w = float(parameters.get("friction_pw", 0.62))
     kp = float(parameters.get("particle_stiffness_n_per_m", 1.72e6))
     radius = float(parameters.get("particle_radius_m") or 0.020)
-    elongation = float(parameters.get("clump_aspect_ratio", 1.0)) - 1.0
-    effects = _effect_strengths(parameters.get("effects") or {})
-    mu_r = sum(float(effects[n].rolling_friction)
-               for n in ("rolling_epsd", "rolling_epsd2", "rolling_constant_torque") if n in effects)
-    # the adhesive contact gives the intercept; SJKR on a linear spring gives none (engine/effects/
-    # cohesion_sjkr.py) and is not modelled here
-    gamma = float(effects["cohesion_adhesive"].surface_energy_j_m2) if "cohesion_adhesive" in effects else 0.0
-    hertz = effects.get("hertz_mindlin")
+    terms = standin_terms(parameters)
+    elongation = terms.get("elongation", 0.0)
+    mu_r = terms.get("rolling_friction", 0.0)
+    gamma = terms.get("surface_energy_j_m2", 0.0)
+    hertz_modulus_pa = terms.get("hertz_young_modulus_pa")
 
     solid = (g.solid_fraction_0 - g.solid_loss_friction * g.sat(mu / 0.25) - g.solid_loss_wall * g.sat(mu_w / 0.2)
              - g.solid_loss_rolling * _rational(mu_r, 0.2) - g.solid_loss_shape * _rational(elongation, 0.3)
@@ -191,8 +205,8 @@ def bulk_values(parameters: Mapping[str, Any], conditions: Conditions, gains: Ga
     def tau(stress):
         return cohesion_pa + (stress + self_weight_pa) * math.tan(math.radians(min(phi_peak(stress), 85.0)))
 
-    if hertz is not None:
-        k_level, exponent = _hertz_equivalent_stiffness(hertz.young_modulus_pa, hertz.poisson_ratio, radius), \
+    if hertz_modulus_pa is not None:
+        k_level, exponent = _hertz_equivalent_stiffness(hertz_modulus_pa, terms["hertz_poisson_ratio"], radius), \
             g.modulus_hertz_exponent
     else:
         k_level, exponent = kp, g.modulus_linear_exponent

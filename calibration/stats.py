@@ -18,7 +18,9 @@
 """
 from __future__ import annotations
 
+import hashlib
 import math
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,17 +91,37 @@ class LackOfFit:
                 "chi2_per_dof": self.per_dof, "noise_band": list(self.noise_band)}
 
 
+_NULL_DRAWS: "OrderedDict[bytes, np.ndarray]" = OrderedDict()
+
+
 def null_residuals(M: np.ndarray, df: np.ndarray, *, n_sim: int = 20000, seed: int = 0) -> np.ndarray | None:
     """Seeded draws of standardised residuals under the model (``n_sim`` x N), or None when every
     variance is known (df infinite) and the chi2 distributions are exact.
 
     r ~ M z with z standard normal, each component divided by sqrt(chi2_df / df) of its variance
-    estimate: with variances from three replicates the tails are far heavier than chi2's.
+    estimate: with variances from three replicates the tails are far heavier than chi2's. The draws are
+    a pure function of (M, df, n_sim, seed); the report and the diagnosis of one iteration ask for the
+    same null, so the last few are kept (read-only) rather than drawn again.
     """
+    M = np.asarray(M, float)
     df = np.asarray(df, float)
     finite = np.isfinite(df)
     if not finite.any():
         return None
+    key = hashlib.sha256(M.tobytes() + df.tobytes() + repr((M.shape, n_sim, seed)).encode()).digest()
+    hit = _NULL_DRAWS.get(key)
+    if hit is not None:
+        _NULL_DRAWS.move_to_end(key)
+        return hit
+    draws = _draw_null(M, df, finite, n_sim, seed)
+    draws.flags.writeable = False
+    _NULL_DRAWS[key] = draws
+    while len(_NULL_DRAWS) > 4:
+        _NULL_DRAWS.popitem(last=False)
+    return draws
+
+
+def _draw_null(M: np.ndarray, df: np.ndarray, finite: np.ndarray, n_sim: int, seed: int) -> np.ndarray:
     rng = np.random.default_rng(seed)
     e = rng.standard_normal((n_sim, M.shape[0])) @ M.T
     scale = np.ones_like(e)

@@ -35,6 +35,13 @@ FINGERPRINT_COLUMNS = ("bulk_density", "modulus_level", "modulus_slope", "cohesi
                        "dilatancy", "angle_of_repose", "pull_force")
 
 
+# The physical terms of the closed-form stand-in (calibration.standin) an effect or candidate can feed:
+# a rolling resistance coefficient, an adhesive surface energy (J/m2), a Hertzian modulus (Pa) and
+# Poisson's ratio replacing the linear spring, and a grain elongation (aspect ratio - 1).
+STANDIN_TERMS = ("rolling_friction", "surface_energy_j_m2", "hertz_young_modulus_pa", "hertz_poisson_ratio",
+                 "elongation")
+
+
 @dataclass(frozen=True)
 class Candidate:
     """What the missing-physics diagnosis (``calibration/``) needs to know of a physical effect.
@@ -67,9 +74,29 @@ class Candidate:
     companions: dict[str, float] = field(default_factory=dict)
     # fidelities whose lab can build the effect (None: all); the thesis fidelity has its own clump mix
     fidelities: tuple[str, ...] | None = None
+    # the closed-form stand-in's term this strength feeds (calibration.standin.TERMS), for a candidate
+    # that is a micro parameter rather than a contact effect (an effect declares its own: Effect.standin)
+    standin_term: str | None = None
 
     def applies_to(self, fidelity: str | None) -> bool:
         return fidelity is None or self.fidelities is None or fidelity in self.fidelities
+
+    @property
+    def effect_name(self) -> str | None:
+        """The contact effect whose parameter the strength is (``effects.<name>.<param>``), else None."""
+        return self.factor.split(".")[1] if self.factor.startswith("effects.") else None
+
+    def active_in(self, factors: list[dict], fixed: dict) -> bool:
+        """Is this effect in a model with design ``factors`` ({name, ...}) and ``fixed`` micro parameters
+        (``effects`` included)? An effect is in when its strength is a factor, when it is one of the fixed
+        contact effects, or when its fixed strength differs from the value at which it vanishes."""
+        effect = self.effect_name
+        if effect is not None:
+            return effect in (fixed.get("effects") or {}) or any(
+                f["name"].startswith(f"effects.{effect}.") for f in factors)
+        if any(f["name"] == self.factor for f in factors):
+            return True
+        return self.factor in fixed and (self.off_value is None or fixed[self.factor] != self.off_value)
 
     def __post_init__(self):
         low, high = self.plausible_range
@@ -104,3 +131,6 @@ class Effect:
     timestep_limit: Callable[..., float] | None = None
     # the missing-physics diagnosis's view of this effect; None: not a diagnosis candidate
     candidate: Candidate | None = None
+    # how the closed-form stand-in (calibration.standin) represents it: (params) -> {term: value} over
+    # calibration.standin.TERMS; None: the stand-in has no closed form for it
+    standin: Callable[..., dict[str, float]] | None = None

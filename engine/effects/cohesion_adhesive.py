@@ -71,4 +71,5 @@ CANDIDATE = Candidate(
 EFFECT = Effect(
     name="cohesion_adhesive", stage="normal_extra", params_model=Params, n_props=1, n_hist=0,
     pair_props=pair_props, module=__name__, doc=__doc__, candidate=CANDIDATE,
+    standin=lambda p: {"surface_energy_j_m2": float(p.surface_energy_j_m2)},
 )

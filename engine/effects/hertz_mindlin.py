@@ -93,4 +93,5 @@ EFFECT = Effect(
     name="hertz_mindlin", stage="stiffness", params_model=Params, n_props=2, n_hist=0,
     pair_props=pair_props, module=__name__, doc=__doc__, timestep_limit=timestep_limit,
     candidate=CANDIDATE,
+    standin=lambda p: {"hertz_young_modulus_pa": float(p.young_modulus_pa), "hertz_poisson_ratio": float(p.poisson_ratio)},
 )

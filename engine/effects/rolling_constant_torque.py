@@ -38,4 +38,5 @@ def apply(p, hist, h0, n0, n1, n2, w0, w1, w2, fn, r_eff, kn, ks, i_roll, dt):
 EFFECT = Effect(
     name="rolling_constant_torque", stage="rolling", params_model=Params, n_props=1, n_hist=0,
     pair_props=pair_props, module=__name__, doc=__doc__,
+    standin=lambda p: {"rolling_friction": float(p.rolling_friction)},
 )

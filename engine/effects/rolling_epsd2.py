@@ -48,4 +48,5 @@ CANDIDATE = Candidate(
 EFFECT = Effect(
     name="rolling_epsd2", stage="rolling", params_model=Params, n_props=1, n_hist=3,
     pair_props=pair_props, module=__name__, doc=__doc__, candidate=CANDIDATE,
+    standin=lambda p: {"rolling_friction": float(p.rolling_friction)},
 )

@@ -28,6 +28,7 @@ from engine.particles import templates as tpl
 CANDIDATE = Candidate(
     name="particle_shape", title="particle shape (elongation)", factor="clump_aspect_ratio",
     unit="1", plausible_range=(1.2, 2.0), step=0.3, off_value=1.0, fidelities=("screening",),
+    standin_term="elongation",
     fingerprint={"bulk_density": "-", "modulus_level": "+-", "friction_angle": "+", "dilatancy": "++",
                  "angle_of_repose": "+", "pull_force": "+"},
     physics="Elongated, interlocking grains dilate more and resist shear more than spheres: friction "

@@ -12,6 +12,7 @@ from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from calibration.adding import effect_hints, with_effect_factor
+from calibration.analysis import active_effects
 from calibration.errors import SettingsError
 from calibration.keys import select as select_targets
 from calibration.records import Measured
@@ -178,6 +179,7 @@ def run_view(run) -> dict[str, Any]:
 
 def iteration_view(it: CampaignIteration, *, with_runs: bool = True) -> dict[str, Any]:
     out = {"number": it.number, "phase": it.phase, "parameters": it.parameters,
+           "effects": sorted(active_effects(it.parameters)),
            "design": _design_summary(it.design), "created_at": _iso(it.created_at),
            "finished_at": _iso(it.finished_at), "report": it.report}
     if with_runs:

@@ -6,9 +6,18 @@ from typing import Any
 
 from pydantic import Field
 
-from service.api.responses.common import CONDITION, PARAMETERS, Condition, Factor, Out, ParameterValues
+from calibration.vocabulary import Phase, RunKind
+from service.api.responses.common import (
+    CONDITION,
+    PARAMETERS,
+    Condition,
+    Factor,
+    Out,
+    ParameterValues,
+)
 from service.api.responses.designs import DesignView
 from service.api.responses.report import Report
+from service.vocabulary import CampaignStatus, RunStatus
 
 
 class CampaignSummary(Out):
@@ -17,11 +26,11 @@ class CampaignSummary(Out):
     id: int
     name: str
     material_id: int
-    status: str = Field(description="draft, running, paused, completed or failed")
+    status: CampaignStatus
     evaluator: str = Field(description="'dem' or 'analytic'")
     fidelity: str
     current_iteration: int = Field(description="0 before the start")
-    phase: str | None = Field(description="the current iteration's phase; null before the start")
+    phase: Phase | None = Field(description="the current iteration's phase; null before the start")
     runs_total: int = Field(description="runs of the current iteration")
     runs_succeeded: int
     runs_failed: int = Field(description="failed or cancelled runs of the current iteration")
@@ -49,7 +58,7 @@ class Run(Out):
     """One battery of an iteration (store.run_view)."""
 
     id: int
-    kind: str = Field(description="design, confirmation, polish or diagnosis")
+    kind: RunKind
     std_order: int
     run_order: int
     is_centre: bool
@@ -57,7 +66,7 @@ class Run(Out):
     natural: ParameterValues | None = Field(description=PARAMETERS)
     seed: int
     job_id: int | None = Field(description="the queued job; null before queueing")
-    status: str = Field(description="pending, queued, running, succeeded, failed or cancelled")
+    status: RunStatus
     responses: dict[str, Response] | None = Field(description="per response name: the battery's value")
     error: str | None
 
@@ -77,8 +86,10 @@ class Iteration(Out):
     """One iteration with its parameters, design, report and runs (store.iteration_view)."""
 
     number: int
-    phase: str = Field(description="design, batteries, analysis, confirmation, polish, report, diagnosis or done")
+    phase: Phase = Field(description="where the iteration is (calibration.vocabulary.Phase)")
     parameters: IterationParameters | None
+    effects: list[str] = Field(description="the effects in the iteration's model (Candidate.active_in: fixed "
+                                           "contact effects, strengths that are factors, a shape off 1)")
     design: DesignView | None
     created_at: str | None
     finished_at: str | None
@@ -216,7 +227,7 @@ class CampaignOptimum(Optimum):
 
 class ConfirmationRun(Out):
     job_id: int | None
-    status: str
+    status: RunStatus
     seed: int
     responses: dict[str, Response] | None
     error: str | None

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from service.api.responses.common import CONDITION, PARAMETERS, Condition, Out, ParameterValues
+from calibration.vocabulary import Verdict
+from service.api.responses.common import (
+    CONDITION,
+    PARAMETERS,
+    Condition,
+    Out,
+    ParameterValues,
+)
 from service.api.responses.report import Decision
 
 
@@ -23,7 +30,7 @@ class HistoryEntry(Out):
     directed_p: float | None = Field(description="once diagnosed: the candidates' directed test")
     per_test: dict[str, float] = Field(description="per lab test: its chi2")
     weighted_rms: float | None = Field(description="RMS of the modelled targets' standardised residuals")
-    verdict: str | None
+    verdict: Verdict | None
     top_effect: str | None = Field(description="the diagnosis's first-ranked effect")
     decision: Decision | None = Field(description="automatic mode: whether the added effect was kept")
     stop_reason: str | None = Field(description="automatic mode: why the loop stopped here")

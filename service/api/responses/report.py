@@ -6,7 +6,15 @@ from typing import Any
 
 from pydantic import Field
 
-from service.api.responses.common import CONDITION, PARAMETERS, Condition, LackOfFit, Out, ParameterValues
+from calibration.vocabulary import Verdict
+from service.api.responses.common import (
+    CONDITION,
+    PARAMETERS,
+    Condition,
+    LackOfFit,
+    Out,
+    ParameterValues,
+)
 from service.api.responses.designs import DesignView
 from service.api.responses.diagnosis import Diagnosis, DirectedTest
 
@@ -187,8 +195,7 @@ class Report(Out):
     confirmation_seeds: list[int] | None = None
     confirmation_job_ids: list[int | None] | None = None
     targets: list[TargetRow] = Field(default_factory=list)
-    verdict: str | None = Field(None, description="targets out of reach, model misses the measurements, "
-                                                  "surrogate inadequate or calibrated")
+    verdict: Verdict | None = Field(None, description="the one verdict (calibration.verdict)")
     meaning: str | None = None
     unreachable: list[str] | None = Field(None, description="responses no parameter set in the box reaches")
     confirmation_outside_interval: list[str] | None = None

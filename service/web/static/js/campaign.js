@@ -9,18 +9,6 @@ import { diagnosisSection } from "./campaign_diagnosis.js";
 import { historySection } from "./campaign_history.js";
 import { designSection, modelsSection } from "./campaign_models.js";
 
-// Candidate names in an iteration's model (as the service's active_effects): fixed effects, effect
-// strengths as factors, particle shape.
-function activeEffects(parameters) {
-  const out = new Set(Object.keys(parameters?.effects || {}));
-  for (const f of parameters?.factors || []) {
-    if (f.name.startsWith("effects.")) out.add(f.name.split(".")[1]);
-    if (f.name === "clump_aspect_ratio") out.add("particle_shape");
-  }
-  if ((parameters?.fixed?.clump_aspect_ratio ?? 1) !== 1) out.add("particle_shape");
-  return [...out].sort();
-}
-
 function goTo(hash) {
   if (location.hash === hash) refresh(); else location.hash = hash;
 }
@@ -49,7 +37,7 @@ function iterationTabs(id, iterations, selected) {
   if (!iterations.length) return "";
   return h("nav", { className: "iterations", "aria-label": "iterations" }, h("span", { className: "muted" }, "Iteration: "),
     iterations.map((it) => {
-      const effects = activeEffects(it.parameters);
+      const effects = it.effects;
       return h("a", { href: `#/campaigns/${id}?iteration=${it.number}`, className: it.number === selected ? "selected" : "",
         "aria-current": it.number === selected ? "page" : undefined, title: `phase ${it.phase}` },
       `${it.number}${effects.length ? " · " + effects.join(", ") : ""}${it.report ? "" : " (running)"}`);
@@ -79,7 +67,7 @@ export async function campaignPage(view, id, params) {
   if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), c.stop_reason));
   if (c.status === "running" || c.status === "paused") parts.push(progressCard(c));
   if (it) {
-    const effects = activeEffects(it.parameters);
+    const effects = it.effects;
     parts.push(h("p", { className: "active-effects" }, h("b", {}, `Iteration ${it.number} model: `),
       effects.length ? `contact effects ${effects.join(", ")}` : "no contact effects beyond the base contact law",
       `; factors ${(it.parameters?.factors || []).map((f) => f.name).join(", ")}.`));
