@@ -9,7 +9,22 @@ from __future__ import annotations
 from enum import Enum
 
 
-class Phase(str, Enum):
+class Word(str, Enum):
+    """A ``(str, Enum)`` whose text is its value on every Python from 3.10: ``str()`` and f-strings give
+    "done", not "Phase.DONE" (3.11 made the latter the default for mixed-in enums), so a member goes
+    into a message, a log line or a stored string as it is."""
+
+    def __str__(self) -> str:
+        return self.value
+
+    __format__ = str.__format__
+
+    @classmethod
+    def values(cls) -> tuple[str, ...]:
+        return tuple(member.value for member in cls)
+
+
+class Phase(Word):
     """Where an iteration is. Phases that wait for batteries: BATTERIES (the design's),
     CONFIRMATION, POLISH (one round at a time) and DIAGNOSIS; the others are computations."""
 
@@ -23,11 +38,8 @@ class Phase(str, Enum):
     DIAGNOSED = "diagnosed"
     DONE = "done"
 
-    def __str__(self) -> str:
-        return self.value
 
-
-class RunKind(str, Enum):
+class RunKind(Word):
     """Why a battery was run: a design point, a confirmation at the optimum, a polishing step on the
     batteries themselves, or a diagnosis battery (a baseline or a candidate effect switched on)."""
 
@@ -36,11 +48,8 @@ class RunKind(str, Enum):
     POLISH = "polish"
     DIAGNOSIS = "diagnosis"
 
-    def __str__(self) -> str:
-        return self.value
 
-
-class Verdict(str, Enum):
+class Verdict(Word):
     """One verdict per iteration (``calibration.verdict`` decides it, in the order the checks matter)."""
 
     OUT_OF_REACH = "targets out of reach"
@@ -48,14 +57,11 @@ class Verdict(str, Enum):
     SURROGATE_INADEQUATE = "surrogate inadequate"
     CALIBRATED = "calibrated"
 
-    def __str__(self) -> str:
-        return self.value
-
 
 MISFIT_VERDICTS = frozenset({Verdict.OUT_OF_REACH, Verdict.MISSES})
 
 
-class StopReason(str, Enum):
+class StopReason(Word):
     """Why the automatic mode stopped. Three are fixed words; the others carry the diagnosis's
     verdict or the reason the next iteration cannot run, after these prefixes."""
 
@@ -65,26 +71,17 @@ class StopReason(str, Enum):
     DIAGNOSIS = "diagnosis: "            # + the diagnosis's verdict
     CANNOT_RUN = "the next iteration with "  # + effect + " cannot run: " + why
 
-    def __str__(self) -> str:
-        return self.value
 
-
-class PolishStage(str, Enum):
+class PolishStage(Word):
     """Where a polishing round is: the Jacobian's points, a Gauss-Newton step's trial lengths, or done."""
 
     JACOBIAN = "jacobian"
     STEP = "step"
     DONE = "done"
 
-    def __str__(self) -> str:
-        return self.value
 
-
-class PolishRule(str, Enum):
+class PolishRule(Word):
     """When an iteration polishes its optimum on the batteries (``LoopSettings.polish_when``)."""
 
     ALWAYS = "always"
     SURROGATE_MISSES = "surrogate_misses"
-
-    def __str__(self) -> str:
-        return self.value

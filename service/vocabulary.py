@@ -5,28 +5,15 @@ the routers, the CLI and the models; a typo was a state nobody handles. Each enu
 so a member *is* its stored string: it compares equal to what the database holds, binds as that
 string, and serialises to it in JSON, and the tables, the API and the page stay as they were.
 
-``str()`` and f-strings give the value too ("failed", not "JobStatus.FAILED", which Python 3.11
-made the default for mixed-in enums), so a member can go into a message or a log line as it is.
+``str()`` and f-strings give the value too (``calibration.vocabulary.Word``, the base of the loop's
+words as well), so a member can go into a message or a log line as it is.
 """
 from __future__ import annotations
 
-import enum
+from calibration.vocabulary import Word
 
 
-class _Word(str, enum.Enum):
-    """A ``(str, Enum)`` whose text is its value on every Python from 3.10."""
-
-    def __str__(self) -> str:
-        return self.value
-
-    __format__ = str.__format__
-
-    @classmethod
-    def values(cls) -> tuple[str, ...]:
-        return tuple(member.value for member in cls)
-
-
-class JobStatus(_Word):
+class JobStatus(Word):
     """A queued job's state (``service.queue`` moves it; only the owner of the lease ends it)."""
 
     QUEUED = "queued"
@@ -50,7 +37,7 @@ class JobStatus(_Word):
         return (cls.FAILED, cls.CANCELLED)
 
 
-class CampaignStatus(_Word):
+class CampaignStatus(Word):
     """A campaign's state: draft until started, running or paused, then completed or failed."""
 
     DRAFT = "draft"
@@ -60,7 +47,7 @@ class CampaignStatus(_Word):
     FAILED = "failed"
 
 
-class RunStatus(_Word):
+class RunStatus(Word):
     """A campaign run's state: pending until its job is queued, then its job's status."""
 
     PENDING = "pending"

@@ -13,9 +13,14 @@ from service import queue
 from service.cli import build_parser
 from service.models.campaign import CAMPAIGN_STATUSES
 from service.models.job import FINISHED_STATUSES, JOB_STATUSES
+from calibration.vocabulary import Phase, RunKind, StopReason, Verdict
 from service.vocabulary import CampaignStatus, JobStatus
 
-SERVICE = Path(__file__).resolve().parents[2] / "service"
+REPO = Path(__file__).resolve().parents[2]
+SERVICE = REPO / "service"
+PHRASES = {v.value for v in Verdict} | {v.value.strip() for v in StopReason}
+LOOP_WORDS = {v.value for v in Phase} | {v.value for v in RunKind}
+ROLE_KEYWORDS = {"phase", "kind", "source", "to"}
 WORDS = set(JobStatus.values()) | set(CampaignStatus.values())
 # Strings that spell a status word but name something else.
 NOT_STATUSES = {
@@ -72,4 +77,49 @@ def test_no_status_literal_outside_the_vocabulary():
             if (isinstance(node, ast.Constant) and node.value in WORDS and id(node) not in docs
                     and (relative, node.value) not in NOT_STATUSES):
                 found.append(f"{relative}:{node.lineno} {node.value!r}")
+    assert found == []
+
+
+def _constants(node: ast.AST):
+    for sub in ast.walk(node):
+        if isinstance(sub, ast.Constant) and isinstance(sub.value, str):
+            yield sub
+
+
+def literals(path: Path) -> list[str]:
+    tree = ast.parse(path.read_text())
+    docs = _docstrings(tree)
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs:
+            if node.value.strip() in PHRASES:
+                found.append(f"{node.lineno} {node.value!r}")
+        if isinstance(node, ast.Compare):
+            for op, left, right in zip(node.ops, [node.left, *node.comparators], node.comparators):
+                if isinstance(op, (ast.Eq, ast.NotEq)):
+                    operands = [left, right]
+                elif isinstance(op, (ast.In, ast.NotIn)) and isinstance(right, (ast.Tuple, ast.List, ast.Set)):
+                    operands = [right]  # membership in a literal collection (a key looked up in a dict is fine)
+                else:
+                    continue
+                found += [f"{c.lineno} {c.value!r} compared" for o in operands for c in _constants(o)
+                          if c.value in LOOP_WORDS]
+        if isinstance(node, ast.keyword) and node.arg in ROLE_KEYWORDS:
+            found += [f"{c.lineno} {node.arg}={c.value!r}" for c in _constants(node.value) if c.value in LOOP_WORDS]
+    return found
+
+
+def test_the_scan_finds_what_it_looks_for(tmp_path):
+    sample = tmp_path / "sample.py"
+    sample.write_text('x = "calibrated"\nif it.phase == "report": pass\nRun(kind="polish")\nd = {"report": 1}\n')
+    assert literals(sample) == ["1 'calibrated'", "2 'report' compared", "3 kind='polish'"]
+
+
+def test_no_loop_word_outside_the_vocabulary():
+    found = []
+    for package in ("calibration", "service"):
+        for path in sorted((REPO / package).rglob("*.py")):
+            if path == REPO / "calibration" / "vocabulary.py":
+                continue
+            found += [f"{path.relative_to(REPO)}:{hit}" for hit in literals(path)]
     assert found == []
