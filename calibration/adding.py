@@ -1,4 +1,5 @@
-"""Adding an effect to the model: its strength becomes one more design factor.
+"""The next iteration's settings when the model or the design changes: an effect added (its strength
+becomes one more design factor) or the design the surface check proposed.
 
 One place for the manual "add this effect" (``POST .../iterations``) and the automatic mode
 (``calibration.automatic``): the range the strength is given, from the diagnosis's estimate or the
@@ -53,3 +54,21 @@ def with_effect_factor(config: dict, name: str, strength_range=None, *, strength
     design.update({"type": "fractional", "generators": generators} if generators else {"type": "full",
                                                                                        "generators": None})
     return {**config, "factors": factors, "design": design}
+
+
+def with_proposed_design(config: dict, last) -> dict:
+    """The settings running the design the ``last`` iteration's surface check proposed: its factors
+    narrowed about the optimum (``narrowed_factorial``), or the same two-level design with face-centred
+    axial runs (``augment_ccd``), whose fit has squared terms."""
+    check = ((last.report or {}).get("surrogate_check") or {}) if last is not None else {}
+    kind, proposal = check.get("next_design_kind"), check.get("next_design")
+    if kind == "narrowed_factorial" and proposal:
+        levels = {f["name"]: (f["low"], f["high"]) for f in proposal["factors"]}
+        factors = [{**f, "low": levels[f["name"]][0], "high": levels[f["name"]][1]} if f["name"] in levels else f
+                   for f in config["factors"]]
+        return {**config, "factors": factors}
+    if kind == "augment_ccd":
+        return {**config, "design": {**(config.get("design") or {}), "axial": "face"}}
+    number = last.number if last is not None else 0
+    raise SettingsError(f"iteration {number} proposes no design (its surface check: "
+                        f"{check.get('verdict', 'not made')})", "proposed_design", conflict=True)

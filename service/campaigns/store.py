@@ -11,7 +11,7 @@ from typing import Any
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
-from calibration.adding import effect_hints, with_effect_factor
+from calibration.adding import effect_hints, with_effect_factor, with_proposed_design
 from calibration.analysis import active_effects
 from calibration.errors import SettingsError
 from calibration.keys import select as select_targets
@@ -104,7 +104,10 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     changed = changes.model_dump(mode="json", exclude_none=True)
     add_effect, strength_range = changed.pop("add_effect", None), changed.pop("strength_range", None)
     if changed.pop("proposed_design", False):
-        config = with_proposed_design(config, campaign)
+        try:
+            config = with_proposed_design(config, max(campaign.iterations, key=lambda it: it.number, default=None))
+        except SettingsError as exc:
+            raise from_settings_error(exc) from exc
     for key, value in changed.items():
         config[key] = value
     if add_effect is not None:
@@ -125,25 +128,6 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     if not won:
         raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])
     return get_campaign(session, campaign_id)
-
-
-def with_proposed_design(config: dict, campaign: Campaign) -> dict:
-    """The configuration running the design the last iteration's surface check proposed: its factors
-    narrowed about the optimum (``narrowed_factorial``), or the same two-level design with face-centred
-    axial runs (``augment_ccd``), whose fit has squared terms."""
-    last = max(campaign.iterations, key=lambda it: it.number, default=None)
-    check = ((last.report or {}).get("surrogate_check") or {}) if last is not None else {}
-    kind, proposal = check.get("next_design_kind"), check.get("next_design")
-    if kind == "narrowed_factorial" and proposal:
-        levels = {f["name"]: (f["low"], f["high"]) for f in proposal["factors"]}
-        factors = [{**f, "low": levels[f["name"]][0], "high": levels[f["name"]][1]} if f["name"] in levels else f
-                   for f in config["factors"]]
-        return {**config, "factors": factors}
-    if kind == "augment_ccd":
-        return {**config, "design": {**(config.get("design") or {}), "axial": "face"}}
-    number = last.number if last is not None else 0
-    raise Conflict(f"iteration {number} proposes no design (its surface check: "
-                   f"{check.get('verdict', 'not made')})", "proposed_design")
 
 
 def iteration(session: Session, campaign: Campaign, number: int | None = None) -> CampaignIteration:

@@ -127,7 +127,7 @@ def test_a_proposed_narrowed_factorial_takes_the_proposed_ranges():
     """The factors keep their names, units and scales; only the levels become the proposal's."""
     from types import SimpleNamespace
 
-    from service.campaigns.store import with_proposed_design
+    from calibration.adding import with_proposed_design
 
     config = {"factors": [{"name": "friction_pp", "low": 0.3, "high": 1.0, "unit": "", "log": False},
                           {"name": "particle_stiffness_n_per_m", "low": 1e6, "high": 3e6, "unit": "N/m", "log": True}],
@@ -136,8 +136,7 @@ def test_a_proposed_narrowed_factorial_takes_the_proposed_ranges():
                             {"name": "particle_stiffness_n_per_m", "low": 1.5e6, "high": 2.5e6}]}
     report = {"surrogate_check": {"verdict": "not confirmed", "next_design_kind": "narrowed_factorial",
                                   "next_design": proposal}}
-    campaign = SimpleNamespace(iterations=[SimpleNamespace(number=1, report=report)])
-    out = with_proposed_design(config, campaign)
+    out = with_proposed_design(config, SimpleNamespace(number=1, report=report))
     assert [(f["name"], f["low"], f["high"], f["log"]) for f in out["factors"]] == [
         ("friction_pp", 0.6, 0.95, False), ("particle_stiffness_n_per_m", 1.5e6, 2.5e6, True)]
     assert out["design"] == config["design"]
