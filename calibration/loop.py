@@ -76,6 +76,21 @@ class CalibrationLoop:
         raw = settings.model_dump(mode="json") if isinstance(settings, LoopSettings) else dict(settings)
         self.state = state or LoopState(settings=LoopSettings.model_validate(raw).model_dump(mode="json"))
 
+    @classmethod
+    def on_backend(cls, targets: Sequence[Measured], backend: str, settings: LoopSettings | Mapping[str, Any],
+                   **kwargs) -> "CalibrationLoop":
+        """The loop on a registered backend (``calibration.evaluator_registry``: "dem", "analytic") in this
+        process, its batteries run as a campaign's jobs would be: the settings' test and fidelity, and the
+        options that make them compute every target's condition (``conditions.battery_options``)."""
+        from .conditions import battery_options
+        from .evaluator_registry import get
+
+        loop_settings = settings if isinstance(settings, LoopSettings) else LoopSettings.model_validate(settings)
+        measured = [t if isinstance(t, Measured) else Measured.from_record(t) for t in targets]
+        evaluator = get(backend).batch(fidelity=loop_settings.fidelity, test=loop_settings.test,
+                                       options=battery_options([t.key for t in measured], loop_settings.options))
+        return cls(measured, evaluator, loop_settings, evaluator_name=backend, **kwargs)
+
     # -- driving ---------------------------------------------------------------------------
     def run(self) -> LoopResult:
         while self.advance():

@@ -95,3 +95,19 @@ def test_a_physically_impossible_measurement_is_not_blamed_on_physics():
     assert att["verdict"] == "no physical match"
     assert any("bulk_density" in m for m in att["measure_next"])
     assert all(isinstance(t, Measured) for t in targets)
+
+
+def test_the_loop_on_a_registered_backend_runs_the_targets_conditions_and_finds_the_effect():
+    """``CalibrationLoop.on_backend`` runs the batteries a campaign would queue: the targets' DST loads and
+    E' stresses (the test bed measures at loads other than the battery's defaults), so every target is
+    simulated, and the hidden rolling resistance is named and added as through the stand-in itself."""
+    case = make_case(7, "single", effects={"rolling_epsd2": 0.3})
+    settings = loop_settings(case, diagnose_always=False, options={"include_aor": True, "include_anchor": True})
+    loop = CalibrationLoop.on_backend(case.targets, "analytic", settings)
+    assert loop.evaluator.options["dst_normal_stresses_pa"] == OPTIONS["dst_normal_stresses_pa"]
+    assert loop.evaluator.options["cct_window_stresses_pa"] == OPTIONS["cct_window_stresses_pa"]
+    result = loop.run()
+    first = result.first.report
+    assert all(t["status"] == "modelled" for t in first["targets"])
+    assert result.decisions and result.decisions[0]["accepted"]
+    assert result.decisions[0]["effect"] in ("rolling_epsd2", "particle_shape")
