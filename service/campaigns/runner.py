@@ -37,9 +37,6 @@ log = logging.getLogger(__name__)
 MAX_STEPS_PER_TICK = 8
 
 
-CampaignFailed = LoopFailed  # a step cannot succeed (a battery failed, no target can be modelled): it fails
-
-
 class CampaignRunner:
     def __init__(self, session_factory, settings=None):
         self.session_factory = session_factory
@@ -48,12 +45,13 @@ class CampaignRunner:
     def tick(self) -> int:
         """Advance every running campaign; returns how many steps were taken."""
         with self.session_factory() as session:
-            ids = list(session.scalars(select(Campaign.id).where(Campaign.status == CampaignStatus.RUNNING.value).order_by(Campaign.id)))
+            ids = list(session.scalars(select(Campaign.id).where(Campaign.status == CampaignStatus.RUNNING.value)
+                                       .order_by(Campaign.id)))
         steps = 0
         for campaign_id in ids:
             try:
                 steps += self.advance(campaign_id)
-            except CampaignFailed as exc:
+            except LoopFailed as exc:
                 self._fail(campaign_id, str(exc))
             except Exception as exc:  # a bug must not stop the other campaigns
                 log.exception("campaign %s: step failed", campaign_id)
@@ -82,7 +80,7 @@ class CampaignRunner:
             return True
         awaited = machine.awaited(it)
         if awaited:
-            progressed, done = self._run_all(session, campaign, config, awaited, it.phase)
+            progressed, done = self._run_all(session, campaign, config, awaited)
             if not done:
                 return progressed
         targets = self._targets(session, campaign, config)
@@ -143,11 +141,11 @@ class CampaignRunner:
         return True
 
     # -- batteries ---------------------------------------------------------------------------
-    def _submit(self, session, campaign, config, run) -> bool:
+    def _submit(self, session, campaign, config, run, target_keys) -> bool:
         from service.queue import submit_job
 
         try:
-            spec = run_spec(config, run.natural, run.seed, [t.key for t in self._targets(session, campaign, config)])
+            spec = run_spec(config, run.natural, run.seed, target_keys)
             job = submit_job(session, spec, evaluator=config.evaluator,
                              priority=config.priority, idempotency_key=f"campaign:{campaign.id}:run:{run.id}",
                              client_id=campaign.client_id, campaign_id=campaign.id)
@@ -156,22 +154,23 @@ class CampaignRunner:
             return False  # the client's queue is full: try again next tick
         except ApiError as exc:
             session.rollback()
-            raise CampaignFailed(f"run {run.std_order} ({run.kind}) cannot be queued: {exc.message}") from exc
+            raise LoopFailed(f"run {run.std_order} ({run.kind}) cannot be queued: {exc.message}") from exc
         run.job_id = job.id
         run.status = RunStatus.QUEUED.value
         session.commit()
         return True
 
-    def _run_all(self, session, campaign, config, runs, kind: str) -> tuple[bool, bool]:
+    def _run_all(self, session, campaign, config, runs) -> tuple[bool, bool]:
         """Queue what is not queued, record what finished: (progressed, all succeeded)."""
         # queued in the design's randomised run order, so drifts in the service do not alias with factors
         runs = sorted(runs, key=lambda r: (r.run_order, r.id))
         progressed = False
-        for run in runs:
-            if run.job_id is None:
-                if not self._submit(session, campaign, config, run):
-                    return progressed, False
-                progressed = True
+        unqueued = [run for run in runs if run.job_id is None]
+        keys = [t.key for t in self._targets(session, campaign, config)] if unqueued else []
+        for run in unqueued:
+            if not self._submit(session, campaign, config, run, keys):
+                return progressed, False
+            progressed = True
         pending = [r for r in runs if r.status != RunStatus.SUCCEEDED]
         if pending:
             jobs = {j.id: j for j in session.scalars(
@@ -179,7 +178,7 @@ class CampaignRunner:
             for run in pending:
                 job = jobs.get(run.job_id)
                 if job is None:
-                    raise CampaignFailed(f"job {run.job_id} of run {run.std_order} ({kind}) vanished from the queue")
+                    raise LoopFailed(f"job {run.job_id} of run {run.std_order} ({run.kind}) vanished from the queue")
                 if job.status == JobStatus.SUCCEEDED:
                     run.responses = responses_of(job.result or {})
                     run.status = RunStatus.SUCCEEDED.value
@@ -188,7 +187,7 @@ class CampaignRunner:
                     run.status = job.status
                     run.error = job.error
                     session.commit()
-                    raise CampaignFailed(f"{kind} run {run.std_order} (job {job.id}) {job.status}: {job.error}")
+                    raise LoopFailed(f"{run.kind} run {run.std_order} (job {job.id}) {job.status}: {job.error}")
                 elif run.status != job.status:
                     run.status = job.status
             session.commit()
