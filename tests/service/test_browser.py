@@ -161,6 +161,10 @@ def test_job_submission_with_an_effect_shows_its_curves(page, service, shots):
     open_view(page, service, "#/submit")
     form = page.locator("form#submit-job")
     evaluator = form.locator("select[name=evaluator]")
+    # the form is drawn once its catalogues (evaluators, lab tests, effects) have arrived: wait for it
+    from playwright.sync_api import expect
+
+    expect(evaluator.locator("option").first).to_be_attached(timeout=TIMEOUT_MS)
     # the options are the registry's (GET /evaluators), the default is JobSubmit's (OpenAPI)
     assert evaluator.locator("option").evaluate_all("options => options.map((o) => o.value)") == names()
     assert evaluator.input_value() == "dem"
