@@ -17,7 +17,8 @@ class Measured:
     """One measured bulk value: its key, replicate values (SI) and what is known of its scatter.
 
     ``stated_uncertainty`` is the standard uncertainty of the mean when a source published one
-    (then it wins over the replicates' scatter, as in the service's measurement store).
+    (then it wins over the replicates' scatter, as in the service's measurement store). ``input_unit``, the
+    unit the values were typed in, lets a report's plausibility warning name the likely unit slip.
     """
 
     key: ResponseKey
@@ -25,6 +26,7 @@ class Measured:
     unit: str = ""
     stated_uncertainty: float | None = None
     id: int | None = None
+    input_unit: str = ""
 
     def __post_init__(self):
         if not self.values:
@@ -39,7 +41,8 @@ class Measured:
         if stated is None and isinstance(record, Mapping):
             stated = record.get("standard_uncertainty") if len(record.get("values", ())) < 2 else None
         return cls(ResponseKey.from_record(record), tuple(float(v) for v in get("values")),
-                   str(get("unit", "") or ""), None if stated is None else float(stated), get("id", None))
+                   str(get("unit", "") or ""), None if stated is None else float(stated), get("id", None),
+                   str(get("input_unit", "") or ""))
 
     @property
     def n(self) -> int:

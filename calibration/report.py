@@ -8,7 +8,9 @@ reachability (the smallest standardised misfit any parameter set in the design b
 fails (calibration.localise: lack of fit against the noise floor, shares per test, trends with
 stress), the conflicts (parameters pinned at a bound, priors pulled off), the surface check (the
 confirmation against the fitted models' intervals, which checks the surrogate, not the physics),
-and the verdict (calibration.verdict).
+and the verdict (calibration.verdict). Last, the plausibility warnings of the measurements it used
+(engine.lab.plausibility): a unit slip stored with a warning at entry is named again in every report
+built on it, where "out of reach" would otherwise be read as missing physics.
 """
 from __future__ import annotations
 
@@ -20,6 +22,7 @@ import numpy as np
 from calibration.keys import ResponseKey, find_response
 from calibration.analysis import report_verdict
 from calibration.records import Measured
+from engine.lab.plausibility import record_warnings
 
 REACHABLE_LIMIT = 3.0
 
@@ -35,8 +38,8 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
     interval_of_mean = {r["response"]: (r["pi_low"], r["pi_high"])
                         for r in (assessment.get("surrogate_check") or {}).get("responses", [])}
     rows = []
+    targets = [t if isinstance(t, Measured) else Measured.from_record(t) for t in targets]
     for meas in targets:
-        meas = meas if isinstance(meas, Measured) else Measured.from_record(meas)
         key = meas.key
         row: dict[str, Any] = {
             "measurement_id": meas.id, "test": key.test, "quantity": key.quantity,
@@ -99,4 +102,5 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
         # conflicts or unreachable targets: the diagnosis runs (and its directed test) even if the lack of fit passes
         "suspect": bool(loc and loc.get("suspect")),
         "surrogate_check": assessment.get("surrogate_check"),
+        "warnings": record_warnings(targets),
     }

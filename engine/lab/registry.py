@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import AfterValidator
 
-from engine.lab.bounds import Bound
+from engine.lab.bounds import Bound, Typical
 from engine.lab.result import BulkProperty
 
 if TYPE_CHECKING:  # the context imports the spec, which imports this module
@@ -47,7 +47,8 @@ NEVER = "never"  # LabTest.battery: run alone only
 
 @dataclass(frozen=True)
 class Quantity:
-    """One reported quantity: canonical name, SI unit, the interval a value must lie in, and the
+    """One reported quantity: canonical name, SI unit, the interval a value must lie in, where granular
+    materials usually lie (``typical``, None where the apparatus decides, e.g. a bulk mass), and the
     condition names it is reported under (besides the unconditioned value), e.g. normal_stress_pa."""
 
     name: str
@@ -55,6 +56,7 @@ class Quantity:
     bound: Bound
     conditions: tuple[str, ...] = ()
     description: str = ""
+    typical: Typical | None = None
 
 
 @dataclass(frozen=True)

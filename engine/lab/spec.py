@@ -6,13 +6,14 @@ what designs vary (the design factors are field names of ``MicroParameters``).
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from engine.lab.bounds import (DENSEST_SOLID_KG_M3, MAX_CONTACT_STIFFNESS_N_PER_M, MAX_FRICTION_COEFFICIENT,
-                               MAX_PARTICLE_RADIUS_M, MAX_SEED, MIN_PARTICLE_RADIUS_M, STIFFEST_SOLID_PA,
-                               check_finite_tree)
+from engine.lab.bounds import (CONTACT_STIFFNESS_TYPICAL, DENSEST_SOLID_KG_M3, FRICTION_COEFFICIENT_TYPICAL,
+                               MAX_CONTACT_STIFFNESS_N_PER_M, MAX_FRICTION_COEFFICIENT, MAX_PARTICLE_RADIUS_M,
+                               MAX_SEED, MIN_PARTICLE_RADIUS_M, NORMAL_STRESS_TYPICAL, PARTICLE_DENSITY_TYPICAL,
+                               STIFFEST_SOLID_PA, check_finite_tree)
 from engine.lab.registry import BATTERY, JobTestName
 
 # Every model here refuses NaN and infinities (``allow_inf_nan=False``): JSON cannot carry them back,
@@ -31,22 +32,25 @@ Fidelity = Literal["screening", "thesis"]
 
 
 class MicroParameters(BaseModel):
-    """DEM micro parameters, SI. Defaults: the thesis's calibrated set (Table 4.9)."""
+    """DEM micro parameters, SI. Defaults: the thesis's calibrated set (Table 4.9).
+
+    A field's ``Typical`` (engine.lab.bounds) rides in its annotation beside the bound: a value outside is
+    accepted with a warning (engine.lab.plausibility.parameter_warnings)."""
 
     model_config = _FINITE
 
-    particle_density_kg_m3: float = Field(2500.0, gt=0, le=DENSEST_SOLID_KG_M3,
+    particle_density_kg_m3: Annotated[float, PARTICLE_DENSITY_TYPICAL] = Field(2500.0, gt=0, le=DENSEST_SOLID_KG_M3,
                                           description="solid density; at most osmium's")
-    particle_stiffness_n_per_m: float = Field(1.72e6, gt=0, le=MAX_CONTACT_STIFFNESS_N_PER_M,
+    particle_stiffness_n_per_m: Annotated[float, CONTACT_STIFFNESS_TYPICAL] = Field(1.72e6, gt=0, le=MAX_CONTACT_STIFFNESS_N_PER_M,
                                               description="kp, PFC-style per-entity normal stiffness")
-    wall_stiffness_n_per_m: float = Field(1.0e7, gt=0, le=MAX_CONTACT_STIFFNESS_N_PER_M,
+    wall_stiffness_n_per_m: Annotated[float, CONTACT_STIFFNESS_TYPICAL] = Field(1.0e7, gt=0, le=MAX_CONTACT_STIFFNESS_N_PER_M,
                                           description="kw, PFC-style per-entity normal stiffness")
     # ks/kn of elastic spheres is 2(1 - nu)/(2 - nu): 2/3 to 4/3 over Poisson's ratios -1..0.5; 10 leaves
     # room for linear-model conventions while refusing typos.
     shear_to_normal_stiffness_ratio: float = Field(1.0, gt=0, le=10.0)
-    friction_pp: float = Field(0.86, ge=0, le=MAX_FRICTION_COEFFICIENT,
+    friction_pp: Annotated[float, FRICTION_COEFFICIENT_TYPICAL] = Field(0.86, ge=0, le=MAX_FRICTION_COEFFICIENT,
                                description="inter-particle Coulomb friction coefficient")
-    friction_pw: float = Field(0.62, ge=0, le=MAX_FRICTION_COEFFICIENT,
+    friction_pw: Annotated[float, FRICTION_COEFFICIENT_TYPICAL] = Field(0.62, ge=0, le=MAX_FRICTION_COEFFICIENT,
                                description="particle-wall Coulomb friction coefficient")
     damping_ratio: float = Field(0.8, ge=0, lt=1, description="critical viscous damping ratio")
     local_damping: float = Field(0.0, ge=0, lt=1)
@@ -98,11 +102,11 @@ class TestOptions(BaseModel):
 
     model_config = _FINITE
 
-    dst_normal_stresses_pa: list[float] | None = Field(
+    dst_normal_stresses_pa: Annotated[list[float] | None, NORMAL_STRESS_TYPICAL] = Field(
         None, min_length=2, max_length=_MAX_DST_STRESSES,
         description="DST normal stresses, Pa: at least two distinct levels (a Mohr-Coulomb line needs two)",
     )
-    cct_max_stress_pa: float | None = Field(None, gt=0, le=STIFFEST_SOLID_PA)
+    cct_max_stress_pa: Annotated[float | None, NORMAL_STRESS_TYPICAL] = Field(None, gt=0, le=STIFFEST_SOLID_PA)
     cct_cycles: int | None = Field(None, ge=1, le=_MAX_CCT_CYCLES,
                                    description="load-unload cycles; each counts in the simulated-time limit")
     cct_window_stresses_pa: list[float] | None = Field(

@@ -9,6 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from calibration.evaluator_registry import DEM, EvaluatorName
 from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
+from engine.lab.plausibility import options_warnings, parameter_warnings
 from engine.lab.registry import BATTERY, JobTestName
 from engine.lab.spec import Fidelity, JobSpec, MicroParameters, TestOptions
 from service import queue
@@ -61,6 +62,8 @@ def job_out(job: Job) -> JobOut:
         lease_expires_at=job.lease_expires_at, idempotency_key=job.idempotency_key, client_id=job.client_id,
         campaign_id=job.campaign_id, result_available=job.status == JobStatus.SUCCEEDED and job.result is not None,
         spec=json_safe(job.spec),
+        warnings=parameter_warnings((job.spec or {}).get("parameters") or {})
+        + options_warnings((job.spec or {}).get("options") or {}),
     )
 
 

@@ -12,7 +12,7 @@ from pydantic import BaseModel, Field
 from engine.lab.bounds import Bound
 from engine.lab.registry import ALWAYS, BATTERY, NEVER, LabTest, Quantity, job_test_names, tests
 from service.api.jsonsafe import json_safe
-from service.materials.units import accepted_units
+from engine.lab.units import accepted_units
 
 router = APIRouter(tags=["tests"])
 

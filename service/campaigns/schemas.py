@@ -14,7 +14,7 @@ from calibration.settings import _FINITE, DesignIn, DesignPreviewIn, FactorIn, L
 from engine.lab.bounds import SQLITE_INT_MAX, CONDITION_BOUNDS
 from engine.lab.registry import known_quantity, known_test
 from engine.lab.spec import MicroParameters, TestOptions
-from service.materials.units import UnitError, condition_si_unit
+from engine.lab.units import UnitError, condition_si_unit
 
 # One priority scale for jobs and campaigns (service.api.params mirrors it for jobs).
 PRIORITY_MIN, PRIORITY_MAX = -1000, 1000

@@ -16,6 +16,7 @@ from calibration.analysis import active_effects
 from calibration.errors import SettingsError
 from calibration.keys import select as select_targets
 from calibration.records import Measured
+from engine.lab.plausibility import settings_warnings
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.config import Settings, get_settings
 from service.errors import Conflict, NotFound, from_settings_error
@@ -152,6 +153,7 @@ def campaign_summary(campaign: Campaign) -> dict[str, Any]:
         "created_at": _iso(campaign.created_at), "started_at": _iso(campaign.started_at),
         "finished_at": _iso(campaign.finished_at), "config": campaign.config,
         "stop_reason": (((current.report or {}).get("automatic") or {}).get("stop_reason") if current else None),
+        "warnings": settings_warnings(campaign.config or {}),
     }
 
 

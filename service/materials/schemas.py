@@ -9,7 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree
 from engine.lab.registry import known_quantity, known_test, quantity
 from service.errors import Invalid
-from service.materials.units import UnitError, condition_si_unit, to_si
+from engine.lab.units import UnitError, condition_si_unit, to_si
 
 # Replicates of one measurement: a laboratory series, not a data dump (each value is stored and returned
 # with every listing of the material).
@@ -142,6 +142,10 @@ class MeasurementOut(BaseModel):
     input_unit: str
     source: str
     created_at: str | None
+    warnings: list[str] = Field(default_factory=list,
+                                description="the value or a condition outside what granular materials measure, "
+                                            "with the unit slip it probably is (engine.lab.plausibility); "
+                                            "stored all the same, and repeated in the reports that use it")
 
 
 class MaterialOut(BaseModel):

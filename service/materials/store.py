@@ -9,6 +9,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session, selectinload
 
 from calibration.keys import ResponseKey
+from engine.lab.plausibility import record_warnings
 from service.api.jsonsafe import json_safe
 from service.errors import Conflict
 from service.materials.schemas import FieldError, MaterialIn, MeasurementIn
@@ -31,13 +32,15 @@ def material_dict(material: Material) -> dict[str, Any]:
 
 
 def measurement_dict(row: Measurement) -> dict[str, Any]:
+    """The API view of a stored measurement with its plausibility warnings, the same words at entry, in
+    every listing and in the reports that use it."""
     try:
-        return json_safe(row.as_dict())
+        return json_safe({**row.as_dict(), "warnings": record_warnings([row])})
     except (TypeError, ValueError, ZeroDivisionError, OverflowError):  # an unreadable legacy row
         return json_safe({**{k: getattr(row, k, None) for k in ("id", "material_id", "test", "quantity", "unit",
                                                                    "input_unit", "source")},
                           "condition": {}, "values": [], "n": 0, "reported_replicates": None, "mean": None,
-                          "standard_uncertainty": None, "created_at": None})
+                          "standard_uncertainty": None, "created_at": None, "warnings": []})
 
 
 def require_editable(material: Material) -> None:

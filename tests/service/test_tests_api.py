@@ -7,7 +7,7 @@ from pathlib import Path
 from conftest_s2 import API, campaign_body, error_loc, s2, thesis_material_id  # noqa: F401
 
 from engine.lab import registry
-from service.materials.units import accepted_units
+from engine.lab.units import accepted_units
 
 STATIC_JS = Path(__file__).resolve().parents[2] / "service" / "web" / "static" / "js"
 

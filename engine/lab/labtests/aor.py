@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-from engine.lab.bounds import SLOPE_ANGLE
+from engine.lab.bounds import SLOPE_ANGLE, Typical
 from engine.lab.registry import Bench, LabTest, Quantity, Run, StageCost
 from engine.lab.stops import AOR_MAX_LIFT_BUCKET_HEIGHTS, LEVEL_SETTLE_MAX_S, PILE_REST_MAX_S, RAIN_SETTLE_MAX_S
 
@@ -37,8 +37,12 @@ def _run(bench: Bench, lo: float, hi: float) -> Run:
 TEST = LabTest(
     name="aor",
     title="Angle of repose: the pile left by a lifted bucket",
+    # Typical: Carr's classes run from 25-30 deg (very free flowing) to above 55 deg (very cohesive); glass
+    # beads pile at about 22 deg (Beakawi Al-Hashemi & Baghabra Al-Amoudi 2018).
     quantities=(Quantity("angle_of_repose_deg", "deg", SLOPE_ANGLE, conditions=("sector",),
-                         description="mean of the sectors; with sector k (1..8), that sector's flank"),),
+                         description="mean of the sectors; with sector k (1..8), that sector's flank",
+                         typical=Typical(15.0, 70.0, "the angles of repose of granular materials",
+                                         "Beakawi Al-Hashemi & Baghabra Al-Amoudi 2018")),),
     options=("include_aor", "aor_lift_speed_m_s", "aor_bucket_friction", "aor_floor_friction"),
     procedure="engine.lab.procedures.repose:run_aor",
     reducer="engine.lab.reducers.repose:angle_of_repose",

@@ -1,7 +1,7 @@
 """Direct shear test (thesis sections 3.3.2 and 4.7.2): one run per normal stress, from the precompressed fill."""
 from __future__ import annotations
 
-from engine.lab.bounds import SLOPE_ANGLE, STIFFEST_SOLID_PA, STRESS, Bound
+from engine.lab.bounds import AS_FRICTION_COEFFICIENT, SLOPE_ANGLE, STIFFEST_SOLID_PA, STRESS, Bound, Typical
 from engine.lab.errors import SpecFieldError
 from engine.lab.registry import ALWAYS, Bench, LabTest, Quantity, Run, StageCost
 from engine.lab.stops import DST_STABILISE_MAX_S
@@ -71,9 +71,16 @@ TEST = LabTest(
     quantities=(
         Quantity("residual_shear_stress_pa", "Pa", STRESS, conditions=("normal_stress_pa",)),
         # Negative dilatancy is contraction, physical for loose packings: the whole open range about zero.
+        # Typical: dense sands dilate at up to about 20 deg (Bolton 1986), loose packings contract a little.
         Quantity("dilatancy_angle_deg", "deg", Bound(-90.0, 90.0, why="an angle between -90 and 90 degrees"),
-                 conditions=("normal_stress_pa",), description="per load; unconditioned, the mean over the loads"),
-        Quantity("friction_angle_deg", "deg", SLOPE_ANGLE),
+                 conditions=("normal_stress_pa",), description="per load; unconditioned, the mean over the loads",
+                 typical=Typical(-10.0, 30.0, "the dilatancy angles of granular materials", "Bolton 1986")),
+        # Typical: sands and gravels 27-48 deg (Das), railway ballast above 60 deg at low confinement
+        # (Indraratna et al. 1998; the thesis's aggregate 60.6 deg).
+        Quantity("friction_angle_deg", "deg", SLOPE_ANGLE,
+                 typical=Typical(20.0, 70.0, "the friction angles of granular materials",
+                                 "Das, Principles of Geotechnical Engineering; Indraratna et al. 1998",
+                                 readings=(AS_FRICTION_COEFFICIENT,))),
         # A Mohr-Coulomb intercept; a fit through scattered points may put it slightly below zero.
         Quantity("cohesion_pa", "Pa", Bound(-STIFFEST_SOLID_PA, STIFFEST_SOLID_PA, why="a Mohr-Coulomb intercept")),
         Quantity("mohr_coulomb_r2", "1", Bound(0.0, 1.0, low_open=False, high_open=False,

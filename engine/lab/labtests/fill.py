@@ -1,7 +1,7 @@
 """Fill (thesis section 4.5.4): rain the shear box, settle, level, settle; the packing the CCT and DST start from."""
 from __future__ import annotations
 
-from engine.lab.bounds import DENSEST_SOLID_KG_M3, POSITIVE, SQLITE_INT_MAX, Bound
+from engine.lab.bounds import DENSEST_SOLID_KG_M3, POSITIVE, SQLITE_INT_MAX, Bound, Typical
 from engine.lab.registry import ALWAYS, Bench, LabTest, Quantity, Run, StageCost
 from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
 
@@ -27,10 +27,21 @@ TEST = LabTest(
     name="fill",
     title="Fill: bulk density and porosity of the levelled packing",
     quantities=(
+        # Typical: from powdered carbon (80 kg/m3) and bagasse (120) to barite and cast-iron chips (2,900-3,200)
+        # in the bulk-materials tables (simetric.co.uk; inter-bulk.com).
         Quantity("bulk_density_kg_m3", "kg/m3", Bound(0.0, DENSEST_SOLID_KG_M3, high_open=False,
-                                                       why="below the densest solid, osmium")),
-        Quantity("porosity", "1", Bound(0.0, 1.0, why="a void volume fraction")),
-        Quantity("voids_ratio", "1", POSITIVE),  # e = n / (1 - n): any positive number for n in (0, 1)
+                                                       why="below the densest solid, osmium"),
+                 typical=Typical(50.0, 4000.0, "the bulk densities of dry granular materials",
+                                 "bulk-material density tables (simetric.co.uk, inter-bulk.com)")),
+        # Typical: random close packing of spheres 0.36, random loose 0.445 (Scott & Kilgour 1969; Onoda &
+        # Liniger 1990); non-spherical grains and fine powders pack looser.
+        Quantity("porosity", "1", Bound(0.0, 1.0, why="a void volume fraction"),
+                 typical=Typical(0.2, 0.8, "the porosities of granular packings",
+                                 "Scott & Kilgour 1969; Onoda & Liniger 1990")),
+        # e = n / (1 - n): any positive number for n in (0, 1); typical, the porosities' range mapped
+        Quantity("voids_ratio", "1", POSITIVE,
+                 typical=Typical(0.25, 4.0, "the voids ratios of granular packings",
+                                 "Scott & Kilgour 1969; Onoda & Liniger 1990")),
         Quantity("packing_height_m", "m", POSITIVE),
         Quantity("bulk_mass_kg", "kg", POSITIVE),
         Quantity("particle_count", "1", Bound(1.0, float(SQLITE_INT_MAX), low_open=False, why="a count of particles")),

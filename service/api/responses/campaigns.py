@@ -42,6 +42,10 @@ class CampaignSummary(Out):
     config: dict[str, Any] = Field(description="the configuration of the next or current iteration: the "
                                                "fields of the create body (CampaignCreate), as validated")
     stop_reason: str | None = Field(description="automatic mode: why the loop stopped")
+    warnings: list[str] = Field(default_factory=list,
+                                description="factor ranges, fixed parameters and options outside their typical "
+                                            "ranges, each with the unit slip it probably is "
+                                            "(engine.lab.plausibility); accepted, not refused")
 
 
 class Response(Out):

@@ -41,6 +41,10 @@ class JobOut(BaseModel):
     campaign_id: int | None
     result_available: bool
     spec: dict[str, Any]
+    warnings: list[str] = Field(default_factory=list,
+                                description="micro parameters and test options outside their typical ranges, each "
+                                            "with the unit slip it probably is (engine.lab.plausibility); the job "
+                                            "runs all the same")
 
     @field_serializer("created_at", "started_at", "finished_at", "heartbeat_at", "lease_expires_at")
     def _utc(self, value: datetime | None) -> str | None:

@@ -210,6 +210,9 @@ class Report(Out):
     diagnosis: Diagnosis | None = None
     adequacy: Adequacy | None = None
     automatic: Automatic | None = None
+    warnings: list[str] | None = Field(
+        None, description="plausibility warnings of the measurements used (engine.lab.plausibility): a value "
+                          "outside what granular materials measure, with the unit slip it probably is")
 
 
 class ReportOut(Report):

@@ -1,7 +1,9 @@
 """Unit conversion at the API edge: users send kPa, MPa, deg, %, mm; we store SI.
 
 Each canonical quantity has one SI unit, declared with its test (``engine.lab.registry``);
-a condition's SI unit is read from its name's suffix (``normal_stress_pa``).
+a condition's SI unit is read from its name's suffix (``normal_stress_pa``). The table lives with the lab,
+not the service, because the plausibility check (``engine.lab.plausibility``), which the database-free
+calibration loop runs too, names the unit a slipped number was probably meant in.
 """
 from __future__ import annotations
 
@@ -32,13 +34,23 @@ class UnitError(ValueError):
 
 
 def accepted_units(si_unit: str) -> list[str]:
-    return list(_FACTORS.get(si_unit, {si_unit: 1.0}))
+    return list(unit_factors(si_unit))
+
+
+def unit_factors(si_unit: str) -> dict[str, float]:
+    """Every accepted input unit of ``si_unit`` with its factor to SI."""
+    return dict(_FACTORS.get(si_unit, {si_unit: 1.0}))
+
+
+def canonical_unit(unit: str) -> str:
+    """The table's spelling of an accepted unit (kg/m^3 -> kg/m3)."""
+    return _ALIASES.get(unit, unit)
 
 
 def to_si(value: float, unit: str, si_unit: str) -> float:
     """Convert ``value`` given in ``unit`` to ``si_unit``; UnitError if they do not fit."""
-    unit = _ALIASES.get(unit, unit)
-    table = _FACTORS.get(si_unit, {si_unit: 1.0})
+    unit = canonical_unit(unit)
+    table = unit_factors(si_unit)
     if unit not in table:
         raise UnitError(f"unit {unit!r} cannot express {si_unit!r}; use one of {sorted(table)}")
     return float(value) * table[unit]
