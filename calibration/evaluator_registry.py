@@ -153,3 +153,10 @@ ANALYTIC = register(Backend(
                 "scatter (milliseconds a battery): for tests, demonstrations and campaigns that must finish "
                 "in seconds.",
 ))
+
+# The evaluator a job or campaign runs on when none is named, one for both (JobSubmit, CampaignCreate, the
+# ORM columns, the queue). The simulation, because a default should give the answer the service exists for:
+# a campaign that silently calibrates against the stand-in returns parameters fitted to closed-form trends,
+# which look like a calibration and mean nothing for the material. The stand-in's speed is one word away
+# (evaluator "analytic"), and the DEM's cost is checked before anything is queued (service.limits).
+DEFAULT = DEM

@@ -54,7 +54,7 @@ def submit_job_ex(
     session: Session,
     spec: JobSpec,
     *,
-    evaluator: str = evaluator_registry.DEM.name,
+    evaluator: str = evaluator_registry.DEFAULT.name,
     priority: int = 0,
     idempotency_key: str | None = None,
     client_id: str = "anonymous",

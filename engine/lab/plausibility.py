@@ -120,7 +120,7 @@ def measurement_warnings(test: str, quantity: str, values: Iterable[float], cond
     values = [float(v) for v in values if v is not None and math.isfinite(v)]
     warnings: list[str] = []
     if values:
-        mean = math.fsum(values) / len(values)
+        mean = math.fsum(v / len(values) for v in values)  # each share first: 1e308 twice does not overflow
         what = label if len(values) == 1 else f"{label}, the mean of {len(values)} replicates,"
         found = slip_warning(what, mean, declared.unit, declared.typical, input_unit=input_unit,
                              bound=declared.bound)

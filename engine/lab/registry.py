@@ -189,7 +189,13 @@ def battery_members(options: TestOptions) -> list[LabTest]:
 
 def requested(spec: JobSpec) -> list[LabTest]:
     """The tests whose properties the job reports."""
-    return battery_members(spec.options) if spec.test == BATTERY else [get(spec.test)]
+    return reported_by(spec.test, spec.options)
+
+
+def reported_by(test: str, options: TestOptions) -> list[LabTest]:
+    """The tests whose properties a job of ``test`` (the battery or one test) with ``options`` reports: what
+    a campaign can match its targets against, known before anything runs."""
+    return battery_members(options) if test == BATTERY else [get(test)]
 
 
 def plan(spec: JobSpec) -> list[tuple[LabTest, bool]]:

@@ -7,7 +7,7 @@ from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
 from fastapi import Path as PathParam
 from pydantic import BaseModel, ConfigDict, Field
 
-from calibration.evaluator_registry import DEM, EvaluatorName
+from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
 from engine.lab.plausibility import options_warnings, parameter_warnings
 from engine.lab.registry import BATTERY, JobTestName
@@ -38,7 +38,7 @@ class JobSubmit(BaseModel):
     seed: int = Field(0, ge=0, le=MAX_SEED, description="random seed; same seed and thread count, same result")
     parameters: MicroParameters = Field(default_factory=MicroParameters)
     options: TestOptions = Field(default_factory=TestOptions)
-    evaluator: EvaluatorName = DEM.name
+    evaluator: EvaluatorName = Field(DEFAULT.name, description="the backend the job runs on (GET /api/v1/evaluators)")
     priority: int = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="higher runs first")
     idempotency_key: str | None = Field(None, min_length=1, max_length=200,
                                         description="resubmitting the same key returns the same job")

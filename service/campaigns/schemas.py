@@ -9,7 +9,7 @@ from typing import Any
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator, model_validator
 
-from calibration.evaluator_registry import ANALYTIC, EvaluatorName
+from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from calibration.settings import _FINITE, DesignIn, DesignPreviewIn, FactorIn, LoopSettings, PriorIn  # noqa: F401
 from engine.lab.bounds import SQLITE_INT_MAX, CONDITION_BOUNDS
 from engine.lab.registry import known_quantity, known_test
@@ -56,7 +56,7 @@ class CampaignCreate(LoopSettings):
 
     name: str = Field(..., min_length=1, max_length=200)
     material_id: int = Field(..., ge=1, le=SQLITE_INT_MAX)
-    evaluator: EvaluatorName = Field(ANALYTIC.name, description="the backend every run goes to (GET /api/v1/evaluators)")
+    evaluator: EvaluatorName = Field(DEFAULT.name, description="the backend every run goes to (GET /api/v1/evaluators)")
     targets: list[TargetIn] | None = Field(
         None, max_length=1000, description="measurements to calibrate against; default every measurement the battery simulates"
     )

@@ -14,12 +14,13 @@ from sqlalchemy.orm import Session
 from calibration.adding import effect_hints, with_effect_factor, with_proposed_design
 from calibration.analysis import active_effects
 from calibration.errors import SettingsError
+from calibration.keys import ResponseKey
 from calibration.keys import select as select_targets
 from calibration.records import Measured
 from engine.lab.plausibility import settings_warnings
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.config import Settings, get_settings
-from service.errors import Conflict, NotFound, from_settings_error
+from service.errors import Conflict, Invalid, NotFound, from_settings_error
 from service.limits import check_campaign_limits
 from service.materials.store import get_material
 from service.models.base import utcnow
@@ -49,10 +50,37 @@ def check_limits_with_targets(session: Session, config: CampaignCreate, field_pr
                           [t.key for t in campaign_targets(session, config)])
 
 
+def check_targets_simulated(session: Session, body: CampaignCreate) -> None:
+    """A 422 before anything runs when the campaign could not compare a single simulated value with a
+    measurement: its material has none (``material_id``), or none of the targets is a measurement of the
+    material that the campaign's ``test`` reports (``targets``). Accepted, such a campaign ran its whole
+    design (on DEM, a quarter of an hour of both cores) to fail with "no target could be modelled"."""
+    from engine.lab.registry import reported_by
+    from engine.lab.spec import TestOptions
+
+    material = get_material(session, body.material_id)
+    if not material.measurements:
+        raise Invalid(f"material {material.id} ({material.name!r}) has no measurements, so a campaign has nothing "
+                      f"to calibrate against: add them first (POST /api/v1/materials/{material.id}/measurements)",
+                      "material_id")
+    chosen = campaign_targets(session, body)
+    if not chosen:
+        raise Invalid(f"no target is a measurement of material {material.id}; it has "
+                      f"{sorted({ResponseKey.from_record(m).label for m in material.measurements})}", "targets")
+    tests = reported_by(body.test, TestOptions.model_validate(body.options))
+    simulated = {(t.name, q.name) for t in tests for q in t.quantities}
+    if not any((m.key.test, m.key.quantity) in simulated for m in chosen):
+        raise Invalid(f"no target is simulated: test {body.test!r} reports {sorted(t.name for t in tests)} and the "
+                      f"targets are {sorted({m.key.label for m in chosen})}; choose targets of those tests, or "
+                      "switch the test on (options.include_aor, options.include_anchor) or run it alone (test)",
+                      "targets")
+
+
 def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = "anonymous",
                     schedule_id: int | None = None) -> Campaign:
     if get_material(session, body.material_id) is None:
         raise NotFound(f"material {body.material_id} not found", "material_id")
+    check_targets_simulated(session, body)
     # the design doe/ builds and the limits of every run: a 422 now, not a failure on start
     check_limits_with_targets(session, body)
     campaign = Campaign(name=body.name, material_id=body.material_id, status=CampaignStatus.DRAFT, evaluator=body.evaluator,

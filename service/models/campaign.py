@@ -11,7 +11,7 @@ from typing import Any
 from sqlalchemy import JSON, DateTime, ForeignKey, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
-from calibration.evaluator_registry import ANALYTIC, NAME_MAX
+from calibration.evaluator_registry import DEFAULT, NAME_MAX
 from service.models.base import Base, utcnow
 from service.vocabulary import CampaignStatus
 
@@ -27,7 +27,7 @@ class Campaign(Base):
     name: Mapped[str] = mapped_column(String(200), nullable=False)
     material_id: Mapped[int] = mapped_column(ForeignKey("materials.id"), index=True, nullable=False)
     status: Mapped[str] = mapped_column(String(16), default=CampaignStatus.DRAFT, index=True, nullable=False)
-    evaluator: Mapped[str] = mapped_column(String(NAME_MAX), default=ANALYTIC.name, nullable=False)
+    evaluator: Mapped[str] = mapped_column(String(NAME_MAX), default=DEFAULT.name, nullable=False)
     fidelity: Mapped[str] = mapped_column(String(16), default="screening", nullable=False)
     # The validated CampaignConfig (factors, design, targets, options, seed ...).
     config: Mapped[dict[str, Any]] = mapped_column(JSON, nullable=False)

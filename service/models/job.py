@@ -12,7 +12,7 @@ from typing import Any
 from sqlalchemy import JSON, Boolean, DateTime, Float, Index, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
-from calibration.evaluator_registry import DEM, NAME_MAX
+from calibration.evaluator_registry import DEFAULT, NAME_MAX
 from service.models.base import Base, utcnow
 from service.vocabulary import JobStatus
 
@@ -30,7 +30,7 @@ class Job(Base):
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     status: Mapped[str] = mapped_column(String(16), default=JobStatus.QUEUED, nullable=False, index=True)
-    evaluator: Mapped[str] = mapped_column(String(NAME_MAX), default=DEM.name, nullable=False)
+    evaluator: Mapped[str] = mapped_column(String(NAME_MAX), default=DEFAULT.name, nullable=False)
     test: Mapped[str] = mapped_column(String(16), nullable=False, index=True)
     fidelity: Mapped[str] = mapped_column(String(16), nullable=False)
     spec: Mapped[dict[str, Any]] = mapped_column(JSON, nullable=False)

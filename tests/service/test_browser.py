@@ -91,7 +91,7 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     form = page.locator("form#new-campaign")
     form.locator("input[name=name]").fill("browser loop")
     form.locator("select[name=material_id]").select_option(label="thesis-coarse-aggregate")
-    assert form.locator("select[name=evaluator]").input_value() == "analytic"  # CampaignCreate's default
+    assert form.locator("select[name=evaluator]").input_value() == "dem"  # CampaignCreate's default, JobSubmit's too
     form.locator("select[name=evaluator]").select_option("analytic")
     form.locator("select[name=fidelity]").select_option("thesis")
     form.locator("input[name=seed]").fill("11")

@@ -130,11 +130,24 @@ def test_unmatched_and_unmodelled_targets_are_reported_not_fatal(s2):
     assert rows["peak_pull_force_n"]["status"] == "not_simulated"
 
 
-def test_campaign_fails_with_reason_when_no_target_can_be_modelled(s2):
+def test_a_campaign_whose_targets_are_not_simulated_is_refused_at_creation(s2):
+    """Issue 31: accepted, it ran its whole design and then failed with "no target could be modelled"."""
     client, app, settings = s2
     material = client.post(f"{API}/materials", json={"name": "anchors only", "measurements": [
         {"test": "anchor", "quantity": "peak_pull_force_n", "values": [650.0],
          "condition": {"packing_height_m": 0.32, "pull_speed_m_s": 0.027}}]}).json()
+    body = campaign_body(material["id"], targets=None, design={"type": "full", "centre_runs": 1})
+    refused = client.post(f"{API}/campaigns", json=body)
+    assert refused.status_code == 422 and refused.json()["detail"][0]["loc"] == ["body", "targets"]
+    assert "no target is simulated" in refused.text and "include_anchor" in refused.text
+    assert client.get(f"{API}/campaigns").json() == []
+
+
+def test_campaign_fails_with_reason_when_no_target_can_be_modelled(s2):
+    """Simulated but moved by no factor (the container fixes the packing height): known only from the runs."""
+    client, app, settings = s2
+    material = client.post(f"{API}/materials", json={"name": "height only", "measurements": [
+        {"test": "fill", "quantity": "packing_height_m", "values": [0.33]}]}).json()
     body = campaign_body(material["id"], targets=None, design={"type": "full", "centre_runs": 1})
     cid = client.post(f"{API}/campaigns", json=body).json()["id"]
     client.post(f"{API}/campaigns/{cid}/start")
