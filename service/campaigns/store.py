@@ -55,7 +55,8 @@ def check_targets_simulated(session: Session, body: CampaignCreate) -> None:
     measurement: its material has none (``material_id``), or none of the targets is a measurement of the
     material that the campaign's ``test`` reports (``targets``). Accepted, such a campaign ran its whole
     design (on DEM, a quarter of an hour of both cores) to fail with "no target could be modelled"."""
-    from engine.lab.registry import reported_by
+    from engine.lab.registry import ALWAYS, NEVER, reported_by
+    from engine.lab.registry import get as get_test
     from engine.lab.spec import TestOptions
 
     material = get_material(session, body.material_id)
@@ -70,10 +71,13 @@ def check_targets_simulated(session: Session, body: CampaignCreate) -> None:
     tests = reported_by(body.test, TestOptions.model_validate(body.options))
     simulated = {(t.name, q.name) for t in tests for q in t.quantities}
     if not any((m.key.test, m.key.quantity) in simulated for m in chosen):
-        raise Invalid(f"no target is simulated: test {body.test!r} reports {sorted(t.name for t in tests)} and the "
-                      f"targets are {sorted({m.key.label for m in chosen})}; choose targets of those tests, or "
-                      "switch the test on (options.include_aor, options.include_anchor) or run it alone (test)",
-                      "targets")
+        wanted = sorted({m.key.test for m in chosen})
+        # how each wanted test would run: its battery switch, else alone (the registry says which)
+        ways = [f"options.{get_test(name).battery}=true" if get_test(name).battery not in (ALWAYS, NEVER)
+                else f"test={name!r}" for name in wanted]
+        raise Invalid(f"no target is simulated: test {body.test!r} reports {[t.name for t in tests]} and the "
+                      f"targets are {sorted({m.key.label for m in chosen})}; run their tests ({', '.join(ways)}) "
+                      "or choose targets among the reported quantities", "targets")
 
 
 def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = "anonymous",

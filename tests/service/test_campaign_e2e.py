@@ -139,7 +139,7 @@ def test_a_campaign_whose_targets_are_not_simulated_is_refused_at_creation(s2):
     body = campaign_body(material["id"], targets=None, design={"type": "full", "centre_runs": 1})
     refused = client.post(f"{API}/campaigns", json=body)
     assert refused.status_code == 422 and refused.json()["detail"][0]["loc"] == ["body", "targets"]
-    assert "no target is simulated" in refused.text and "include_anchor" in refused.text
+    assert "no target is simulated" in refused.text and "options.include_anchor=true" in refused.text
     assert client.get(f"{API}/campaigns").json() == []
 
 
