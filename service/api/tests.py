@@ -1,8 +1,9 @@
 """The lab-test catalogue: every test the virtual lab runs, read from ``engine.lab.registry``.
 
 Why an endpoint: jobs and campaigns name a test, measurements a test and a quantity; the page, the CLI and
-scripts learn here which names exist, what each test reports (SI unit, physical bounds, conditions), which
-options it reads, what it needs first and how the battery is composed, instead of each keeping its own list.
+scripts learn here which names exist, what each test reports (SI unit, physical bounds, typical range,
+conditions), which options it reads, what it needs first and how the battery is composed, instead of each
+keeping its own list.
 """
 from __future__ import annotations
 
@@ -27,11 +28,21 @@ class BoundsOut(BaseModel):
     why: str
 
 
+class TypicalOut(BaseModel):
+    """Where granular materials usually measure (SI, closed): outside, a value is stored with a warning."""
+
+    low: float
+    high: float
+    what: str = Field(description="the population the range describes")
+    source: str = Field(description="short reference; docs/lab.md, 'Plausible ranges', has the full one")
+
+
 class QuantityOut(BaseModel):
     name: str
     si_unit: str
     accepted_units: list[str] = Field(description="units a measurement may be sent in (converted to SI)")
     bounds: BoundsOut
+    typical: TypicalOut | None = Field(description="the typical range; null where the apparatus sets the value")
     conditions: list[str] = Field(description="condition names the value is reported under, besides none")
     description: str
 
@@ -66,8 +77,10 @@ def bounds_out(bound: Bound) -> BoundsOut:
 
 
 def quantity_out(q: Quantity) -> QuantityOut:
+    typical = None if q.typical is None else TypicalOut(low=q.typical.low, high=q.typical.high, what=q.typical.what,
+                                                        source=q.typical.source)
     return QuantityOut(name=q.name, si_unit=q.unit, accepted_units=accepted_units(q.unit), bounds=bounds_out(q.bound),
-                       conditions=list(q.conditions), description=q.description)
+                       typical=typical, conditions=list(q.conditions), description=q.description)
 
 
 def _test_out(t: LabTest) -> LabTestOut:

@@ -125,7 +125,9 @@ def test_material_used_by_a_campaign_cannot_be_deleted(s2):
     from conftest_s2 import campaign_body
 
     client, _, _ = s2
-    material = client.post(f"{API}/materials", json={"name": "used"}).json()
+    # a campaign needs a measurement to calibrate against (an empty material is refused at creation)
+    material = client.post(f"{API}/materials", json={"name": "used", "measurements": [
+        {"test": "fill", "quantity": "bulk_density_kg_m3", "values": [1400.0]}]}).json()
     assert client.post(f"{API}/campaigns", json=campaign_body(material["id"])).status_code == 201
     response = client.delete(f"{API}/materials/{material['id']}")
     assert response.status_code == 409 and error_loc(response) == ["path", "material_id"]

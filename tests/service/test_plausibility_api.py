@@ -125,3 +125,11 @@ def test_a_campaign_whose_targets_its_test_does_not_run_is_refused_naming_target
     other = client.post(f"{API}/campaigns", json=campaign_body(material_id, targets=[
         {"test": "dst", "quantity": "residual_shear_stress_pa", "condition": {"normal_stress_pa": 1.0e5}}]))
     assert other.status_code == 422 and other.json()["detail"][0]["loc"] == ["body", "targets"]
+
+
+def test_the_catalogue_serves_each_typical_range_with_its_source(s2):
+    client, _, _ = s2
+    quantities = {(t["name"], q["name"]): q for t in client.get(f"{API}/tests").json()["tests"] for q in t["quantities"]}
+    modulus = quantities[("cct", "confined_modulus_pa")]["typical"]
+    assert (modulus["low"], modulus["high"]) == (1.0e6, 1.0e9) and "Domenico" in modulus["source"]
+    assert quantities[("fill", "bulk_mass_kg")]["typical"] is None  # the container sets it
