@@ -114,24 +114,29 @@ def measurement_warnings(test: str, quantity: str, values: Iterable[float], cond
     conditions (typed in SI: the stored row keeps no condition units)."""
     from engine.lab.registry import quantity as declared_quantity
 
-    declared = declared_quantity(test, quantity)
-    name = f"{test} {quantity}"
-    label = f"measurement {measurement_id} ({name})" if measurement_id is not None else name
+    try:
+        declared = declared_quantity(test, quantity)
+    except ValueError:  # a stored row of a quantity no longer declared: no range to hold it against
+        return []
+
+    def label(detail: str = "") -> str:
+        inner = f"{test} {quantity}{detail}"
+        return f"measurement {measurement_id} ({inner})" if measurement_id is not None else inner
+
     values = [float(v) for v in values if v is not None and math.isfinite(v)]
     warnings: list[str] = []
     if values:
         mean = math.fsum(v / len(values) for v in values)  # each share first: 1e308 twice does not overflow
-        what = label if len(values) == 1 else f"{label}, the mean of {len(values)} replicates,"
-        found = slip_warning(what, mean, declared.unit, declared.typical, input_unit=input_unit,
-                             bound=declared.bound)
-        if found is None and len(values) > 1:
-            for index, value in enumerate(values):
-                found_one = slip_warning(f"{label} value {index + 1}", value, declared.unit, declared.typical,
-                                         input_unit=input_unit, bound=declared.bound)
-                if found_one is not None:
-                    warnings.append(found_one)
-        elif found is not None:
+        found = slip_warning(label("" if len(values) == 1 else f", mean of {len(values)} replicates"), mean,
+                             declared.unit, declared.typical, input_unit=input_unit, bound=declared.bound)
+        if found is not None:
             warnings.append(found)
+        elif len(values) > 1:
+            for index, value in enumerate(values):
+                found = slip_warning(label(f", value {index + 1}"), value, declared.unit, declared.typical,
+                                     input_unit=input_unit, bound=declared.bound)
+                if found is not None:
+                    warnings.append(found)
     for cname, cvalue in (condition or {}).items():
         if cvalue is None:
             continue
@@ -139,7 +144,7 @@ def measurement_warnings(test: str, quantity: str, values: Iterable[float], cond
             si = condition_si_unit(cname)
         except UnitError:
             continue
-        found = slip_warning(f"{label} condition {cname}", float(cvalue), si, CONDITION_TYPICAL.get(cname))
+        found = slip_warning(f"{label()} condition {cname}", float(cvalue), si, CONDITION_TYPICAL.get(cname))
         if found is not None:
             warnings.append(found)
     return warnings

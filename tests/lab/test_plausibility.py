@@ -64,7 +64,7 @@ def test_a_friction_coefficient_typed_as_an_angle_is_named():
 def test_a_decimal_comma_split_replicate_is_named_by_its_position():
     # "1397,8" read as two replicates: the mean 702.5 is plausible, the 8 kg/m3 is not
     text = _one(measurement_warnings("fill", "bulk_density_kg_m3", [1397.0, 8.0]))
-    assert text.startswith("fill bulk_density_kg_m3 value 2 = 8 kg/m3 is below")
+    assert text.startswith("fill bulk_density_kg_m3, value 2 = 8 kg/m3 is below")
 
 
 def test_a_particle_density_in_g_per_cm3_on_a_job_names_g_per_cm3():
@@ -98,6 +98,11 @@ def test_the_thesis_measurements_and_the_default_parameters_raise_no_warning():
     assert parameter_warnings(MicroParameters().model_dump()) == []
     assert options_warnings({"dst_normal_stresses_pa": data["direct_estimates"]["dst_normal_stresses_pa"],
                              "cct_max_stress_pa": data["direct_estimates"]["cct_max_normal_stress_pa"]}) == []
+
+
+def test_replicates_that_all_slipped_give_one_warning_on_their_mean():
+    text = _one(measurement_warnings("fill", "bulk_density_kg_m3", [1.412, 1.3836, 1.3978], measurement_id=2))
+    assert text.startswith("measurement 2 (fill bulk_density_kg_m3, mean of 3 replicates) = 1.3978 kg/m3 is below")
 
 
 def test_loop_records_carry_the_input_unit_into_the_warning():
