@@ -32,7 +32,7 @@ TEST = LabTest(
         Quantity("bulk_density_kg_m3", "kg/m3", Bound(0.0, DENSEST_SOLID_KG_M3, high_open=False,
                                                        why="below the densest solid, osmium"),
                  typical=Typical(50.0, 4000.0, "the bulk densities of dry granular materials",
-                                 "bulk-material density tables (simetric.co.uk, inter-bulk.com)")),
+                                 "bulk-density tables of simetric.co.uk and inter-bulk.com")),
         # Typical: random close packing of spheres 0.36, random loose 0.445 (Scott & Kilgour 1969; Onoda &
         # Liniger 1990); non-spherical grains and fine powders pack looser.
         Quantity("porosity", "1", Bound(0.0, 1.0, why="a void volume fraction"),
