@@ -6,6 +6,7 @@ import { api, condition, h, schemas, status, submitForm, table } from "./core.js
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
 import { evaluatorSelect, evaluators } from "./evaluators.js";
 import { batteryChecks, batteryOptions, labTests, testSelect } from "./labtests.js";
+import { numberListField, readNumberList } from "./numbers.js";
 
 const DEFAULT_FACTORS = [["particle_density_kg_m3", 2300, 2700], ["particle_stiffness_n_per_m", 1.0e6, 3.0e6], ["friction_pp", 0.3, 1.0]];
 
@@ -85,7 +86,7 @@ export async function campaignsPage(view, params) {
     effectPicker(effects.effects, "fixed_parameters.effects"),
     h("h4", {}, "Options"),
     h("div", {},
-      field("DST normal stresses (kPa, comma-separated)", h("input", { name: "dst_kpa", placeholder: "fidelity default", "data-loc": "options" })),
+      numberListField("DST normal stresses (kPa)", "dst_kpa", "options.dst_normal_stresses_pa", "fidelity default"),
       batteryChecks(tests, () => "options"),
       field("Assumed relative uncertainty", h("input", { name: "default_relative_uncertainty", type: "number", step: "any", value: 0.05, "data-loc": "default_relative_uncertainty" })),
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "allow_extrapolation", "data-loc": "allow_extrapolation" }), " allow the optimum outside the box"),
@@ -104,8 +105,9 @@ export async function campaignsPage(view, params) {
 
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
-    const body = campaignBody(form, materials.find((m) => String(m.id) === materialSelect.value), tests);
-    const made = await submitForm(form, () => api("/campaigns", { method: "POST", body }));
+    const material = materials.find((m) => String(m.id) === materialSelect.value);
+    // the body is read inside the submission, so that a list typed wrongly is shown beside its field
+    const made = await submitForm(form, () => api("/campaigns", { method: "POST", body: campaignBody(form, material, tests) }));
     if (made) location.hash = `#/campaigns/${made.id}`;
   });
   view.replaceChildren(h("h2", {}, "Campaigns"),
@@ -131,8 +133,8 @@ function campaignBody(form, material, tests) {
     uncertainty: num(all("prior_uncertainty")[i]), source: all("prior_source")[i] })).filter((p) => p.parameter);
   const generators = String(data.get("generators") || "").split(",").map((g) => g.trim()).filter(Boolean);
   const options = batteryOptions(tests, data);
-  const dst = String(data.get("dst_kpa") || "").trim();
-  if (dst) options.dst_normal_stresses_pa = dst.split(",").map((v) => Number(v) * 1000);
+  const dst = readNumberList(data.get("dst_kpa"), "options.dst_normal_stresses_pa");
+  if (dst.length) options.dst_normal_stresses_pa = dst.map((kpa) => kpa * 1000);
   const ticked = all("target").map(Number);
   const targets = material && ticked.length
     ? ticked.map((i) => material.measurements[i]).map((m) => ({ test: m.test, quantity: m.quantity, condition: m.condition || {} }))

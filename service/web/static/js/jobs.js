@@ -6,6 +6,7 @@ import { evaluatorSelect, evaluators } from "./evaluators.js";
 import { curveViews } from "./jobcurves.js";
 import { batteryChecks, batteryOptions, labTests, testSelect } from "./labtests.js";
 import { refresh } from "./live.js";
+import { numberListField, readNumberList } from "./numbers.js";
 
 function numberField(name, prop, loc) {
   const value = prop.default ?? "";
@@ -33,7 +34,7 @@ export async function submitPage(view) {
     effectPicker(effects.effects, "parameters.effects"),
     h("h3", {}, "Options"),
     h("div", {},
-      h("label", {}, "DST normal stresses (kPa, comma-separated)", h("input", { name: "dst_kpa", placeholder: "fidelity default", "data-loc": "options.dst_normal_stresses_pa" })),
+      numberListField("DST normal stresses (kPa)", "dst_kpa", "options.dst_normal_stresses_pa", "fidelity default"),
       batteryChecks(tests, (option) => `options.${option}`)),
     h("p", {}, h("button", { type: "submit" }, "Queue job")));
   form.addEventListener("submit", async (event) => {
@@ -47,11 +48,13 @@ export async function submitPage(view) {
     const effectsPicked = pickedEffects(form);
     if (Object.keys(effectsPicked).length) parameters.effects = effectsPicked;
     const options = batteryOptions(tests, data);
-    const dst = String(data.get("dst_kpa") || "").trim();
-    if (dst) options.dst_normal_stresses_pa = dst.split(",").map((v) => Number(v) * 1000);
-    const body = { test: data.get("test"), fidelity: data.get("fidelity"), evaluator: data.get("evaluator"),
-      seed: Number(data.get("seed")), priority: Number(data.get("priority")), parameters, options };
-    const job = await submitForm(form, () => api("/jobs", { method: "POST", body }));
+    const body = () => {  // inside the submission, so that a list typed wrongly is shown beside its field
+      const dst = readNumberList(data.get("dst_kpa"), "options.dst_normal_stresses_pa");
+      if (dst.length) options.dst_normal_stresses_pa = dst.map((kpa) => kpa * 1000);
+      return { test: data.get("test"), fidelity: data.get("fidelity"), evaluator: data.get("evaluator"),
+        seed: Number(data.get("seed")), priority: Number(data.get("priority")), parameters, options };
+    };
+    const job = await submitForm(form, () => api("/jobs", { method: "POST", body: body() }));
     if (job) location.hash = `#/jobs/${job.id}`;
   });
   view.replaceChildren(form);
