@@ -67,12 +67,13 @@ function residualStrip(rows) {
   const labels = rows.map(targetLabel);
   const data = rows.map((r, i) => ({ value: [i, r.standardised_residual], name: labels[i], itemStyle: { color: TEST_COLOURS[r.test] || COLOURS[0] } }));
   const predicted = rows.map((r, i) => ({ value: [i, r.predicted_standardised_residual], name: labels[i] }));
-  const extreme = Math.max(3, ...rows.flatMap((r) => [Math.abs(r.standardised_residual || 0), Math.abs(r.predicted_standardised_residual || 0)])) * 1.1;
+  const extreme = Math.max(3, ...rows.flatMap((r) => [Math.abs(r.standardised_residual || 0), Math.abs(r.predicted_standardised_residual || 0)])) * 1.05;
+  const range = roundRange(-extreme, extreme);  // symmetric about 0, ending on round ticks
   return chart({ title: { text: "Standardised residuals (model − measured) / σ" },
     legend: { top: 2, right: 6, data: ["confirmation", "surface prediction"] },
     grid: { left: 56, right: 14, top: 36, bottom: 110 },
     xAxis: { type: "category", data: labels, axisLabel: { rotate: 35, fontSize: 10, interval: 0 } },
-    yAxis: axis("residual (σ)", { min: -extreme, max: extreme }),
+    yAxis: axis("residual (σ)", range),
     series: [
       { type: "scatter", name: "confirmation", data, symbolSize: 10, z: 3, markArea: band(-2, 2, "rgba(7,148,85,0.10)", "±2σ"),
         markLine: { silent: true, symbol: "none", data: [{ yAxis: 0 }], lineStyle: { color: "#667085" }, label: { show: false } } },

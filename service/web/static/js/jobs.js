@@ -67,15 +67,33 @@ function progress(job) {
     ` ${pct}% ${job.progress?.phase || ""}`);
 }
 
+// Which jobs the list shows by where they came from (GET /jobs?origin=): the jobs submitted here by
+// default, since campaigns queue their batteries by the hundred; a campaign's "its jobs" link
+// (campaign_id) shows that campaign's.
+const ORIGINS = [["direct", "submitted directly"], ["campaign", "campaign batteries"], ["all", "all"]];
+
 export async function jobsPage(view, params) {
   const filter = params.get("status") || "";
-  const query = new URLSearchParams({ limit: "100" });
+  const campaign = params.get("campaign_id") || "";
+  const origin = params.get("origin") || (campaign ? "all" : "direct");
+  const query = new URLSearchParams({ limit: "100", origin });
   if (filter) query.set("status", filter);
-  if (params.get("campaign_id")) query.set("campaign_id", params.get("campaign_id"));
+  if (campaign) query.set("campaign_id", campaign);
   const [list, defs] = await Promise.all([api(`/jobs?${query}`), schemas()]);
-  const select = h("select", { onchange: (e) => { location.hash = `#/jobs${e.target.value ? "?status=" + e.target.value : ""}`; } },
+  // the page's own address keeps the filters, so a refresh or a shared link shows the same list
+  const go = (changed) => {
+    const next = new URLSearchParams({ ...Object.fromEntries(params), ...changed });
+    for (const [key, value] of [...next]) if (!value) next.delete(key);
+    location.hash = `#/jobs${next.size ? "?" + next : ""}`;
+  };
+  const select = h("select", { name: "status", onchange: (e) => go({ status: e.target.value }) },
     ["", ...defs.JobStatus.enum].map((s) => h("option", { value: s, selected: s === filter }, s || "all")));
-  view.replaceChildren(h("h2", {}, `Jobs (${list.total})`), h("p", {}, "Status ", select, " ", h("a", { href: "#/submit" }, "submit a job")),
+  const originSelect = h("select", { name: "origin", onchange: (e) => go({ origin: e.target.value }) },
+    ORIGINS.map(([value, text]) => h("option", { value, selected: value === origin }, text)));
+  view.replaceChildren(h("h2", {}, `Jobs (${list.total})`),
+    h("p", { className: "filters" }, h("label", {}, "Status ", select), " ", h("label", {}, "Origin ", originSelect), " ",
+      campaign ? [h("span", { className: "muted" }, `campaign #${campaign} `), h("a", { href: "#/jobs?origin=all" }, "every job"), " · "] : "",
+      h("a", { href: "#/submit" }, "submit a job")),
     h("div", { className: "scroll" }, table(["Id", "Test", "Evaluator", "Fidelity", "Seed", "Status", "Progress", "Campaign", "Created"],
       list.items.map((j) => [h("a", { href: `#/jobs/${j.id}` }, `#${j.id}`), j.test, j.evaluator, j.fidelity, String(j.seed),
         status(j.status), progress(j), j.campaign_id ? h("a", { href: `#/campaigns/${j.campaign_id}` }, `#${j.campaign_id}`) : "–",
