@@ -1,11 +1,9 @@
 // One iteration's report: the verdict (printed once), the targets as a parity plot per test, the
 // standardised residual strip with its +-2 band, reachability against its cutoff, and the table.
 import { fmt, h, status, wideTable } from "./core.js";
-import { conditionText, humanText, quantityLabel } from "./labels.js";
+import { conditionText, humanText, quantityLabel, targetLabel } from "./labels.js";
 import { COLOURS, TEST_COLOURS, axis, band, chart, errorBars, roundRange } from "./plot.js";
 
-// a target in words, "dst · friction angle (deg)" or "... at normal stress 24 kPa" (labels.js)
-export const targetLabel = (r) => { const cond = conditionText(r.condition); return `${r.test} · ${quantityLabel(r.quantity)}${cond ? " at " + cond : ""}`; };
 const modelled = (report) => report.targets.filter((r) => r.status === "modelled" && Number.isFinite(r.measured));
 // sigma of a residual: the measurement's and the simulator's standard uncertainties together (the
 // report's residual_sd divides the simulator's by the number of confirmation seeds)

@@ -1,7 +1,7 @@
 // Names for people. The API's identifiers carry their unit as a suffix (confined_modulus_pa,
 // bulk_density_kg_m3, normal_stress_pa) and the calibration's column keys join test, quantity and
 // condition with "__" (cct__confined_modulus_pa__normal_stress_pa_24000); the page shows
-// "confined modulus (Pa)" and "cct confined modulus (Pa) at normal stress 24 kPa" instead, so no
+// "confined modulus (Pa)" and "cct · confined modulus (Pa) at normal stress 24 kPa" instead, so no
 // internal key reaches the text a user reads (issue 31).
 import { fmt } from "./core.js";
 
@@ -38,10 +38,11 @@ export function conditionText(condition) {
   }).join(", ");
 }
 
-// A target or response row ({test, quantity, condition}) in words.
-export function targetText({ test, quantity, condition }) {
+// A target or response row ({test, quantity, condition}) in words:
+// "dst · friction angle (deg)", "dst · residual shear stress (Pa) at normal stress 24 kPa".
+export function targetLabel({ test, quantity, condition }) {
   const cond = conditionText(condition);
-  return `${test} ${quantityLabel(quantity)}${cond ? " at " + cond : ""}`;
+  return `${test} · ${quantityLabel(quantity)}${cond ? " at " + cond : ""}`;
 }
 
 // A column key (calibration/keys.py ResponseKey.name) back in words. Its conditions were written
@@ -53,10 +54,10 @@ export function keyText(key) {
   const condition = {};
   for (const part of conditions) {
     const m = part.match(/^(.+?)_(\d+(?:_\d+)?(?:e_\d+)?)$/);
-    if (!m) return `${test} ${quantityLabel(quantity)} (${conditions.join(", ")})`;
+    if (!m) return `${test} · ${quantityLabel(quantity)} (${conditions.join(", ")})`;
     condition[m[1]] = Number(m[2].replace(/e_/, "e+").replace("_", "."));
   }
-  return targetText({ test, quantity, condition });
+  return targetLabel({ test, quantity, condition });
 }
 
 // Any such key inside a sentence (a verdict, a diagnosis message, a model's error) in words.
