@@ -370,8 +370,8 @@ def test_create_scrolls_to_and_focuses_the_first_field_in_error(page, service, s
 
 def test_decimal_comma_is_one_value_and_ambiguity_is_refused(page, service, shots):
     """ "1397,8" typed as replicate values is one value 1397.8 (not replicates 1397 and 8); "1,397" could
-    be 1397 or 1.397 and is refused beside the field, with nothing stored; the DST stresses of a job
-    follow the same rule."""
+    be 1397 or 1.397 and is refused beside the field, with nothing stored; a job's DST stresses and its
+    single numbers follow the same rule."""
     material = service.api("POST", "/materials", json={"name": "decimal comma"}).json()
     open_view(page, service, f"#/materials/{material['id']}")
     form = page.locator("form#add-measurement")
@@ -410,10 +410,14 @@ def test_decimal_comma_is_one_value_and_ambiguity_is_refused(page, service, shot
     job.get_by_role("button", name="Queue job").click()
     expect_text(page, "form#submit-job label:has(> input[name=dst_kpa]) .field-error", "more than one comma")
     job.locator("input[name=dst_kpa]").fill("12,5 24")
+    friction = job.locator("input[name=friction_pp]")  # one number by the same rule (a number box dropped the comma: 05)
+    friction.fill("")
+    friction.press_sequentially("0,5")
     job.get_by_role("button", name="Queue job").click()
     page.wait_for_url(re.compile(r"#/jobs/\d+$"))
     spec = service.api("GET", f"/jobs/{page.url.rsplit('/', 1)[1]}").json()["spec"]
     assert spec["options"]["dst_normal_stresses_pa"] == [12500.0, 24000.0]
+    assert spec["parameters"]["friction_pp"] == 0.5
 
 
 def test_jobs_list_hides_campaign_batteries_by_default(page, service):

@@ -4,6 +4,7 @@
 // measurement that separates them, and "add this effect and run the next iteration".
 import { api, fmt, h, submitForm, table } from "./core.js";
 import { humanText, quantityLabel } from "./labels.js";
+import { numberInput, readNumber } from "./numbers.js";
 import { COLOURS, axis, chart, textWidth } from "./plot.js";
 
 const GROUP_COLOURS = ["#7a5af8", "#dc6803", "#0e9384", "#c11574"];
@@ -46,15 +47,15 @@ function addEffectForm(campaignId, r, nextNumber, enabled, onAdded) {
   const [lo, hi] = (r.plausible_range || [null, null]).map(typed);
   const form = h("form", { className: "add-effect", "data-effect": r.effect, novalidate: true },
     h("div", { className: "form-errors" }),
-    h("label", {}, "strength low", h("input", { name: "low", type: "number", step: "any", value: lo, "data-loc": "strength_range" })),
-    h("label", {}, "high", h("input", { name: "high", type: "number", step: "any", value: hi, "data-loc": "strength_range" })),
+    h("label", {}, "strength low", numberInput({ name: "low", value: lo, "data-loc": "strength_range" })),
+    h("label", {}, "high", numberInput({ name: "high", value: hi, "data-loc": "strength_range" })),
     h("button", { type: "submit", disabled: !enabled, title: enabled ? "" : "the campaign must be completed and this its latest iteration" },
       `Add ${r.title} and run iteration ${nextNumber}`));
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
     const data = new FormData(form);
-    const body = { add_effect: r.effect, strength_range: [Number(data.get("low")), Number(data.get("high"))] };
-    const done = await submitForm(form, () => api(`/campaigns/${campaignId}/iterations`, { method: "POST", body }));
+    const body = () => ({ add_effect: r.effect, strength_range: ["low", "high"].map((k) => readNumber(data.get(k), "strength_range")) });
+    const done = await submitForm(form, () => api(`/campaigns/${campaignId}/iterations`, { method: "POST", body: body() }));
     if (done) onAdded(done);
   });
   return form;

@@ -6,12 +6,12 @@ import { evaluatorSelect, evaluators } from "./evaluators.js";
 import { curveViews } from "./jobcurves.js";
 import { batteryChecks, batteryOptions, labTests, testSelect } from "./labtests.js";
 import { refresh } from "./live.js";
-import { numberListField, readNumberList } from "./numbers.js";
+import { numberInput, numberListField, readNumber, readNumberList } from "./numbers.js";
 
 function numberField(name, prop, loc) {
   const value = prop.default ?? "";
   return h("label", { title: prop.description || "" }, name,
-    h("input", { name, type: "number", step: "any", value, "data-loc": loc }));
+    numberInput({ name, value, "data-loc": loc }));
 }
 
 const isNumber = (p) => p.type === "number" || p.type === "integer" || (p.anyOf || []).some((a) => a.type === "number" || a.type === "integer");
@@ -40,15 +40,15 @@ export async function submitPage(view) {
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
     const data = new FormData(form);
-    const parameters = {};
-    for (const [name] of numeric) {
-      const raw = data.get(name);
-      if (raw !== null && raw !== "") parameters[name] = Number(raw);
-    }
-    const effectsPicked = pickedEffects(form);
-    if (Object.keys(effectsPicked).length) parameters.effects = effectsPicked;
     const options = batteryOptions(tests, data);
-    const body = () => {  // inside the submission, so that a list typed wrongly is shown beside its field
+    const body = () => {  // inside the submission, so that a number typed wrongly is shown beside its field
+      const parameters = {};
+      for (const [name] of numeric) {
+        const value = readNumber(data.get(name), `parameters.${name}`);
+        if (value !== null) parameters[name] = value;
+      }
+      const effectsPicked = pickedEffects(form);
+      if (Object.keys(effectsPicked).length) parameters.effects = effectsPicked;
       const dst = readNumberList(data.get("dst_kpa"), "options.dst_normal_stresses_pa");
       if (dst.length) options.dst_normal_stresses_pa = dst.map((kpa) => kpa * 1000);
       return { test: data.get("test"), fidelity: data.get("fidelity"), evaluator: data.get("evaluator"),

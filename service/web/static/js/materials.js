@@ -2,7 +2,7 @@
 import { api, attempt, condition, flash, fmt, h, submitForm, table } from "./core.js";
 import { nameAndUnit } from "./labels.js";
 import { refresh } from "./live.js";
-import { numberListField, readNumberList } from "./numbers.js";
+import { numberInput, numberListField, readNumber, readNumberList } from "./numbers.js";
 
 export async function materialsPage(view) {
   const materials = await api("/materials");
@@ -44,7 +44,7 @@ export async function materialPage(view, id) {
     h("label", {}, "Test", testSelect), h("label", {}, "Quantity", quantitySelect), h("label", {}, "Unit", unitSelect),
     numberListField("Replicate values", "values", "values", "1412.0; 1383.6; 1397.8"),
     h("label", {}, "Condition name", h("input", { name: "cond_name", placeholder: "normal_stress_pa", "data-loc": "condition" })),
-    h("label", {}, "Condition value", h("input", { name: "cond_value", type: "number", step: "any", "data-loc": "condition" })),
+    h("label", {}, "Condition value", numberInput({ name: "cond_value", "data-loc": "condition" })),
     h("label", {}, "Condition unit", h("input", { name: "cond_unit", placeholder: "kPa", "data-loc": "condition_units" })),
     h("label", {}, "Source", h("input", { name: "source", "data-loc": "source" })),
     h("button", { type: "submit" }, "Add"));
@@ -56,7 +56,7 @@ export async function materialPage(view, id) {
         values: readNumberList(data.get("values"), "values") };
       const name = String(data.get("cond_name") || "").trim();
       if (name) {
-        out.condition = { [name]: Number(data.get("cond_value")) };
+        out.condition = { [name]: readNumber(data.get("cond_value"), "condition") };
         if (data.get("cond_unit")) out.condition_units = { [name]: data.get("cond_unit") };
       }
       return out;

@@ -57,6 +57,19 @@ export function readNumberList(text, loc) {
   return values;
 }
 
+// One number typed in a box, by the same rule ("0,5" is 0.5); an empty box is null (not given).
+export function readNumber(text, loc) {
+  const values = readNumberList(text, loc);
+  if (values.length > 1) throw new ApiError(422, [{ loc: ["body", ...loc.split(".")], msg: `one number here, not ${values.length}` }]);
+  return values.length ? values[0] : null;
+}
+
+// A box for one real number. Text, not type="number": Chromium's number box drops a typed comma,
+// so "0,5" became 05 = 5 without a word; here it is read by the rule above.
+export function numberInput(attrs) {
+  return h("input", { ...attrs, type: "text", inputmode: "decimal", autocomplete: "off" });
+}
+
 // A list field: its label, the input (data-loc: where the API reports its errors) and the rule as
 // a hint under it, so the rule is read where the list is typed.
 export function numberListField(label, name, loc, placeholder = "") {
