@@ -11,7 +11,8 @@
 //     ("1.397,8", "1,397.8"), with more than one comma ("1,397,8" or "6,12,24" meant as a list),
 //     or with a comma followed by exactly three digits ("1,397": 1397 or 1.397?), unless the part
 //     before the comma is 0 ("0,125").
-// Exponents are accepted ("1e8", "2,5e6").
+// Exponents are accepted ("1e8", "2,5e6"). The boxes for one real number (numberInput, read by
+// readNumber) follow the same rule for a single value, so "0,5" means 0.5 in every field of the page.
 import { ApiError, h } from "./core.js";
 
 export const LIST_HINT = "separate values with ; or spaces; a comma inside a number is a decimal comma (1397,8)";
