@@ -24,7 +24,7 @@ from service.config import Settings, get_settings
 from service.errors import Conflict, Invalid, NotFound, TooMany
 from service.models.base import utcnow
 from service.models.job import Job
-from service.vocabulary import JobStatus
+from service.vocabulary import JobOrigin, JobStatus
 from service.limits import check_limits
 
 CLAIM_CANDIDATES = 8  # queued ids tried per claim before giving up on this round
@@ -154,8 +154,12 @@ def get_job(session: Session, job_id: int) -> Job:
 
 def list_jobs(session: Session, *, status: str | None = None, test: str | None = None,
               campaign_id: int | None = None, evaluator: str | None = None,
-              limit: int = 100, offset: int = 0) -> tuple[list[Job], int]:
+              origin: JobOrigin = JobOrigin.ALL, limit: int = 100, offset: int = 0) -> tuple[list[Job], int]:
     where = []
+    if origin == JobOrigin.DIRECT:
+        where.append(Job.campaign_id.is_(None))
+    elif origin == JobOrigin.CAMPAIGN:
+        where.append(Job.campaign_id.is_not(None))
     if status is not None:
         where.append(Job.status == status)
     if test is not None:

@@ -37,6 +37,16 @@ class JobStatus(Word):
         return (cls.FAILED, cls.CANCELLED)
 
 
+class JobOrigin(Word):
+    """Which jobs a list shows by where they came from: submitted directly (no campaign), queued by a
+    campaign (its batteries), or both. The page lists direct jobs by default: two campaigns queue
+    well over a hundred batteries, which buried the jobs a user submitted."""
+
+    DIRECT = "direct"
+    CAMPAIGN = "campaign"
+    ALL = "all"
+
+
 class CampaignStatus(Word):
     """A campaign's state: draft until started, running or paused, then completed or failed."""
 

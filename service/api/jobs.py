@@ -22,7 +22,7 @@ from service.db import DbSession
 from service.errors import Conflict, NotFound
 from service.models.job import Job
 from service.security import client_id
-from service.vocabulary import JobStatus
+from service.vocabulary import JobOrigin, JobStatus
 from service.workers.errors import scrub
 
 router = APIRouter(prefix="/jobs", tags=["jobs"])
@@ -97,9 +97,11 @@ def submit(body: JobSubmit, request: Request, response: Response, session: DbSes
 def list_jobs(session: DbSession, status_: JobStatus | None = Query(None, alias="status"),
               test: JobTestName | None = None, campaign_id: int | None = Query(None, ge=1, le=SQLITE_INT_MAX),
               evaluator: EvaluatorName | None = None,
+              origin: JobOrigin = Query(JobOrigin.ALL, description="direct: jobs submitted without a campaign; "
+                                        "campaign: the batteries campaigns queued; all: both"),
               limit: int = Query(100, ge=1, le=1000), offset: Offset = 0) -> JobList:
     rows, total = queue.list_jobs(session, status=status_, test=test, campaign_id=campaign_id,
-                                  evaluator=evaluator, limit=limit, offset=offset)
+                                  evaluator=evaluator, origin=origin, limit=limit, offset=offset)
     return JobList(items=[job_out(j) for j in rows], total=total, limit=limit, offset=offset)
 
 

@@ -26,6 +26,7 @@ from service_net import free_port, wait_healthy
 
 CHROMIUM_CANDIDATES = ("/usr/bin/chromium", "/usr/bin/chromium-browser")
 REQUIRE_ENV = "DEMCAL_REQUIRE_BROWSER"
+REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
 def chromium_path() -> str | None:
@@ -66,6 +67,9 @@ def start_service(data_dir: Path, workers: int = 1) -> LiveService:
     port = free_port()
     database_url = f"sqlite:///{(data_dir / 'demcal.db').as_posix()}"
     env = dict(os.environ)
+    # the served code is this checkout's, not whichever one the package is installed (editable) from:
+    # the service runs in data_dir, where `python -m service.cli` would otherwise import the installed copy
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO_ROOT), env.get("PYTHONPATH", "")) if p)
     env.update({"DEMCAL_DATABASE_URL": database_url, "DEMCAL_SEED_MATERIALS": "true", "DEMCAL_LOG_LEVEL": "WARNING",
                 "DEMCAL_TICK_INTERVAL_S": "0.3", "DEMCAL_POLL_INTERVAL_S": "0.1", "PYTHONUNBUFFERED": "1"})
     proc = subprocess.Popen([sys.executable, "-m", "service.cli", "serve", "--port", str(port), "--workers", str(workers)],

@@ -112,7 +112,7 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     expect_text(page, "section.verdict", r"Polishing on the batteries: (skipped|\d+ Gauss-Newton step)")
     failing = page.locator("section.card:has(h3:text('Targets')) tr:has(.target-fails)")
     assert failing.count() >= 1
-    assert "friction_angle_deg" in " ".join(failing.all_inner_texts())
+    assert "friction angle (deg)" in " ".join(failing.all_inner_texts())  # named for people since issue 31
     assert page.locator("section.verdict").count() == 1 and page.get_by_text("Verdict:").count() == 1  # printed once
     # the ranking chart and table name the effect; the first significant one can be added
     expect_text(page, "section.diagnosis h3", "Diagnosis: ")
@@ -121,6 +121,9 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     assert top in ("rolling_epsd2", "particle_shape"), top
     assert page.locator("section.diagnosis [aria-label='effect ranking'] svg").count() == 1
     expect_text(page, "section.history .chi2dof[data-iteration='1']", r"\d")
+    assert_diagnosis_fits(page)
+    assert_parity_axes_end_on_ticks(page)
+    assert not re.search(r"\b(fill|cct|dst|aor|anchor)__", page.locator("main").inner_text())  # no response keys
     for title, name in (("Verdict", "campaign-verdict"), ("Targets", "campaign-targets"), ("Across conditions", "campaign-conditions"),
                         ("Diagnosis", "campaign-diagnosis"), ("Fitted response surfaces", "campaign-anova")):
         section_shot(page, shots, title, name)
@@ -155,6 +158,53 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     page.locator("nav.iterations a", has_text=re.compile(r"^1")).click()
     expect_text(page, "p.active-effects", "Iteration 1 model: no contact effects")
     page.screenshot(path=str(shots / "campaign-iteration-1.png"))
+
+
+def overflowing(page, selector: str) -> list[str]:
+    """The cells, inputs and scroll boxes under ``selector`` whose content is wider than their box
+    (scrollWidth > clientWidth: clipped, cut off, or hidden behind a sideways scroll)."""
+    return page.evaluate("""(selector) => [...document.querySelectorAll(selector)].flatMap((root) =>
+        [...root.querySelectorAll("td, th, input, .scroll, p, h3, h4")])
+        .filter((el) => el.scrollWidth > el.clientWidth + 1)
+        .map((el) => `${el.tagName.toLowerCase()} ${el.scrollWidth}>${el.clientWidth}: ${(el.value || el.textContent).slice(0, 60)}`)""",
+                         selector)
+
+
+def assert_diagnosis_fits(page):
+    """The diagnosis panel at 1280 px: no cell, input or table clipped; the ranking chart's labels
+    whole, inside the chart and clear of each other (the critical value's above the axis labels)."""
+    assert page.viewport_size["width"] == 1280
+    assert overflowing(page, "section.diagnosis") == []
+    chart = page.locator("section.diagnosis [aria-label='effect ranking']")
+    texts = chart.evaluate("""(box) => { const outer = box.getBoundingClientRect();
+        return [...box.querySelectorAll("svg text")].filter((t) => t.textContent.trim()).map((t) => {
+          const r = t.getBoundingClientRect();
+          return { text: t.textContent, left: r.left - outer.left, right: r.right - outer.left, top: r.top - outer.top,
+                   bottom: r.bottom - outer.top, width: outer.width, height: outer.height }; }); }""")
+    assert texts and not [t for t in texts if "…" in t["text"] or "..." in t["text"]], texts
+    outside = [t["text"] for t in texts if t["left"] < 0 or t["right"] > t["width"] + 0.5 or t["top"] < 0 or t["bottom"] > t["height"] + 0.5]
+    assert outside == [], outside
+    critical = next(t for t in texts if t["text"].startswith("critical"))
+    overlaps = [t["text"] for t in texts if t is not critical and t["left"] < critical["right"] and critical["left"] < t["right"]
+                and t["top"] < critical["bottom"] and critical["top"] < t["bottom"]]
+    assert overlaps == [], (critical, overlaps)
+    # the strength bounds show whole in their inputs (1e8, not "1000000(")
+    for box in page.locator("section.diagnosis form.add-effect input").all():
+        assert box.input_value() and box.evaluate("(el) => el.scrollWidth <= el.clientWidth"), box.input_value()
+
+
+def assert_parity_axes_end_on_ticks(page):
+    """Each parity chart's axes start and end on a multiple of their tick interval (round labels)."""
+    charts = page.locator("section.card [aria-label^='parity ']")
+    assert charts.count() >= 1
+    for handle in charts.element_handles():
+        axes = page.evaluate("""async (el) => {
+            const echarts = await import("/static/vendor/echarts-6.1.0/echarts.esm.min.js");
+            const option = echarts.getInstanceByDom(el).getOption();
+            return [...option.xAxis, ...option.yAxis].map((a) => [a.min, a.max, a.interval]); }""", handle)
+        for low, high, step in axes:
+            for end in (low, high):
+                assert abs(end / step - round(end / step)) < 1e-9, (low, high, step)
 
 
 def test_job_submission_with_an_effect_shows_its_curves(page, service, shots):
@@ -254,7 +304,7 @@ def test_bad_field_is_shown_beside_its_input(page, service, shots):
     form.get_by_role("button", name="Queue job").click()
     expect_text(page, "form#submit-job .field-error", "greater than or equal to 0")
     label = form.locator("label:has(input[name=seed])")
-    assert "field-error" in label.locator("xpath=following-sibling::*[1]").get_attribute("class")
+    assert label.locator(".field-error").count() == 1  # inside its label, under the input (since issue 31)
     assert form.locator("input[name=seed]").get_attribute("aria-invalid") == "true"
     assert form.locator(".field-error").count() == 1
     assert page.url.endswith("#/submit")  # nothing was queued
@@ -269,6 +319,121 @@ def test_bad_field_is_shown_beside_its_input(page, service, shots):
     assert page.url.endswith("#/campaigns")  # nothing was created
     row.scroll_into_view_if_needed()
     page.screenshot(path=str(shots / "form-field-error.png"))
+
+
+def test_error_is_drawn_under_its_own_field(page, service, shots):
+    """friction_pp's refusal inside friction_pp's label, under its input; none at the other fields.
+    (Placed after the label, it wrapped to the next line, under particle_density_kg_m3.)"""
+    page.watch.allowed.append("status of 422")
+    open_view(page, service, "#/submit")
+    form = page.locator("form#submit-job")
+    form.locator("select[name=evaluator]").select_option("analytic")
+    form.locator("input[name=friction_pp]").fill("-1")
+    form.get_by_role("button", name="Queue job").click()
+    label = form.locator("label:has(> input[name=friction_pp])")
+    expect_text(page, "form#submit-job label:has(> input[name=friction_pp]) .field-error", "greater than or equal to 0")
+    assert form.locator(".field-error").count() == 1
+    assert form.locator("label:has(> input[name=particle_density_kg_m3]) .field-error").count() == 0
+    box, message = form.locator("input[name=friction_pp]").bounding_box(), label.locator(".field-error").bounding_box()
+    assert message["y"] >= box["y"] + box["height"] - 1 and abs(message["x"] - box["x"]) < 8, (box, message)
+    assert page.evaluate("document.activeElement.name") == "friction_pp"
+    label.screenshot(path=str(shots / "form-error-under-field.png"))
+
+
+def in_viewport(locator) -> bool:
+    return locator.evaluate("""(el) => { const r = el.getBoundingClientRect();
+        return r.top >= 0 && r.bottom <= window.innerHeight && r.left >= 0 && r.right <= window.innerWidth; }""")
+
+
+def test_create_scrolls_to_and_focuses_the_first_field_in_error(page, service, shots):
+    """"Create (draft)" sits at the bottom of a long form: after a refusal the page brings the first
+    field in error (in the form's order) into view and focuses it, instead of staying at the button."""
+    page.watch.allowed.append("status of 422")
+    open_view(page, service, "#/campaigns")
+    form = page.locator("form#new-campaign")
+    form.locator("input[name=seed]").fill("-1")  # near the top
+    form.locator("input[name=factor_low]").first.fill("3000")  # further down, above its high of 2700
+    button = form.get_by_role("button", name="Create (draft)")
+    button.scroll_into_view_if_needed()
+    seed = form.locator("input[name=seed]")
+    assert not in_viewport(seed)  # the form is longer than the window: the test can fail
+    button.click()
+    expect_text(page, "form#new-campaign label:has(> input[name=seed]) .field-error", "greater than or equal to 0")
+    assert form.locator(".field-error").count() == 2  # the factor row's error too
+    from playwright.sync_api import expect
+
+    expect(seed).to_be_focused()
+    assert in_viewport(seed) and in_viewport(form.locator("label:has(> input[name=seed]) .field-error"))
+    assert page.url.endswith("#/campaigns")  # nothing was created
+    page.screenshot(path=str(shots / "form-scrolled-to-error.png"))
+
+
+def test_decimal_comma_is_one_value_and_ambiguity_is_refused(page, service, shots):
+    """ "1397,8" typed as replicate values is one value 1397.8 (not replicates 1397 and 8); "1,397" could
+    be 1397 or 1.397 and is refused beside the field, with nothing stored; a job's DST stresses and its
+    single numbers follow the same rule."""
+    material = service.api("POST", "/materials", json={"name": "decimal comma"}).json()
+    open_view(page, service, f"#/materials/{material['id']}")
+    form = page.locator("form#add-measurement")
+    form.locator("select[name=test]").select_option("fill")
+    form.locator("select[name=quantity]").select_option("bulk_density_kg_m3")
+    form.locator("select[name=unit]").select_option("kg/m3")
+    assert "decimal comma" in form.locator("label:has(> input[name=values]) .hint").inner_text()  # the rule, in the hint
+    values = form.locator("input[name=values]")
+    values.fill("1397,8")
+    form.get_by_role("button", name="Add").click()
+    expect_text(page, "#flash", "measurement added")
+    stored = lambda: service.api("GET", f"/materials/{material['id']}").json()["measurements"]  # noqa: E731
+    assert [m["values"] for m in stored()] == [[1397.8]]
+
+    form = page.locator("form#add-measurement")
+    form.locator("input[name=values]").fill("1412; 1,397")
+    form.get_by_role("button", name="Add").click()
+    expect_text(page, "form#add-measurement label:has(> input[name=values]) .field-error", "could be 1397 or 1.397")
+    assert page.evaluate("document.activeElement.name") == "values"
+    assert len(stored()) == 1  # nothing sent
+
+    form.locator("select[name=quantity]").select_option("porosity")  # one measurement per quantity and condition
+    form.locator("select[name=unit]").select_option("1")
+    form.locator("input[name=values]").fill("0,4593; 0,46 0.455")  # separators and decimal marks mixed
+    form.get_by_role("button", name="Add").click()
+    from playwright.sync_api import expect
+
+    expect(page.locator("main table").first).to_contain_text("porosity", timeout=TIMEOUT_MS)
+    assert sorted(m["values"] for m in stored()) == [[0.4593, 0.46, 0.455], [1397.8]]
+    page.screenshot(path=str(shots / "material-decimal-comma.png"))
+
+    open_view(page, service, "#/submit")
+    job = page.locator("form#submit-job")
+    job.locator("select[name=evaluator]").select_option("analytic")
+    job.locator("input[name=dst_kpa]").fill("6,12,24")  # a comma list without spaces: separators or decimals?
+    job.get_by_role("button", name="Queue job").click()
+    expect_text(page, "form#submit-job label:has(> input[name=dst_kpa]) .field-error", "more than one comma")
+    job.locator("input[name=dst_kpa]").fill("12,5 24")
+    friction = job.locator("input[name=friction_pp]")  # one number by the same rule (a number box dropped the comma: 05)
+    friction.fill("")
+    friction.press_sequentially("0,5")
+    job.get_by_role("button", name="Queue job").click()
+    page.wait_for_url(re.compile(r"#/jobs/\d+$"))
+    spec = service.api("GET", f"/jobs/{page.url.rsplit('/', 1)[1]}").json()["spec"]
+    assert spec["options"]["dst_normal_stresses_pa"] == [12500.0, 24000.0]
+    assert spec["parameters"]["friction_pp"] == 0.5
+
+
+def test_jobs_list_hides_campaign_batteries_by_default(page, service):
+    """The list shows the jobs submitted directly; campaign batteries behind the origin filter."""
+    direct = service.api("POST", "/jobs", json={"evaluator": "analytic", "test": "fill"}).json()
+    battery = service.api("POST", "/jobs", json={"evaluator": "analytic", "test": "fill", "campaign_id": 987650}).json()
+    open_view(page, service, "#/jobs")
+    expect_text(page, "h2", "Jobs \\(")
+    links = lambda: page.locator("main table tbody a[href^='#/jobs/']").all_inner_texts()  # noqa: E731
+    assert f"#{direct['id']}" in links() and f"#{battery['id']}" not in links()
+    page.locator("select[name=origin]").select_option("campaign")
+    page.wait_for_url(re.compile(r"origin=campaign"))
+    from playwright.sync_api import expect
+
+    expect(page.locator(f"main table a[href='#/jobs/{battery['id']}']")).to_have_count(1, timeout=TIMEOUT_MS)
+    assert f"#{direct['id']}" not in links()
 
 
 def test_api_docs_work_offline(page, service, shots):

@@ -122,6 +122,20 @@ def test_list_and_filter(client):
         assert r.status_code == 422 and loc in locs(r)
 
 
+def test_list_by_origin_direct_campaign_or_all(client):
+    """The page lists the jobs a user submitted without the batteries campaigns queued (origin=direct)."""
+    direct = submit(client, test="dst").json()
+    battery = submit(client, test="dst", campaign_id=4).json()
+    ids = lambda q: [j["id"] for j in client.get(f"{API}/jobs?{q}").json()["items"]]  # noqa: E731
+    assert ids("origin=direct") == [direct["id"]]
+    assert ids("origin=campaign") == [battery["id"]]
+    assert ids("origin=all") == ids("") == [battery["id"], direct["id"]]  # all is the default
+    assert client.get(f"{API}/jobs?origin=direct").json()["total"] == 1
+    assert ids("origin=direct&campaign_id=4") == []  # the filters combine
+    r = client.get(f"{API}/jobs?origin=mine")
+    assert r.status_code == 422 and ["query", "origin"] in locs(r)
+
+
 def test_get_status_and_missing(client):
     job = submit(client).json()
     got = client.get(f"{API}/jobs/{job['id']}").json()

@@ -21,6 +21,7 @@ from conftest_s2 import API, campaign_body, run_to_end, s2, thesis_material_id  
 NOT_JSON = {
     ("GET", "/"): "the web page (HTML file)",
     ("GET", "/ui"): "redirect to the web page",
+    ("GET", "/favicon.ico"): "the page's icon (SVG file)",
     ("GET", f"{API}/docs"): "Swagger UI (HTML)",
     ("GET", f"{API}/redoc"): "ReDoc (HTML)",
     ("DELETE", f"{API}/materials/{{material_id}}"): "204 No Content",

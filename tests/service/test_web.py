@@ -50,6 +50,15 @@ def test_index_and_assets_are_served_locally(s2):
     assert client.get("/static/js/nothing.js").status_code == 404
 
 
+def test_favicon_is_served_not_a_404(s2):
+    """Browsers ask every page's host for /favicon.ico (the API docs name no icon): the app's own SVG."""
+    client, _, _ = s2
+    icon = client.get("/favicon.ico")
+    assert icon.status_code == 200 and icon.headers["content-type"].startswith("image/svg+xml")
+    assert icon.content == client.get("/static/favicon.svg").content and b"<svg" in icon.content
+    assert '<link rel="icon" href="/static/favicon.svg"' in client.get("/").text
+
+
 def test_pages_call_only_existing_api_endpoints(s2):
     client, _, _ = s2
     paths = client.get("/api/v1/openapi.json").json()["paths"]

@@ -2,6 +2,7 @@
 // iteration, read its verdict, targets, conditions and diagnosis, add the indicated effect to run
 // the next iteration, and follow the error and the parameters across iterations.
 import { api, attempt, fmt, h, optional, status, table } from "./core.js";
+import { humanText } from "./labels.js";
 import { refresh } from "./live.js";
 import { targetsSection, verdictSection } from "./campaign_report.js";
 import { conditionsSection } from "./campaign_conditions.js";
@@ -63,8 +64,8 @@ export async function campaignPage(view, id, params) {
       [[h("a", { href: `#/materials/${c.material_id}` }, `#${c.material_id}`), c.evaluator, c.fidelity, String(c.current_iteration), c.phase || "–",
         `${c.runs_succeeded}/${c.runs_total}`, String(c.runs_failed)]]),
     iterationTabs(id, iterations, it?.number)];
-  if (c.error) parts.push(h("p", { className: "job-error" }, h("b", {}, "Failed: "), c.error));
-  if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), c.stop_reason));
+  if (c.error) parts.push(h("p", { className: "job-error" }, h("b", {}, "Failed: "), humanText(c.error)));
+  if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), humanText(c.stop_reason)));
   if (c.status === "running" || c.status === "paused") parts.push(progressCard(c));
   if (it) {
     const effects = it.effects;

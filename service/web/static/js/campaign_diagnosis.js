@@ -3,23 +3,30 @@
 // effect's strength against its plausible range, the fingerprint table, alias groups with the
 // measurement that separates them, and "add this effect and run the next iteration".
 import { api, fmt, h, submitForm, table } from "./core.js";
-import { COLOURS, axis, chart } from "./plot.js";
+import { humanText, quantityLabel } from "./labels.js";
+import { numberInput, readNumber } from "./numbers.js";
+import { COLOURS, axis, chart, textWidth } from "./plot.js";
 
 const GROUP_COLOURS = ["#7a5af8", "#dc6803", "#0e9384", "#c11574"];
 const colourOf = (r) => (r.alias_group ? GROUP_COLOURS[(r.alias_group - 1) % GROUP_COLOURS.length] : r.significant ? COLOURS[0] : "#98a2b3");
 
+// The chart takes the card's width; its left margin is as wide as the longest effect name (measured,
+// never truncated), the bars' "explained" labels have room on the right, and the critical value is
+// written above the plot, where it cannot overlap the axis labels.
 function rankingChart(d) {
   const rows = d.ranking;
+  const names = rows.map((r) => `${r.title} (${r.effect})`);
+  const explained = rows.map((r) => `${fmt(100 * r.explained, 2)} % explained`);
   return chart({ title: { text: "Effect ranking: score (LM) against its critical value" },
-    grid: { left: 170, right: 70, top: 34, bottom: 40 },
-    yAxis: { type: "category", inverse: true, data: rows.map((r) => `${r.title} (${r.effect})`), axisLabel: { fontSize: 10, width: 160, overflow: "truncate" } },
+    grid: { left: textWidth(names, 10) + 16, right: textWidth(explained, 11) + 16, top: 52, bottom: 56 },
+    yAxis: { type: "category", inverse: true, data: names, axisLabel: { fontSize: 10 } },
     xAxis: axis("Lagrange-multiplier score LM (-)", { min: 0, scale: false }),
     series: [{ type: "bar", name: "LM", barMaxWidth: 18,
       data: rows.map((r) => ({ value: r.lm, itemStyle: { color: colourOf(r) } })),
-      label: { show: true, position: "right", formatter: (p) => `${fmt(100 * rows[p.dataIndex].explained, 2)} % explained` },
+      label: { show: true, position: "right", formatter: (p) => explained[p.dataIndex] },
       markLine: { silent: true, symbol: "none", data: [{ xAxis: d.critical_lm }], lineStyle: { color: "#b42318", type: "dashed" },
-        label: { formatter: `critical ${fmt(d.critical_lm, 3)}`, position: "end" } } }] },
-  { height: 70 + 30 * rows.length, label: "effect ranking" });
+        label: { formatter: `critical ${fmt(d.critical_lm, 3)}`, position: "start", color: "#b42318" } } }] },
+  { height: 108 + 30 * rows.length, label: "effect ranking" });
 }
 
 // The strength the data ask for, on the plausible range's scale (0 = low end, 1 = high end).
@@ -29,52 +36,58 @@ function strengthBar(r) {
   const frac = (r.strength - lo) / (hi - lo), pos = Math.max(0, Math.min(1, frac));
   return h("span", { className: "strength", title: `plausible ${fmt(lo)} – ${fmt(hi)} ${r.unit}` },
     h("span", { className: "range" }, h("span", { className: `mark ${frac < 0 || frac > 1 ? "outside" : ""}`, style: `left:${(100 * pos).toFixed(1)}%` })),
-    ` ${fmt(r.strength, 3)} ${r.unit === "1" ? "" : r.unit} (${fmt(lo)}–${fmt(hi)})`);
+    ` ${fmt(r.strength, 3)} ${r.unit === "1" ? "" : r.unit} (${fmt(lo, 3)} – ${fmt(hi, 3)})`);
 }
 
+// A bound as the input shows it: 1e8, not 100000000 (which the box cut to "1000000(").
+const typed = (v) => (Number.isFinite(v) && v !== 0 && (Math.abs(v) >= 1e5 || Math.abs(v) < 1e-3)
+  ? v.toExponential().replace("e+", "e") : v ?? "");
+
 function addEffectForm(campaignId, r, nextNumber, enabled, onAdded) {
-  const [lo, hi] = r.plausible_range || ["", ""];
+  const [lo, hi] = (r.plausible_range || [null, null]).map(typed);
   const form = h("form", { className: "add-effect", "data-effect": r.effect, novalidate: true },
     h("div", { className: "form-errors" }),
-    h("label", {}, "strength low", h("input", { name: "low", type: "number", step: "any", value: lo, "data-loc": "strength_range" })),
-    h("label", {}, "high", h("input", { name: "high", type: "number", step: "any", value: hi, "data-loc": "strength_range" })),
+    h("label", {}, "strength low", numberInput({ name: "low", value: lo, "data-loc": "strength_range" })),
+    h("label", {}, "high", numberInput({ name: "high", value: hi, "data-loc": "strength_range" })),
     h("button", { type: "submit", disabled: !enabled, title: enabled ? "" : "the campaign must be completed and this its latest iteration" },
       `Add ${r.title} and run iteration ${nextNumber}`));
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
     const data = new FormData(form);
-    const body = { add_effect: r.effect, strength_range: [Number(data.get("low")), Number(data.get("high"))] };
-    const done = await submitForm(form, () => api(`/campaigns/${campaignId}/iterations`, { method: "POST", body }));
+    const body = () => ({ add_effect: r.effect, strength_range: ["low", "high"].map((k) => readNumber(data.get(k), "strength_range")) });
+    const done = await submitForm(form, () => api(`/campaigns/${campaignId}/iterations`, { method: "POST", body: body() }));
     if (done) onAdded(done);
   });
   return form;
 }
 
-function fingerprints(f) {
+// rows named by the effects' titles where the ranking has them (the table is read beside the chart)
+function fingerprints(f, titles) {
   const cols = f.columns;
   const cell = (v) => h("span", { className: `fp fp-${v === "" ? "none" : v.includes("+") ? "up" : v.includes("-") ? "down" : "zero"}` }, v === "" ? "·" : v);
-  return h("div", { className: "scroll" }, table(["", ...cols.map((c) => c.replaceAll("_", " "))],
+  return h("div", { className: "scroll fingerprints" }, table(["", ...cols.map((c) => quantityLabel(c))],
     [[h("b", {}, "observed"), ...cols.map((c) => cell(f.observed[c] ?? ""))],
-      ...Object.entries(f.effects).map(([name, row]) => [name, ...cols.map((c) => cell(row[c] ?? ""))])]));
+      ...Object.entries(f.effects).map(([name, row]) => [titles[name] || name, ...cols.map((c) => cell(row[c] ?? ""))])]));
 }
 
 // canAdd: the campaign is completed and this is its latest iteration.
 export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded }) {
   const groups = d.alias_groups || [];
   const suggested = d.ranking.filter((r) => r.significant);
+  // chart and fingerprints one under the other: side by side at 1280 px the chart truncated the
+  // effects' names and the table hid its last columns (issue 31)
   return h("section", { className: "card diagnosis" }, h("h3", {}, `Diagnosis: ${d.verdict}`),
-    h("p", {}, d.message),
-    h("div", { className: "side-by-side" },
-      h("div", {}, rankingChart(d)),
-      h("div", {}, h("h4", {}, "Fingerprints (sign of the change each effect makes)"), fingerprints(d.fingerprints))),
+    h("p", {}, humanText(d.message)),
+    rankingChart(d),
+    h("h4", {}, "Fingerprints (sign of the change each effect makes)"), fingerprints(d.fingerprints, Object.fromEntries(d.ranking.map((r) => [r.effect, r.title]))),
     h("div", { className: "scroll" }, table(["Effect", "LM", "Holm p", "Explained", "Strength (plausible range)", "Alias group", ""],
       d.ranking.map((r) => [
         h("span", {}, h("span", { className: "swatch", style: `background:${colourOf(r)}` }), ` ${r.title} `, h("code", {}, r.effect)),
         r.lm, r.p_holm, `${fmt(100 * r.explained, 3)} %`, strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
         r.significant ? addEffectForm(campaignId, r, nextNumber, canAdd, onAdded) : h("span", { className: "muted" }, "not significant")]))),
     groups.length ? h("div", {}, h("h4", {}, "Alias groups: effects the data cannot tell apart"),
-      h("ul", {}, groups.map((g) => h("li", {}, h("b", {}, `group ${g.group}: ${g.effects.join(", ")}. `), g.message || "",
-        h("ul", {}, (g.separators || []).map((s) => h("li", {}, `${s.effects.join(" vs ")}: measure ${s.separating_measurement} (cos ${fmt(s.cos, 3)})`))))))) : "",
-    (d.measure_next || []).length ? h("p", {}, h("b", {}, "Measure next: "), d.measure_next.join("; ")) : "",
+      h("ul", {}, groups.map((g) => h("li", {}, h("b", {}, `group ${g.group}: ${g.effects.join(", ")}. `), humanText(g.message || ""),
+        h("ul", {}, (g.separators || []).map((s) => h("li", {}, `${s.effects.join(" vs ")}: measure ${humanText(s.separating_measurement)} (cos ${fmt(s.cos, 3)})`))))))) : "",
+    (d.measure_next || []).length ? h("p", {}, h("b", {}, "Measure next: "), d.measure_next.map(humanText).join("; ")) : "",
     suggested.length ? "" : h("p", { className: "muted" }, "No effect is significant: nothing to add."));
 }

@@ -1,6 +1,7 @@
 // The iteration's design and fitted response surfaces: ANOVA tables (with lack of fit and curvature)
 // under a factor legend, since the table's rows name factors by letter (A, B, AB, ...).
 import { fmt, h, table, wideTable } from "./core.js";
+import { humanText, keyText } from "./labels.js";
 
 function legend(factors) {
   return h("p", { className: "legend" }, h("b", {}, "Factors: "),
@@ -15,13 +16,13 @@ export function modelsSection(models) {
   const first = entries.find(([, m]) => m.ok)?.[1];
   return h("section", { className: "card models" }, h("h3", {}, "Fitted response surfaces (ANOVA)"),
     first ? legend(first.fit.factors) : "",
-    entries.map(([name, m]) => h("details", { open: entries.length <= 3 }, h("summary", {}, name, m.ok ? ` — R² ${fmt(m.fit.fit_statistics.r_squared, 4)}` : " — not fitted"),
+    entries.map(([name, m]) => h("details", { open: entries.length <= 3 }, h("summary", {}, keyText(name), m.ok ? ` — R² ${fmt(m.fit.fit_statistics.r_squared, 4)}` : " — not fitted"),
       m.ok ? [h("p", {}, h("code", { className: "equation" }, m.fit.equation_natural)),
         h("div", { className: "scroll" }, table(["Source", "Sum of squares", "df", "Mean square", "F", "p"],
           m.fit.anova.map((r) => [h("span", { className: ROW_CLASS[r.source] || "" }, r.source), r.sum_of_squares, String(r.df), r.mean_square, r.f_value, r.p_value]))),
         h("p", { className: "muted" }, `R² ${fmt(m.fit.fit_statistics.r_squared)}, adjusted ${fmt(m.fit.fit_statistics.adj_r_squared)}, predicted ${fmt(m.fit.fit_statistics.pred_r_squared)}; pure-error sd ${fmt(m.pure_error_sd)} (simulator noise from the centre replicates)`),
         m.fit.messages.map((msg) => h("p", { className: "muted" }, msg))]
-        : h("p", { className: "bad" }, m.error))));
+        : h("p", { className: "bad" }, humanText(m.error)))));
 }
 
 export function designSection(design) {

@@ -1,9 +1,9 @@
 // One iteration's report: the verdict (printed once), the targets as a parity plot per test, the
 // standardised residual strip with its +-2 band, reachability against its cutoff, and the table.
-import { condition, fmt, h, status, wideTable } from "./core.js";
-import { COLOURS, TEST_COLOURS, axis, band, chart, errorBars } from "./plot.js";
+import { fmt, h, status, wideTable } from "./core.js";
+import { conditionText, humanText, quantityLabel, targetLabel } from "./labels.js";
+import { COLOURS, TEST_COLOURS, axis, band, chart, errorBars, roundRange } from "./plot.js";
 
-export const targetLabel = (r) => `${r.test} · ${r.quantity}${Object.keys(r.condition || {}).length ? " @ " + condition(r.condition) : ""}`;
 const modelled = (report) => report.targets.filter((r) => r.status === "modelled" && Number.isFinite(r.measured));
 // sigma of a residual: the measurement's and the simulator's standard uncertainties together (the
 // report's residual_sd divides the simulator's by the number of confirmation seeds)
@@ -14,18 +14,18 @@ export function verdictSection(report) {
   const failing = (report.tests || []).filter((t) => t.fails).map((t) => t.test);
   return h("section", { className: "card verdict" },
     h("h3", {}, "Verdict: ", h("span", { className: `status verdict-${(report.verdict || "").replaceAll(" ", "_")}` }, report.verdict)),
-    report.meaning ? h("p", {}, report.meaning) : "",
+    report.meaning ? h("p", {}, humanText(report.meaning)) : "",
     lof ? h("p", {}, h("b", {}, "Model against measurements: "),
       `χ²/dof ${fmt(lof.chi2_per_dof, 3)} on ${lof.dof} dof (noise band ${fmt(lof.noise_band[0], 2)} – ${fmt(lof.noise_band[1], 2)}), p = ${fmt(lof.p_value, 3)}`,
       failing.length ? h("span", { className: "bad" }, ` · failing tests: ${failing.join(", ")}`) : "") : "",
     report.adequacy ? h("p", {}, h("b", {}, "With the candidate effects' directed test: "),
       `p = ${fmt(report.adequacy.directed?.p_value, 3)}; together with the lack of fit (Holm) p = ${fmt(report.adequacy.p_value, 3)}: `,
       h("span", { className: report.adequacy.fails ? "bad" : "" }, report.adequacy.fails ? "the model misses the measurements" : "no misfit beyond noise")) : "",
-    ...((report.conflicts?.active_bounds) || []).map((b) => h("p", { className: "bad" }, `${b.parameter} is pinned at its ${b.side} bound: ${b.meaning}`)),
-    ...((report.conflicts?.priors_pulled) || []).map((p) => h("p", { className: "bad" }, p.meaning)),
-    report.surrogate_check ? h("p", { className: "muted" }, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${report.surrogate_check.reason}`) : "",
+    ...((report.conflicts?.active_bounds) || []).map((b) => h("p", { className: "bad" }, `${b.parameter} is pinned at its ${b.side} bound: ${humanText(b.meaning)}`)),
+    ...((report.conflicts?.priors_pulled) || []).map((p) => h("p", { className: "bad" }, humanText(p.meaning))),
+    report.surrogate_check ? h("p", { className: "muted" }, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${humanText(report.surrogate_check.reason)}`) : "",
     report.polish ? h("p", { className: "muted" }, h("b", {}, "Polishing on the batteries: "), report.polish.skipped
-      ? `skipped, the surfaces predicted the confirmation (${report.polish.skipped})`
+      ? `skipped, the surfaces predicted the confirmation (${humanText(report.polish.skipped)})`
       : `${report.polish.steps} Gauss-Newton step(s), ${report.polish.batteries} batteries, χ² ${fmt(report.polish.chi2_start, 3)} → ${fmt(report.polish.chi2, 3)}`) : "");
 }
 
@@ -46,17 +46,18 @@ function parityPanel(test, rows) {
       lo = Math.min(lo, x - ux, y - uy); hi = Math.max(hi, x + ux, y + uy);
       return { value: [x, y, x - ux, x + ux, y - uy, y + uy], name: targetLabel(r) };
     });
-    series.push({ type: "scatter", name: quantity, data: points, symbolSize: 9, itemStyle: { color: colour }, z: 3,
+    series.push({ type: "scatter", name: quantityLabel(quantity), data: points, symbolSize: 9, itemStyle: { color: colour }, z: 3,
       tooltip: { formatter: (p) => `${p.name}<br>measured/ref ${fmt(p.value[0], 3)}, model/ref ${fmt(p.value[1], 3)}` } });
-    series.push(errorBars(`${quantity} ±2σ`, points.map((p) => p.value), colour));
+    series.push(errorBars(`${quantityLabel(quantity)} ±2σ`, points.map((p) => p.value), colour));
   });
-  const pad = (hi - lo) * 0.08 || 0.05;
-  const [a, b] = [lo - pad, hi + pad];
+  const pad = (hi - lo) * 0.04 || 0.05;
+  const range = roundRange(lo - pad, hi + pad);  // both axes the same round range: the diagonal is at 45°
+  const [a, b] = [range.min, range.max];
   series.push({ type: "line", name: "model = measured", data: [[a, a], [b, b]], showSymbol: false, silent: true,
     lineStyle: { color: "#98a2b3", type: "dashed", width: 1 }, z: 0 });
-  return chart({ title: { text: `Parity: ${test}` }, legend: { top: 20, left: 4, type: "scroll", textStyle: { fontSize: 10 }, data: [...byQuantity.keys()] },
+  return chart({ title: { text: `Parity: ${test}` }, legend: { top: 20, left: 4, type: "scroll", textStyle: { fontSize: 10 }, data: [...byQuantity.keys()].map(quantityLabel) },
     grid: { left: 56, right: 14, top: 60, bottom: 44 },
-    xAxis: axis("measured / mean measured (-)", { min: a, max: b }), yAxis: axis("model / mean measured (-)", { min: a, max: b }), series },
+    xAxis: axis("measured / mean measured (-)", range), yAxis: axis("model / mean measured (-)", range), series },
   { height: 300, label: `parity ${test}` });
 }
 
@@ -64,12 +65,13 @@ function residualStrip(rows) {
   const labels = rows.map(targetLabel);
   const data = rows.map((r, i) => ({ value: [i, r.standardised_residual], name: labels[i], itemStyle: { color: TEST_COLOURS[r.test] || COLOURS[0] } }));
   const predicted = rows.map((r, i) => ({ value: [i, r.predicted_standardised_residual], name: labels[i] }));
-  const extreme = Math.max(3, ...rows.flatMap((r) => [Math.abs(r.standardised_residual || 0), Math.abs(r.predicted_standardised_residual || 0)])) * 1.1;
+  const extreme = Math.max(3, ...rows.flatMap((r) => [Math.abs(r.standardised_residual || 0), Math.abs(r.predicted_standardised_residual || 0)])) * 1.05;
+  const range = roundRange(-extreme, extreme);  // symmetric about 0, ending on round ticks
   return chart({ title: { text: "Standardised residuals (model − measured) / σ" },
     legend: { top: 2, right: 6, data: ["confirmation", "surface prediction"] },
     grid: { left: 56, right: 14, top: 36, bottom: 110 },
     xAxis: { type: "category", data: labels, axisLabel: { rotate: 35, fontSize: 10, interval: 0 } },
-    yAxis: axis("residual (σ)", { min: -extreme, max: extreme }),
+    yAxis: axis("residual (σ)", range),
     series: [
       { type: "scatter", name: "confirmation", data, symbolSize: 10, z: 3, markArea: band(-2, 2, "rgba(7,148,85,0.10)", "±2σ"),
         markLine: { silent: true, symbol: "none", data: [{ yAxis: 0 }], lineStyle: { color: "#667085" }, label: { show: false } } },
@@ -108,7 +110,7 @@ export function targetsSection(report) {
     wideTable(["Test", "Quantity", "Condition", "Measured ± u", "Predicted [95% PI]", "Confirmed", "z", "Reachability", "Status"],
       report.targets.map((r) => {
         const fails = Number.isFinite(r.standardised_residual) && Math.abs(r.standardised_residual) > 2;
-        return [r.test, r.quantity, condition(r.condition),
+        return [r.test, quantityLabel(r.quantity), conditionText(r.condition) || "–",
           r.measured_uncertainty ? `${fmt(r.measured)} ± ${fmt(r.measured_uncertainty, 3)} ${r.unit || ""}${r.uncertainty_assumed ? " (assumed)" : ""}` : fmt(r.measured),
           r.predicted !== undefined ? `${fmt(r.predicted)} [${fmt(r.prediction_interval?.[0])}, ${fmt(r.prediction_interval?.[1])}]` : "–",
           r.confirmed !== undefined && r.confirmed !== null ? h("span", { className: r.confirmation_in_interval === false ? "bad" : "" }, fmt(r.confirmed)) : "–",

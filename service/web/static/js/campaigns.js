@@ -6,6 +6,7 @@ import { api, condition, h, schemas, status, submitForm, table } from "./core.js
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
 import { evaluatorSelect, evaluators } from "./evaluators.js";
 import { batteryChecks, batteryOptions, labTests, testSelect } from "./labtests.js";
+import { numberInput, numberListField, readNumber, readNumberList } from "./numbers.js";
 
 const DEFAULT_FACTORS = [["particle_density_kg_m3", 2300, 2700], ["particle_stiffness_n_per_m", 1.0e6, 3.0e6], ["friction_pp", 0.3, 1.0]];
 
@@ -50,17 +51,19 @@ export async function campaignsPage(view, params) {
 
   const [factorRows, addFactor] = rowList("factors", (i, v) => [
     field("Factor", h("select", { name: "factor_name", "data-loc": `factors.${i}.name` }, options(factorNames, v.name))),
-    field("Low", h("input", { name: "factor_low", type: "number", step: "any", value: v.low ?? "", "data-loc": `factors.${i}.low` })),
-    field("High", h("input", { name: "factor_high", type: "number", step: "any", value: v.high ?? "", "data-loc": `factors.${i}.high` })),
+    field("Low", numberInput({ name: "factor_low", value: v.low ?? "", "data-loc": `factors.${i}.low` })),
+    field("High", numberInput({ name: "factor_high", value: v.high ?? "", "data-loc": `factors.${i}.high` })),
     h("label", { className: "check" }, h("input", { type: "checkbox", name: `factor_log_${i}`, "data-loc": `factors.${i}.log` }), " log scale")],
   DEFAULT_FACTORS.map(([name, low, high]) => ({ name, low, high })));
   const [fixedRows, addFixed] = rowList("fixed", (i, v) => [
     field("Fixed parameter", h("select", { name: "fixed_name", "data-loc": "fixed_parameters" }, options(micro, v.name))),
-    field("Value (SI)", h("input", { name: "fixed_value", type: "number", step: "any", "data-loc": "fixed_parameters" }))], []);
+    // the API names a fixed parameter's error by the parameter (at the select); the page's own
+    // refusal of what was typed names this box (a loc of the page's, no API field is called "value")
+    field("Value (SI)", numberInput({ name: "fixed_value", "data-loc": `fixed_parameters.value.${i}` }))], []);
   const [priorRows, addPrior] = rowList("priors", (i) => [
     field("Prior on factor", h("select", { name: "prior_parameter", "data-loc": `priors.${i}.parameter` }, options(factorNames))),
-    field("Value", h("input", { name: "prior_value", type: "number", step: "any", "data-loc": `priors.${i}.value` })),
-    field("Std. uncertainty", h("input", { name: "prior_uncertainty", type: "number", step: "any", "data-loc": `priors.${i}.uncertainty` })),
+    field("Value", numberInput({ name: "prior_value", "data-loc": `priors.${i}.value` })),
+    field("Std. uncertainty", numberInput({ name: "prior_uncertainty", "data-loc": `priors.${i}.uncertainty` })),
     field("Source", h("input", { name: "prior_source", "data-loc": `priors.${i}.source` }))], []);
 
   const form = h("form", { className: "card", id: "new-campaign", novalidate: true }, h("h3", {}, "New campaign"),
@@ -85,9 +88,9 @@ export async function campaignsPage(view, params) {
     effectPicker(effects.effects, "fixed_parameters.effects"),
     h("h4", {}, "Options"),
     h("div", {},
-      field("DST normal stresses (kPa, comma-separated)", h("input", { name: "dst_kpa", placeholder: "fidelity default", "data-loc": "options" })),
+      numberListField("DST normal stresses (kPa)", "dst_kpa", "options.dst_normal_stresses_pa", "fidelity default"),
       batteryChecks(tests, () => "options"),
-      field("Assumed relative uncertainty", h("input", { name: "default_relative_uncertainty", type: "number", step: "any", value: 0.05, "data-loc": "default_relative_uncertainty" })),
+      field("Assumed relative uncertainty", numberInput({ name: "default_relative_uncertainty", value: 0.05, "data-loc": "default_relative_uncertainty" })),
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "allow_extrapolation", "data-loc": "allow_extrapolation" }), " allow the optimum outside the box"),
       h("label", { className: "check" }, h("input", { type: "checkbox", name: "diagnose", checked: true, "data-loc": "diagnose" }), " diagnose a missing effect when the model misses"),
       h("label", { className: "check", title: "also after a report that passes with nothing flagged: the candidates' directed test sees a misfit spread thinly over many targets; one battery per candidate and a baseline, per confirmation seed" },
@@ -104,8 +107,9 @@ export async function campaignsPage(view, params) {
 
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
-    const body = campaignBody(form, materials.find((m) => String(m.id) === materialSelect.value), tests);
-    const made = await submitForm(form, () => api("/campaigns", { method: "POST", body }));
+    const material = materials.find((m) => String(m.id) === materialSelect.value);
+    // the body is read inside the submission, so that a list typed wrongly is shown beside its field
+    const made = await submitForm(form, () => api("/campaigns", { method: "POST", body: campaignBody(form, material, tests) }));
     if (made) location.hash = `#/campaigns/${made.id}`;
   });
   view.replaceChildren(h("h2", {}, "Campaigns"),
@@ -121,18 +125,20 @@ function campaignBody(form, material, tests) {
   const data = new FormData(form);
   const all = (name) => data.getAll(name).map(String);
   const num = (v) => (v === "" || v === null ? null : Number(v));
-  const factors = all("factor_name").map((name, i) => ({ name, low: num(all("factor_low")[i]), high: num(all("factor_high")[i]),
-    log: data.get(`factor_log_${i}`) === "on" })).filter((f) => f.name);
+  // real numbers by the page's one rule (numbers.js: "0,5" is 0.5), a refusal placed at `loc`
+  const real = (v, loc) => readNumber(v, loc);
+  const factors = all("factor_name").map((name, i) => ({ name, low: real(all("factor_low")[i], `factors.${i}.low`),
+    high: real(all("factor_high")[i], `factors.${i}.high`), log: data.get(`factor_log_${i}`) === "on" })).filter((f) => f.name);
   const fixed = {};
-  all("fixed_name").forEach((name, i) => { if (name) fixed[name] = num(all("fixed_value")[i]); });
+  all("fixed_name").forEach((name, i) => { if (name) fixed[name] = real(all("fixed_value")[i], `fixed_parameters.value.${i}`); });
   const effects = pickedEffects(form);
   if (Object.keys(effects).length) fixed.effects = effects;
-  const priors = all("prior_parameter").map((parameter, i) => ({ parameter, value: num(all("prior_value")[i]),
-    uncertainty: num(all("prior_uncertainty")[i]), source: all("prior_source")[i] })).filter((p) => p.parameter);
+  const priors = all("prior_parameter").map((parameter, i) => ({ parameter, value: real(all("prior_value")[i], `priors.${i}.value`),
+    uncertainty: real(all("prior_uncertainty")[i], `priors.${i}.uncertainty`), source: all("prior_source")[i] })).filter((p) => p.parameter);
   const generators = String(data.get("generators") || "").split(",").map((g) => g.trim()).filter(Boolean);
   const options = batteryOptions(tests, data);
-  const dst = String(data.get("dst_kpa") || "").trim();
-  if (dst) options.dst_normal_stresses_pa = dst.split(",").map((v) => Number(v) * 1000);
+  const dst = readNumberList(data.get("dst_kpa"), "options.dst_normal_stresses_pa");
+  if (dst.length) options.dst_normal_stresses_pa = dst.map((kpa) => kpa * 1000);
   const ticked = all("target").map(Number);
   const targets = material && ticked.length
     ? ticked.map((i) => material.measurements[i]).map((m) => ({ test: m.test, quantity: m.quantity, condition: m.condition || {} }))
@@ -143,7 +149,7 @@ function campaignBody(form, material, tests) {
     factors, targets, fixed_parameters: fixed, options, priors,
     design: { type: data.get("design_type"), centre_runs: num(data.get("centre_runs")), replicates: num(data.get("replicates")),
       ...(generators.length ? { generators } : {}) },
-    default_relative_uncertainty: num(data.get("default_relative_uncertainty")),
+    default_relative_uncertainty: real(data.get("default_relative_uncertainty"), "default_relative_uncertainty"),
     allow_extrapolation: data.get("allow_extrapolation") === "on", diagnose: data.get("diagnose") === "on",
     diagnose_always: data.get("diagnose_always") === "on",
     automatic: data.get("automatic") === "on", max_iterations: num(data.get("max_iterations")),

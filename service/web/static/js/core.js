@@ -80,6 +80,10 @@ export function formValues(form) {
 // data-loc="factors.0.low" (the error's loc without "body"); an error is shown at the input whose
 // data-loc is the longest prefix of its loc, or at the form's top when none matches (a rule across
 // fields names them in its message). Returns how many were placed beside a field.
+// The message goes inside the field's label, under its input: placed after the label (as before
+// issue 31) it was the next item of the inline row and wrapped to the start of the next line, so
+// friction_pp's error was drawn under particle_density_kg_m3. A row-level input (the row itself,
+// e.g. low >= high) has no label: its message follows the row.
 export function showFieldErrors(form, error) {
   clearFieldErrors(form);
   const fields = [...form.querySelectorAll("[data-loc]")];
@@ -96,8 +100,9 @@ export function showFieldErrors(form, error) {
     if (best) {
       best.classList.add("invalid");
       best.setAttribute("aria-invalid", "true");
-      const holder = best.closest("label") || best;
-      holder.after(h("span", { className: "field-error", role: "alert" }, text));
+      const message = h("span", { className: "field-error", role: "alert" }, text);
+      const label = best.closest("label");
+      if (label && form.contains(label)) label.append(message); else best.after(message);
       placed += 1;
     } else {
       general.push(`${loc.join(".") || "request"}: ${text}`);
@@ -115,7 +120,22 @@ export function clearFieldErrors(form) {
   if (top) top.replaceChildren();
 }
 
-// Submit a form's request; a 422 goes beside the fields, anything else to the flash line.
+// Bring the first field in error (in the page's order) into view and give it the focus, so that
+// a refusal is seen where it happened even when the button is far below it (the long campaign
+// form); with no field to point at, the form's own error box. A row-level error focuses the
+// row's first input.
+export function revealFirstError(form) {
+  const marked = form.querySelector(".invalid");
+  const target = marked && !marked.matches("input, select, textarea, button")
+    ? marked.querySelector("input, select, textarea") || marked : marked;
+  const box = target || form.querySelector(".form-errors:not(:empty)");
+  if (!box) return;
+  box.scrollIntoView({ block: "center" });
+  if (box === target) box.focus({ preventScroll: true });
+}
+
+// Submit a form's request; a 422 goes beside the fields (the first one brought into view),
+// anything else to the flash line.
 export async function submitForm(form, action) {
   clearFieldErrors(form);
   try {
@@ -126,6 +146,7 @@ export async function submitForm(form, action) {
     if (error instanceof ApiError && error.status === 422) {
       showFieldErrors(form, error);
       flash("Some fields need attention (marked below).", "error");
+      revealFirstError(form);
     } else {
       flash(error.message, "error");
     }

@@ -2,6 +2,7 @@
 // of GET /api/v1/effects with its parameters (units and bounds in the tooltip). The chosen effects
 // become parameters.effects = {name: {parameter: value}} (jobs) or fixed_parameters.effects (campaigns).
 import { api, h } from "./core.js";
+import { numberInput, readNumber } from "./numbers.js";
 
 let catalogueCache = null;
 export async function catalogue() {
@@ -22,20 +23,19 @@ export function effectPicker(effects, locPrefix) {
         h("input", { type: "checkbox", name: "effect", value: e.name, "data-loc": `${locPrefix}.${e.name}` }),
         ` ${e.candidate?.title || e.name} `, h("code", {}, e.name)),
       e.parameters.map((p) => h("label", { title: `${p.description}${bounds(p)}` }, p.name,
-        h("input", { name: `effect:${e.name}:${p.name}`, type: "number", step: "any", value: p.default ?? "",
-          "data-loc": `${locPrefix}.${e.name}.${p.name}` }))))));
+        numberInput({ name: `effect:${e.name}:${p.name}`, value: p.default ?? "", "data-loc": `${locPrefix}.${e.name}.${p.name}` }))))));
 }
 
 // {name: {parameter: value}} for the ticked effects; empty inputs are left to the effect's defaults.
+// Numbers are read by the page's one rule (numbers.js); a refusal names the box (its data-loc).
 export function pickedEffects(form) {
-  const data = new FormData(form);
-  const out = {};
-  for (const name of data.getAll("effect")) {
-    out[name] = {};
-    for (const [key, raw] of data.entries()) {
-      const [tag, effect, param] = key.split(":");
-      if (tag === "effect" && effect === name && raw !== "") out[name][param] = Number(raw);
-    }
+  const ticked = new FormData(form).getAll("effect");
+  const out = Object.fromEntries(ticked.map((name) => [name, {}]));
+  for (const input of form.querySelectorAll("input[name^='effect:']")) {
+    const [, effect, param] = input.name.split(":");
+    if (!(effect in out)) continue;
+    const value = readNumber(input.value, input.dataset.loc);
+    if (value !== null) out[effect][param] = value;
   }
   return out;
 }

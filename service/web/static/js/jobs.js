@@ -6,11 +6,12 @@ import { evaluatorSelect, evaluators } from "./evaluators.js";
 import { curveViews } from "./jobcurves.js";
 import { batteryChecks, batteryOptions, labTests, testSelect } from "./labtests.js";
 import { refresh } from "./live.js";
+import { numberInput, numberListField, readNumber, readNumberList } from "./numbers.js";
 
 function numberField(name, prop, loc) {
   const value = prop.default ?? "";
   return h("label", { title: prop.description || "" }, name,
-    h("input", { name, type: "number", step: "any", value, "data-loc": loc }));
+    numberInput({ name, value, "data-loc": loc }));
 }
 
 const isNumber = (p) => p.type === "number" || p.type === "integer" || (p.anyOf || []).some((a) => a.type === "number" || a.type === "integer");
@@ -33,25 +34,27 @@ export async function submitPage(view) {
     effectPicker(effects.effects, "parameters.effects"),
     h("h3", {}, "Options"),
     h("div", {},
-      h("label", {}, "DST normal stresses (kPa, comma-separated)", h("input", { name: "dst_kpa", placeholder: "fidelity default", "data-loc": "options.dst_normal_stresses_pa" })),
+      numberListField("DST normal stresses (kPa)", "dst_kpa", "options.dst_normal_stresses_pa", "fidelity default"),
       batteryChecks(tests, (option) => `options.${option}`)),
     h("p", {}, h("button", { type: "submit" }, "Queue job")));
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
     const data = new FormData(form);
-    const parameters = {};
-    for (const [name] of numeric) {
-      const raw = data.get(name);
-      if (raw !== null && raw !== "") parameters[name] = Number(raw);
-    }
-    const effectsPicked = pickedEffects(form);
-    if (Object.keys(effectsPicked).length) parameters.effects = effectsPicked;
     const options = batteryOptions(tests, data);
-    const dst = String(data.get("dst_kpa") || "").trim();
-    if (dst) options.dst_normal_stresses_pa = dst.split(",").map((v) => Number(v) * 1000);
-    const body = { test: data.get("test"), fidelity: data.get("fidelity"), evaluator: data.get("evaluator"),
-      seed: Number(data.get("seed")), priority: Number(data.get("priority")), parameters, options };
-    const job = await submitForm(form, () => api("/jobs", { method: "POST", body }));
+    const body = () => {  // inside the submission, so that a number typed wrongly is shown beside its field
+      const parameters = {};
+      for (const [name] of numeric) {
+        const value = readNumber(data.get(name), `parameters.${name}`);
+        if (value !== null) parameters[name] = value;
+      }
+      const effectsPicked = pickedEffects(form);
+      if (Object.keys(effectsPicked).length) parameters.effects = effectsPicked;
+      const dst = readNumberList(data.get("dst_kpa"), "options.dst_normal_stresses_pa");
+      if (dst.length) options.dst_normal_stresses_pa = dst.map((kpa) => kpa * 1000);
+      return { test: data.get("test"), fidelity: data.get("fidelity"), evaluator: data.get("evaluator"),
+        seed: Number(data.get("seed")), priority: Number(data.get("priority")), parameters, options };
+    };
+    const job = await submitForm(form, () => api("/jobs", { method: "POST", body: body() }));
     if (job) location.hash = `#/jobs/${job.id}`;
   });
   view.replaceChildren(form);
@@ -64,15 +67,33 @@ function progress(job) {
     ` ${pct}% ${job.progress?.phase || ""}`);
 }
 
+// Which jobs the list shows by where they came from (GET /jobs?origin=): the jobs submitted here by
+// default, since campaigns queue their batteries by the hundred; a campaign's "its jobs" link
+// (campaign_id) shows that campaign's.
+const ORIGINS = [["direct", "submitted directly"], ["campaign", "campaign batteries"], ["all", "all"]];
+
 export async function jobsPage(view, params) {
   const filter = params.get("status") || "";
-  const query = new URLSearchParams({ limit: "100" });
+  const campaign = params.get("campaign_id") || "";
+  const origin = params.get("origin") || (campaign ? "all" : "direct");
+  const query = new URLSearchParams({ limit: "100", origin });
   if (filter) query.set("status", filter);
-  if (params.get("campaign_id")) query.set("campaign_id", params.get("campaign_id"));
+  if (campaign) query.set("campaign_id", campaign);
   const [list, defs] = await Promise.all([api(`/jobs?${query}`), schemas()]);
-  const select = h("select", { onchange: (e) => { location.hash = `#/jobs${e.target.value ? "?status=" + e.target.value : ""}`; } },
+  // the page's own address keeps the filters, so a refresh or a shared link shows the same list
+  const go = (changed) => {
+    const next = new URLSearchParams({ ...Object.fromEntries(params), ...changed });
+    for (const [key, value] of [...next]) if (!value) next.delete(key);
+    location.hash = `#/jobs${next.size ? "?" + next : ""}`;
+  };
+  const select = h("select", { name: "status", onchange: (e) => go({ status: e.target.value }) },
     ["", ...defs.JobStatus.enum].map((s) => h("option", { value: s, selected: s === filter }, s || "all")));
-  view.replaceChildren(h("h2", {}, `Jobs (${list.total})`), h("p", {}, "Status ", select, " ", h("a", { href: "#/submit" }, "submit a job")),
+  const originSelect = h("select", { name: "origin", onchange: (e) => go({ origin: e.target.value }) },
+    ORIGINS.map(([value, text]) => h("option", { value, selected: value === origin }, text)));
+  view.replaceChildren(h("h2", {}, `Jobs (${list.total})`),
+    h("p", { className: "filters" }, h("label", {}, "Status ", select), " ", h("label", {}, "Origin ", originSelect), " ",
+      campaign ? [h("span", { className: "muted" }, `campaign #${campaign} `), h("a", { href: "#/jobs?origin=all" }, "every job"), " · "] : "",
+      h("a", { href: "#/submit" }, "submit a job")),
     h("div", { className: "scroll" }, table(["Id", "Test", "Evaluator", "Fidelity", "Seed", "Status", "Progress", "Campaign", "Created"],
       list.items.map((j) => [h("a", { href: `#/jobs/${j.id}` }, `#${j.id}`), j.test, j.evaluator, j.fidelity, String(j.seed),
         status(j.status), progress(j), j.campaign_id ? h("a", { href: `#/campaigns/${j.campaign_id}` }, `#${j.campaign_id}`) : "–",

@@ -1,6 +1,8 @@
 // Materials: list, measurements (SI, with replicates and uncertainty), adding measurements in any accepted unit.
-import { api, attempt, condition, h, table } from "./core.js";
+import { api, attempt, condition, flash, fmt, h, submitForm, table } from "./core.js";
+import { nameAndUnit } from "./labels.js";
 import { refresh } from "./live.js";
+import { numberInput, numberListField, readNumber, readNumberList } from "./numbers.js";
 
 export async function materialsPage(view) {
   const materials = await api("/materials");
@@ -36,25 +38,33 @@ export async function materialPage(view, id) {
   testSelect.addEventListener("change", fillQuantities);
   quantitySelect.addEventListener("change", fillUnits);
   fillQuantities();
-  const form = h("form", { className: "card" }, h("h3", {}, "Add a measurement"),
+  testSelect.dataset.loc = "test"; quantitySelect.dataset.loc = "quantity"; unitSelect.dataset.loc = "unit";
+  const form = h("form", { className: "card", id: "add-measurement", novalidate: true }, h("h3", {}, "Add a measurement"),
+    h("div", { className: "form-errors" }),
     h("label", {}, "Test", testSelect), h("label", {}, "Quantity", quantitySelect), h("label", {}, "Unit", unitSelect),
-    h("label", {}, "Replicate values (comma-separated)", h("input", { name: "values", required: true, placeholder: "1412.0, 1383.6, 1397.8" })),
-    h("label", {}, "Condition name", h("input", { name: "cond_name", placeholder: "normal_stress_pa" })),
-    h("label", {}, "Condition value", h("input", { name: "cond_value", type: "number", step: "any" })),
-    h("label", {}, "Condition unit", h("input", { name: "cond_unit", placeholder: "kPa" })),
-    h("label", {}, "Source", h("input", { name: "source" })),
+    numberListField("Replicate values", "values", "values", "1412.0; 1383.6; 1397.8"),
+    h("label", {}, "Condition name", h("input", { name: "cond_name", placeholder: "normal_stress_pa", "data-loc": "condition" })),
+    h("label", {}, "Condition value", numberInput({ name: "cond_value", "data-loc": "condition" })),
+    h("label", {}, "Condition unit", h("input", { name: "cond_unit", placeholder: "kPa", "data-loc": "condition_units" })),
+    h("label", {}, "Source", h("input", { name: "source", "data-loc": "source" })),
     h("button", { type: "submit" }, "Add"));
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
     const data = new FormData(form);
-    const body = { test: data.get("test"), quantity: data.get("quantity"), unit: data.get("unit"), source: data.get("source"),
-      values: String(data.get("values")).split(",").map((v) => v.trim()).filter(Boolean).map(Number) };
-    const name = String(data.get("cond_name") || "").trim();
-    if (name) {
-      body.condition = { [name]: Number(data.get("cond_value")) };
-      if (data.get("cond_unit")) body.condition_units = { [name]: data.get("cond_unit") };
+    const body = () => {  // inside the submission: a list typed wrongly is shown beside its field
+      const out = { test: data.get("test"), quantity: data.get("quantity"), unit: data.get("unit"), source: data.get("source"),
+        values: readNumberList(data.get("values"), "values") };
+      const name = String(data.get("cond_name") || "").trim();
+      if (name) {
+        out.condition = { [name]: readNumber(data.get("cond_value"), "condition") };
+        if (data.get("cond_unit")) out.condition_units = { [name]: data.get("cond_unit") };
+      }
+      return out;
+    };
+    if (await submitForm(form, () => api(`/materials/${id}/measurements`, { method: "POST", body: body() }))) {
+      flash("measurement added", "ok");
+      refresh();
     }
-    if (await attempt(() => api(`/materials/${id}/measurements`, { method: "POST", body }), "measurement added")) refresh();
   });
   view.replaceChildren(h("h2", {}, material.name), h("p", { className: "muted" }, material.description),
     h("p", { className: "muted" }, material.source),
@@ -67,10 +77,24 @@ export async function materialPage(view, id) {
           if (!window.confirm(`Delete the ${m.test} ${m.quantity} measurement (${m.n} values)?`)) return;
           if (await attempt(() => api(`/materials/${id}/measurements/${m.id}`, { method: "DELETE" }), "deleted")) refresh();
         } }, "Delete")])),
-    Object.keys(material.direct_estimates || {}).length ? h("div", {}, h("h3", {}, "Direct estimates"),
-      h("pre", {}, JSON.stringify(material.direct_estimates, null, 1))) : "",
+    Object.keys(material.direct_estimates || {}).length ? h("div", { className: "direct-estimates" }, h("h3", {}, "Direct estimates"),
+      estimatesTable(material.direct_estimates)) : "",
     material.bundled ? readOnlyNote(view, material) : form,
     h("p", {}, h("a", { href: `#/campaigns?material=${id}` }, "Calibrate this material →")));
+}
+
+// The material's direct estimates (measured directly, not calibrated): one row each, named for
+// people, with its unit and source. An entry is a number, a list (the loads a test was run at), a
+// {value, source} record, or a table of named values (friction against each wall material).
+function estimatesTable(estimates) {
+  const values = (v) => (Array.isArray(v) ? v.map((x) => fmt(x)).join(", ")
+    : v && typeof v === "object" ? Object.entries(v).map(([k, x]) => `${k} ${fmt(x)}`).join("; ") : fmt(v));
+  return h("div", { className: "scroll" }, table(["Estimate", "Value", "Unit", "Source"],
+    Object.entries(estimates).map(([name, entry]) => {
+      const record = entry && typeof entry === "object" && !Array.isArray(entry) && "value" in entry;
+      const { label, unit } = nameAndUnit(name);
+      return [label, values(record ? entry.value : entry), unit || "–", record ? entry.source || "–" : "–"];
+    })));
 }
 
 // The bundled reference material is read-only (the API answers 409): offer a copy to edit instead.

@@ -22,6 +22,28 @@ export function axis(name, extra = {}) {
     axisLabel: { formatter: (v) => fmt(v, 3), hideOverlap: true }, splitLine: { lineStyle: { color: "#eaecf0" } }, ...extra };
 }
 
+// The width in pixels of the widest of these texts in the charts' font: a margin that fits the
+// labels exactly instead of truncating them ("rolling resistance (rolling_eps...").
+let measurer = null;
+export function textWidth(texts, fontSize = 11) {
+  measurer = measurer || document.createElement("canvas").getContext("2d");
+  measurer.font = `${fontSize}px ${BASE.textStyle.fontFamily}`;
+  return Math.ceil(Math.max(0, ...texts.map((t) => measurer.measureText(String(t)).width)));
+}
+
+// An axis range that starts and ends on round ticks: [lo, hi] widened to multiples of a 1-2-5
+// step giving about `ticks` intervals. Ends at arbitrary values (0.862 beside the tick 0.87)
+// printed labels that overlapped their neighbours. Returns { min, max, interval } for axis().
+export function roundRange(lo, hi, ticks = 5) {
+  if (!Number.isFinite(lo) || !Number.isFinite(hi)) return {};
+  if (hi <= lo) { const pad = Math.abs(lo) * 0.05 || 0.05; lo -= pad; hi += pad; }
+  const raw = (hi - lo) / ticks, power = 10 ** Math.floor(Math.log10(raw));
+  const step = [1, 2, 2.5, 5, 10].map((m) => m * power).find((st) => st >= raw);
+  // rounded through toPrecision, so that 0.1 * 9 is the tick 0.9, not 0.9000000000000001
+  const snap = (v) => Number(v.toPrecision(12));
+  return { min: snap(Math.floor(lo / step) * step), max: snap(Math.ceil(hi / step) * step), interval: snap(step) };
+}
+
 export function chart(option, { height = 280, label = "" } = {}) {
   const box = h("div", { className: "chart", style: `height:${height}px`, role: "img", "aria-label": label || option.title?.text || "chart" });
   requestAnimationFrame(() => {
