@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+from calibration.awaiting import awaited
 from calibration.evaluator_registry import names as evaluator_names
 from calibration.vocabulary import Phase
 from service.cli_http import CliError, bar, watch, watch_options
@@ -19,8 +20,7 @@ from service.cli_http import leaf as _leaf
 from service.cli_http import pairs as _pairs
 from service.cli_http import read_json as _read_json
 from service.cli_http import table as _table
-from service.materials.replicates import ReplicateError, parse_replicates
-from service.vocabulary import CampaignStatus
+from service.vocabulary import CampaignStatus, RunStatus
 
 
 
@@ -42,6 +42,8 @@ def material_show(args) -> int:
 
 
 def material_add(args) -> int:
+    from service.materials.replicates import ReplicateError, parse_replicates  # the package imports the store
+
     try:
         values = parse_replicates(args.values, "--values")
     except ReplicateError as exc:
@@ -120,15 +122,13 @@ def campaign_create(args) -> int:
 
 
 # What each phase that waits for batteries waits for, by name; the count is the phase's own
-# (calibration.machine.awaited), known when the phase starts, so it does not grow as phases are added.
+# (calibration.awaiting.awaited, the loop's rule), known when the phase starts, so it does not grow as phases are added.
 PHASE_RUNS = {Phase.BATTERIES: "design runs", Phase.CONFIRMATION: "confirmation seeds",
               Phase.POLISH: "polish round", Phase.DIAGNOSIS: "diagnosis batteries"}
 
 
 def _phase_progress(args, c: dict) -> str:
     """``design runs [#####.....] 5/11`` for a running campaign's current phase, else what it is doing."""
-    from calibration.machine import awaited
-    from service.vocabulary import RunStatus
 
     if c["status"] != CampaignStatus.RUNNING:
         return f"phase {c['phase'] or '-'}, runs {c['runs_succeeded']}/{c['runs_total']}"

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 
 import pytest
 
@@ -19,8 +20,7 @@ THREE = ("--factor", "particle_density_kg_m3:2300:2700", "--factor", "particle_s
 
 def _create(capsys, url, *extra) -> int:
     code, out, err = run(capsys, "campaign", "create", "--url", url, "--name", f"c{len(extra)}", "--material", "1",
-                         "--evaluator", "analytic", "--fidelity", "thesis", *THREE, "--centre-runs", "3",
-                         "--polish-steps", "0", *extra, "-q")
+                         "--evaluator", "analytic", "--fidelity", "thesis", *THREE, "--centre-runs", "3", *extra, "-q")
     assert code == 0, err
     return int(out)  # -q: the id alone
 
@@ -45,16 +45,21 @@ def test_status_shows_each_phase_s_own_runs_and_watch_ends_with_the_campaign(ser
     runner.tick()
     out = _status(capsys, url, cid)
     assert "phase confirmation: confirmation seeds [" in out and "] 0/2" in out  # not x/13: the phase's own
-    seen_diagnosis = False
-    for _ in range(8):
+    seen = set()
+    for _ in range(20):
         drain(app, settings)
         runner.tick()
         out = _status(capsys, url, cid)
+        if "phase polish: polish round " in out:  # a round's own runs, the round numbered
+            seen.add("polish")
+            assert re.search(r"polish round \d+ \[[#.]{24}\] 0/\d+", out), out
         if "phase diagnosis: diagnosis batteries [" in out:
-            seen_diagnosis = True
+            seen.add("diagnosis")
             code, _, err = run(capsys, "campaign", "diagnose", str(cid), "--url", url)
             assert code == 2 and "not done yet (phase diagnosis)" in err
-    assert seen_diagnosis and "completed" in out
+        if "completed" in out:
+            break
+    assert seen == {"polish", "diagnosis"} and "completed" in out
     code, out, _ = run(capsys, "campaign", "status", str(cid), "--url", url, "--watch", "--interval", "0.05")
     assert code == 0 and out.count("\n") == 1 and "completed, iteration 1, phase done" in out
 
