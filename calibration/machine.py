@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 from . import analysis, automatic, polish
-from .awaiting import awaited, runs_of  # noqa: F401  (awaited: the runner's, through machine)
+from .awaiting import awaited, round_runs, runs_of  # noqa: F401  (awaited: the runner's, through machine)
 from .design import build_design, design_view
 from .errors import LoopFailed, SettingsError
 from .records import Measured
@@ -163,7 +163,7 @@ def _polish(ctx: Context, it) -> Transition:
                                      [r.seed for r in confirmations])
         return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
                           _polish_runs(state, points))
-    state, points = polish.advance(s, design, modelled, state, polish.round_runs(it, state), s.polish_steps)
+    state, points = polish.advance(s, design, modelled, state, round_runs(it, state), s.polish_steps)
     if points:
         return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
                           _polish_runs(state, points))

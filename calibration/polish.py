@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from calibration import calibrate as cal
-from calibration.awaiting import ROUND, round_runs  # noqa: F401  (round_runs: the machine's, through polish)
+from calibration.awaiting import ROUND
 from calibration.vocabulary import PolishStage, RunKind
 
 CODED_STEP = 0.1

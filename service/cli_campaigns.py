@@ -121,27 +121,29 @@ def campaign_create(args) -> int:
     return _emit(args, c, f"campaign {c['id']} {c['status']}")
 
 
-# What each phase that waits for batteries waits for, by name; the count is the phase's own
-# (calibration.awaiting.awaited, the loop's rule), known when the phase starts, so it does not grow as phases are added.
+# What each phase that waits for batteries waits for, by name; the count is the phase's own (the loop's
+# rule, calibration.awaiting.awaited), known when the phase starts, so it does not grow as phases are added.
 PHASE_RUNS = {Phase.BATTERIES: "design runs", Phase.CONFIRMATION: "confirmation seeds",
               Phase.POLISH: "polish round", Phase.DIAGNOSIS: "diagnosis batteries"}
 
 
 def _phase_progress(args, c: dict) -> str:
     """``design runs [#####.....] 5/11`` for a running campaign's current phase, else what it is doing."""
-
     if c["status"] != CampaignStatus.RUNNING:
         return f"phase {c['phase'] or '-'}, runs {c['runs_succeeded']}/{c['runs_total']}"
     if c["phase"] in (None, Phase.DONE):  # the runner has yet to make the (next) iteration
         return f"starting iteration {c['current_iteration'] + 1}"
-    it = _call(args, "GET", f"/campaigns/{c['id']}/iterations/{c['current_iteration']}")
+    base = f"/campaigns/{c['id']}"
+    # the polishing's state before the runs: a round's runs are stored with the state that starts it, so
+    # the runs read after it include the state's round
+    optimum = (_call(args, "GET", f"{base}/optimum", params={"number": c["current_iteration"]})
+               if c["phase"] == Phase.POLISH else None)
+    it = _call(args, "GET", f"{base}/iterations/{c['current_iteration']}")
     phase = it["phase"]  # the iteration's own, read with its runs
-    if phase not in PHASE_RUNS:
-        return f"phase {phase}" + ("" if phase == Phase.DONE else " (computing)")
-    optimum = (_call(args, "GET", f"/campaigns/{c['id']}/optimum", params={"number": it["number"]})
-               if phase == Phase.POLISH else None)
     view = SimpleNamespace(phase=phase, optimum=optimum, runs=[SimpleNamespace(**r) for r in it["runs"]])
-    runs = awaited(view)
+    runs = awaited(view) if phase in PHASE_RUNS else []
+    if not runs:  # a computation, or a phase changing between the reads
+        return f"phase {phase}" + ("" if phase == Phase.DONE else " (computing)")
     done = sum(r.status == RunStatus.SUCCEEDED for r in runs)
     failed = sum(r.status in (RunStatus.FAILED, RunStatus.CANCELLED) for r in runs)
     label = PHASE_RUNS[Phase(phase)]

@@ -8,11 +8,11 @@ import json
 import re
 
 import pytest
-
 from conftest_s2 import drain
+from test_campaign_cli import run, server  # noqa: F401  (the live-server fixture)
+
 from service.campaigns.runner import CampaignRunner
 from service.cli_http import CliError, service_url
-from test_campaign_cli import run, server  # noqa: F401  (the live-server fixture)
 
 THREE = ("--factor", "particle_density_kg_m3:2300:2700", "--factor", "particle_stiffness_n_per_m:1e6:3e6",
          "--factor", "friction_pp:0.3:1.0")
