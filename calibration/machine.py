@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 from . import analysis, automatic, polish
+from .awaiting import awaited, round_runs, runs_of  # noqa: F401  (awaited: the runner's, through machine)
 from .design import build_design, design_view
 from .errors import LoopFailed, SettingsError
 from .records import Measured
@@ -87,10 +88,6 @@ def records(runs) -> list[list[dict]]:
     return [list((r.responses or {}).values()) for r in runs]
 
 
-def runs_of(it, kind: RunKind) -> list:
-    return [r for r in it.runs if r.kind == kind]
-
-
 def iteration_parameters(settings: LoopSettings, evaluator: str | None = None) -> dict[str, Any]:
     """What a new iteration records of the settings it runs with (its factors, fixed parameters with
     the active effects apart, options), so the history can show each iteration's model."""
@@ -99,22 +96,6 @@ def iteration_parameters(settings: LoopSettings, evaluator: str | None = None) -
             "fixed": {k: v for k, v in fixed.items() if k != "effects"},
             "effects": fixed.get("effects", {}), "options": dict(settings.options),
             "evaluator": evaluator, "fidelity": settings.fidelity}
-
-
-def awaited(it) -> list:
-    """The runs the iteration's phase waits for (all must have succeeded before ``step``)."""
-    phase = Phase(it.phase)
-    if phase == Phase.BATTERIES:
-        return runs_of(it, RunKind.DESIGN)
-    if phase == Phase.CONFIRMATION:
-        return runs_of(it, RunKind.CONFIRMATION)
-    if phase == Phase.DIAGNOSIS:
-        return runs_of(it, RunKind.DIAGNOSIS)
-    if phase == Phase.POLISH:
-        state = (it.optimum or {}).get("polish")
-        if state and state["stage"] != PolishStage.DONE:
-            return polish.round_runs(it, state)
-    return []
 
 
 def step(ctx: Context, it) -> Transition | None:
@@ -182,7 +163,7 @@ def _polish(ctx: Context, it) -> Transition:
                                      [r.seed for r in confirmations])
         return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
                           _polish_runs(state, points))
-    state, points = polish.advance(s, design, modelled, state, polish.round_runs(it, state), s.polish_steps)
+    state, points = polish.advance(s, design, modelled, state, round_runs(it, state), s.polish_steps)
     if points:
         return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
                           _polish_runs(state, points))

@@ -24,12 +24,12 @@ from typing import Any
 import numpy as np
 
 from calibration import calibrate as cal
+from calibration.awaiting import ROUND
 from calibration.vocabulary import PolishStage, RunKind
 
 CODED_STEP = 0.1
 SHRINKS = (1.0, 0.5, 0.25)
 MIN_STEP = 1e-3
-ROUND = 1000  # std_order of a polish run = round x ROUND + index + 1
 
 
 def _residuals(config, design, modelled, theta: dict, records: list[list[dict]], seeds: list[int]):
@@ -139,12 +139,6 @@ def _done(state: dict) -> dict:
     state = dict(state)
     state.update(stage=PolishStage.DONE.value)
     return state
-
-
-def round_runs(it, state: dict) -> list:
-    """The runs of the state's current round, in std_order (each point's runs at every seed in turn)."""
-    return sorted((r for r in it.runs if r.kind == RunKind.POLISH and r.std_order // ROUND == state["round"]),
-                  key=lambda r: r.std_order)
 
 
 def final_runs(it) -> list:

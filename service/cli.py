@@ -11,7 +11,6 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from service.config import settings_from_env
-from service.security import check_bind
 
 # Each provides register(subparsers): demcal doe ..., demcal run SPEC, demcal material/campaign/schedule ...
 PLUGINS = ("doe.cli", "engine.lab.cli", "service.cli_jobs", "service.cli_campaigns")
@@ -40,6 +39,8 @@ def _logging() -> None:
 def cmd_serve(args: argparse.Namespace) -> int:
     settings = _settings(args, host=args.host, port=args.port, workers=args.workers,
                          dask_scheduler=args.dask_scheduler)
+    from service.security import check_bind  # imports FastAPI: only serve pays for it, not every client command
+
     check_bind(settings)  # before the heavy imports: refuse a non-loopback host without a token
     from service.storage import StorageError, check_storage
 

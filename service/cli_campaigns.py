@@ -1,14 +1,18 @@
 """``demcal material|campaign|schedule ...``: every calibration action, scripted through the HTTP API.
 
-The commands talk to a running service (``--url``, default $DEMCAL_URL or
-http://127.0.0.1:8000) with httpx, so they work against a remote service as
+The commands talk to a running service (``--url``, else $DEMCAL_URL, else $DEMCAL_HOST/$DEMCAL_PORT:
+service.cli_http.service_url) with httpx, so they work against a remote service as
 well as a local one. Any error (HTTP 4xx/5xx, no server, bad input file) is a
 one-line message on stderr and exit status 2, never a traceback.
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
+from calibration.awaiting import awaited
 from calibration.evaluator_registry import names as evaluator_names
-from service.cli_http import CliError
+from calibration.vocabulary import Phase
+from service.cli_http import CliError, bar, watch, watch_options
 from service.cli_http import call as _call
 from service.cli_http import emit as _emit
 from service.cli_http import fmt as _fmt
@@ -16,7 +20,7 @@ from service.cli_http import leaf as _leaf
 from service.cli_http import pairs as _pairs
 from service.cli_http import read_json as _read_json
 from service.cli_http import table as _table
-from service.vocabulary import CampaignStatus
+from service.vocabulary import CampaignStatus, RunStatus
 
 
 
@@ -38,17 +42,21 @@ def material_show(args) -> int:
 
 
 def material_add(args) -> int:
+    from service.materials.replicates import ReplicateError, parse_replicates  # the package imports the store
+
     try:
-        values = [float(v) for v in args.values.split(",")]
-    except ValueError as exc:
-        raise CliError(f"--values: {exc}") from exc
+        values = parse_replicates(args.values, "--values")
+    except ReplicateError as exc:
+        raise CliError(str(exc)) from exc
     body = {"test": args.test, "quantity": args.quantity, "values": values, "source": args.source or "",
             "condition": _pairs(args.condition, "--condition"), "condition_units": _pairs(args.condition_unit,
                                                                                              "--condition-unit", str)}
     if args.unit:
         body["unit"] = args.unit
     m = _call(args, "POST", f"/materials/{args.id}/measurements", body)
-    return _emit(args, m, f"measurement {m['id']}: {m['test']}/{m['quantity']} mean {_fmt(m['mean'])} {m['unit']}")
+    # the count shows how the list was read (a decimal comma is one value, not two)
+    return _emit(args, m, f"measurement {m['id']}: {m['test']}/{m['quantity']}, {len(values)} replicate(s), "
+                          f"mean {_fmt(m['mean'])} {m['unit']}")
 
 
 def material_create(args) -> int:
@@ -113,9 +121,40 @@ def campaign_create(args) -> int:
     return _emit(args, c, f"campaign {c['id']} {c['status']}")
 
 
-def _status_text(c: dict) -> str:
-    text = (f"campaign {c['id']} {c['name']!r}: {c['status']}, iteration {c['current_iteration']}, "
-            f"phase {c['phase'] or '-'}, runs {c['runs_succeeded']}/{c['runs_total']}")
+# What each phase that waits for batteries waits for, by name; the count is the phase's own (the loop's
+# rule, calibration.awaiting.awaited), known when the phase starts, so it does not grow as phases are added.
+PHASE_RUNS = {Phase.BATTERIES: "design runs", Phase.CONFIRMATION: "confirmation seeds",
+              Phase.POLISH: "polish round", Phase.DIAGNOSIS: "diagnosis batteries"}
+
+
+def _phase_progress(args, c: dict) -> str:
+    """``design runs [#####.....] 5/11`` for a running campaign's current phase, else what it is doing."""
+    if c["status"] != CampaignStatus.RUNNING:
+        return f"phase {c['phase'] or '-'}, runs {c['runs_succeeded']}/{c['runs_total']}"
+    if c["phase"] in (None, Phase.DONE):  # the runner has yet to make the (next) iteration
+        return f"starting iteration {c['current_iteration'] + 1}"
+    base = f"/campaigns/{c['id']}"
+    # the polishing's state before the runs: a round's runs are stored with the state that starts it, so
+    # the runs read after it include the state's round
+    optimum = (_call(args, "GET", f"{base}/optimum", params={"number": c["current_iteration"]})
+               if c["phase"] == Phase.POLISH else None)
+    it = _call(args, "GET", f"{base}/iterations/{c['current_iteration']}")
+    phase = it["phase"]  # the iteration's own, read with its runs
+    view = SimpleNamespace(phase=phase, optimum=optimum, runs=[SimpleNamespace(**r) for r in it["runs"]])
+    runs = awaited(view) if phase in PHASE_RUNS else []
+    if not runs:  # a computation, or a phase changing between the reads
+        return f"phase {phase}" + ("" if phase == Phase.DONE else " (computing)")
+    done = sum(r.status == RunStatus.SUCCEEDED for r in runs)
+    failed = sum(r.status in (RunStatus.FAILED, RunStatus.CANCELLED) for r in runs)
+    label = PHASE_RUNS[Phase(phase)]
+    if phase == Phase.POLISH:
+        label += f" {((optimum or {}).get('polish') or {}).get('round', '')}".rstrip()
+    return f"phase {phase}: {label} {bar(done, len(runs))}" + (f", {failed} failed" if failed else "")
+
+
+def _status_text(c: dict, progress: str | None = None) -> str:
+    progress = progress or f"phase {c['phase'] or '-'}, runs {c['runs_succeeded']}/{c['runs_total']}"
+    text = f"campaign {c['id']} {c['name']!r}: {c['status']}, iteration {c['current_iteration']}, {progress}"
     if c.get("stop_reason"):
         text += f"\nautomatic mode stopped: {c['stop_reason']}"
     return text + (f"\nerror: {c['error']}" if c.get("error") else "")
@@ -129,17 +168,47 @@ def campaign_list(args) -> int:
 
 
 def campaign_action(args) -> int:
-    method = "GET" if args.action == "status" else "POST"
-    path = f"/campaigns/{args.id}" + ("" if args.action == "status" else f"/{args.action}")
-    c = _call(args, method, path)
+    c = _call(args, "POST", f"/campaigns/{args.id}/{args.action}")
     return _emit(args, c, _status_text(c))
+
+
+def campaign_status(args) -> int:
+    """A campaign's state with its phase's progress; --watch follows it until it stops running (exit
+    status 0 when it completed, 1 when it failed or was paused)."""
+    def fetch() -> dict:
+        return _call(args, "GET", f"/campaigns/{args.id}")
+
+    def render(c: dict) -> str:
+        return _status_text(c, _phase_progress(args, c))
+
+    if not args.watch:
+        c = fetch()
+        return _emit(args, c, render(c))
+    if args.json:
+        raise CliError("--watch draws progress for people; poll without it for --json")
+    c = watch(args, fetch, render, lambda c: c["status"] != CampaignStatus.RUNNING)
+    return 0 if c["status"] == CampaignStatus.COMPLETED else 1
+
+
+def _strength(row: dict) -> str:
+    """The estimated strength in its unit (the candidate's, as GET /effects gives it), or a switch-type
+    effect's share of its full switch. A negative estimate is no strength: the misfit points the other
+    way from what the effect does, so the table says that instead of printing a negative energy."""
+    if row["strength"] is not None:
+        value, unit = row["strength"], row.get("unit")
+        text = _fmt(float(value)) + ("" if unit in (None, "", "1") else f" {unit}")
+    elif row.get("fraction_of_switch") is not None:
+        value = row["fraction_of_switch"]
+        text = f"{100 * value:.3g} % of the switch"
+    else:
+        return "-"
+    return "none (opposite sign)" if value < 0 else text
 
 
 def campaign_diagnosis(args) -> int:
     params = {"number": args.iteration} if args.iteration else None
     d = _call(args, "GET", f"/campaigns/{args.id}/diagnosis", params=params)
-    rows = [[r["effect"], r["title"], r["lm"], r["p_holm"], r["explained"],
-             r["strength"] if r["strength"] is not None else r.get("fraction_of_switch"),
+    rows = [[r["effect"], r["title"], r["lm"], r["p_holm"], r["explained"], _strength(r),
              "yes" if r["plausible"] else "no", r["alias_group"] or ""] for r in d["ranking"]]
     text = (f"campaign {d['campaign_id']} iteration {d['iteration']}: {d['verdict']}\n{d['message']}\n\n"
             + _table(["effect", "physics", "LM", "Holm p", "explained", "strength", "plausible", "alias group"],
@@ -172,8 +241,32 @@ def campaign_next(args) -> int:
             raise CliError(f"--strength-range {args.strength_range!r}: expected LOW:HIGH ({exc})") from exc
     if args.proposed_design:
         body["proposed_design"] = True
+    before = _call(args, "GET", f"/campaigns/{args.id}/iterations")
     c = _call(args, "POST", f"/campaigns/{args.id}/iterations", body=body)
-    return _emit(args, c, _status_text(c))
+    return _emit(args, c, _next_text(c, before[-1] if before else None, args.add_effect))
+
+
+def _next_text(c: dict, last: dict | None, effect: str | None) -> str:
+    """What the iteration just asked for will run (the campaign's summary still shows the finished one
+    until the runner makes the new one): its number, the effect and factors it adds or changes."""
+    number = (last["number"] if last else 0) + 1
+    old = {f["name"]: f for f in ((last or {}).get("parameters") or {}).get("factors", [])}
+    new = c["config"].get("factors", [])
+
+    def span(f: dict) -> str:
+        return f"{f['name']} {_fmt(float(f['low']))}..{_fmt(float(f['high']))}"
+
+    added = [span(f) for f in new if f["name"] not in old]
+    changed = [span(f) for f in new if f["name"] in old
+               and (old[f["name"]]["low"], old[f["name"]]["high"]) != (f["low"], f["high"])]
+    dropped = sorted(set(old) - {f["name"] for f in new})
+    text = f"campaign {c['id']}: iteration {number} {c['status']}"
+    if effect:
+        text += f", with {effect} added"
+    for what, names in (("new factor", added), ("new range", changed), ("dropped factor", dropped)):
+        if names:
+            text += f"\n{what}{'s' if len(names) > 1 else ''}: " + "; ".join(names)
+    return text + f"\nfactors ({len(new)}): " + ", ".join(f["name"] for f in new)
 
 
 def campaign_report(args) -> int:
@@ -249,7 +342,7 @@ def register(subparsers) -> None:
     _leaf(msub, "list", material_list, "list materials")
     _leaf(msub, "show", material_show, "show a material's measurements (SI)").add_argument("id", type=int)
     mcreate = _leaf(msub, "create", material_create, "create a material from a JSON body (as POST /materials) "
-                    "and/or flags")
+                    "and/or flags", creates=True)
     mcreate.add_argument("--file", help="JSON body, '-' for stdin")
     mcreate.add_argument("--name")
     mcreate.add_argument("--description")
@@ -258,14 +351,17 @@ def register(subparsers) -> None:
     dm = _leaf(msub, "delete-measurement", material_delete_measurement, "delete one measurement of a material")
     dm.add_argument("id", type=int)
     dm.add_argument("measurement", type=int)
-    cp = _leaf(msub, "copy", material_copy, "copy a material (e.g. the read-only bundled one) to edit it")
+    cp = _leaf(msub, "copy", material_copy, "copy a material (e.g. the read-only bundled one) to edit it",
+               creates=True)
     cp.add_argument("id", type=int)
     cp.add_argument("--name", required=True, help="name of the copy")
-    add = _leaf(msub, "add-measurement", material_add, "add replicate values of one measurement")
+    add = _leaf(msub, "add-measurement", material_add, "add replicate values of one measurement", creates=True)
     add.add_argument("id", type=int)
     add.add_argument("--test", required=True)
     add.add_argument("--quantity", required=True)
-    add.add_argument("--values", required=True, help="comma-separated replicate values")
+    add.add_argument("--values", required=True,
+                     help="replicate values separated by ';', spaces or new lines, e.g. '1412; 1383.6; 1397.8'; a "
+                          "decimal comma is read where unambiguous ('1397,8'), else refused ('1,397')")
     add.add_argument("--unit", help="unit of the values, e.g. kPa (default SI)")
     add.add_argument("--condition", action="append", help="NAME=VALUE, e.g. normal_stress_pa=24 (repeatable)")
     add.add_argument("--condition-unit", action="append", help="NAME=UNIT, e.g. normal_stress_pa=kPa")
@@ -273,7 +369,7 @@ def register(subparsers) -> None:
 
     campaign = subparsers.add_parser("campaign", help="calibration campaigns")
     csub = campaign.add_subparsers(dest="campaign_command", required=True)
-    create = _leaf(csub, "create", campaign_create, "create a campaign from a JSON file and/or flags")
+    create = _leaf(csub, "create", campaign_create, "create a campaign from a JSON file and/or flags", creates=True)
     create.add_argument("--file", help="JSON body (as POST /campaigns), '-' for stdin")
     create.add_argument("--name")
     create.add_argument("--material", dest="material_id", type=int)
@@ -301,9 +397,12 @@ def register(subparsers) -> None:
     list_parser = _leaf(csub, "list", campaign_list, "list campaigns")
     list_parser.add_argument("--status", choices=CampaignStatus.values())
     for action, text in (("start", "start a draft campaign"), ("pause", "pause a running campaign"),
-                         ("resume", "resume a paused campaign"), ("status", "show a campaign's state")):
+                         ("resume", "resume a paused campaign")):
         _leaf(csub, action, campaign_action, text).add_argument("id", type=int)
         csub.choices[action].set_defaults(action=action)
+    status = _leaf(csub, "status", campaign_status, "a campaign's state and its phase's progress")
+    status.add_argument("id", type=int)
+    watch_options(status, "it completes, fails or is paused (exit status 0 when it completed, else 1)")
     report = _leaf(csub, "report", campaign_report, "measured vs predicted vs confirmed per target")
     report.add_argument("id", type=int)
     report.add_argument("--iteration", type=int)

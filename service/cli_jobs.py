@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from calibration.evaluator_registry import names as evaluator_names
 from engine.lab.registry import job_test_names
-from service.cli_http import CliError, call, emit, fmt, leaf, pairs, read_json, table
+from service.cli_http import CliError, call, emit, fmt, leaf, pairs, read_json, table, watch, watch_options
 from service.vocabulary import JobStatus
 
 
@@ -45,8 +45,17 @@ def job_list(args) -> int:
 
 
 def job_status(args) -> int:
-    j = call(args, "GET", f"/jobs/{args.id}")
-    return emit(args, j, _status_line(j))
+    """A job's state; --watch follows it until it finishes (exit status 0 when it succeeded, else 1)."""
+    def fetch() -> dict:
+        return call(args, "GET", f"/jobs/{args.id}")
+
+    if not args.watch:
+        j = fetch()
+        return emit(args, j, _status_line(j))
+    if args.json:
+        raise CliError("--watch draws progress for people; poll without it for --json")
+    j = watch(args, fetch, _status_line, lambda j: j["status"] in JobStatus.finished())
+    return 0 if j["status"] == JobStatus.SUCCEEDED else 1
 
 
 def job_result(args) -> int:
@@ -66,7 +75,8 @@ def job_action(args) -> int:
 def register(subparsers) -> None:
     job = subparsers.add_parser("job", help="queued DEM and stand-in jobs")
     jsub = job.add_subparsers(dest="job_command", required=True)
-    submit = leaf(jsub, "submit", job_submit, "queue a job from a JSON body (as POST /jobs) and/or flags")
+    submit = leaf(jsub, "submit", job_submit, "queue a job from a JSON body (as POST /jobs) and/or flags",
+                  creates=True)
     submit.add_argument("--file", help="JSON body, '-' for stdin")
     submit.add_argument("--test", choices=job_test_names())
     submit.add_argument("--fidelity", choices=["screening", "thesis"])
@@ -80,7 +90,9 @@ def register(subparsers) -> None:
     lst.add_argument("--test", choices=job_test_names())
     lst.add_argument("--campaign", type=int, help="only this campaign's jobs")
     lst.add_argument("--limit", type=int)
-    leaf(jsub, "status", job_status, "a job's state and progress").add_argument("id", type=int)
+    status = leaf(jsub, "status", job_status, "a job's state and progress")
+    status.add_argument("id", type=int)
+    watch_options(status, "it finishes (exit status 0 when it succeeded, else 1)")
     leaf(jsub, "result", job_result, "a finished job's bulk values (SI)").add_argument("id", type=int)
     for action, text in (("cancel", "cancel a queued job, or ask a running one to stop"),
                          ("retry", "queue a failed or cancelled job again")):

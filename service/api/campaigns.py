@@ -158,9 +158,16 @@ def report(session: DbSession, campaign_id: CampaignId, number: int | None = Ite
 def diagnosis(session: DbSession, campaign_id: CampaignId, number: int | None = IterationQ) -> dict:
     campaign, it, value = _product(session, campaign_id, number, "report", "report")
     if "diagnosis" not in value:
-        reason = ("the model reproduces the measurements; nothing to diagnose"
-                  if value.get("verdict") == Verdict.CALIBRATED and it.phase != Phase.DIAGNOSIS
-                  else f"the diagnosis batteries are not done (phase {it.phase})")
+        # a finished iteration without a diagnosis never runs one: say why, not "not done"
+        verdict = value.get("verdict")
+        if it.phase != Phase.DONE:
+            reason = f"the diagnosis batteries are not done yet (phase {it.phase})"
+        elif verdict == Verdict.CALIBRATED:
+            reason = "the model reproduces the measurements; nothing to diagnose"
+        else:
+            reason = (f"the iteration finished ({verdict!r}) without one: the loop diagnoses only where a misfit "
+                      "can be attributed (diagnose on, degrees of freedom left, and in automatic mode an "
+                      "iteration the next one builds on)")
         raise Conflict(f"campaign {campaign_id} iteration {it.number} has no diagnosis: {reason}",
                        ["path", "campaign_id"])
     return {"campaign_id": campaign.id, "iteration": it.number, **value["diagnosis"]}

@@ -47,7 +47,7 @@ def test_material_commands(server, capsys):
     assert code == 0 and "thesis-coarse-aggregate" in out
     code, out, _ = run(capsys, "material", "show", "1", "--url", url, "--json")
     assert code == 0 and json.loads(out)["measurements"][0]["values"] == [1412.0, 1383.6, 1397.8]
-    add = ("--test", "dst", "--quantity", "residual_shear_stress_pa", "--values", "17,18", "--unit", "kPa",
+    add = ("--test", "dst", "--quantity", "residual_shear_stress_pa", "--values", "17; 18", "--unit", "kPa",
            "--condition", "normal_stress_pa=24", "--condition-unit", "normal_stress_pa=kPa")
     code, _, err = run(capsys, "material", "add-measurement", "1", "--url", url, *add)
     assert code == 2 and "HTTP 409" in err and "read-only" in err  # the bundled reference material
@@ -55,14 +55,14 @@ def test_material_commands(server, capsys):
     copy = json.loads(out)
     assert code == 0 and not copy["bundled"] and len(copy["measurements"]) == 13
     code, out, _ = run(capsys, "material", "add-measurement", str(copy["id"]), "--url", url, *add)
-    assert code == 0 and "mean 17500 Pa" in out  # (17 + 18) / 2 kPa
+    assert code == 0 and "2 replicate(s), mean 17500 Pa" in out  # (17 + 18) / 2 kPa
     code, _, err = run(capsys, "material", "add-measurement", str(copy["id"]), "--url", url, "--test", "dst",
                        "--quantity", "porosity", "--values", "1")
     assert code == 2 and "HTTP 422" in err and "quantity" in err
     code, _, err = run(capsys, "material", "show", "99", "--url", url)
     assert code == 2 and "HTTP 404" in err
     code, _, err = run(capsys, "material", "add-measurement", str(copy["id"]), "--url", url, "--test", "dst",
-                       "--quantity", "friction_angle_deg", "--values", "a,b")
+                       "--quantity", "friction_angle_deg", "--values", "a b")
     assert code == 2 and "--values" in err
 
 
@@ -133,7 +133,8 @@ def test_campaign_and_schedule_commands(server, capsys, tmp_path):
 
 def test_unreachable_service_is_a_message_not_a_traceback(capsys):
     code, _, err = run(capsys, "campaign", "list", "--url", "http://127.0.0.1:9")
-    assert code == 2 and err.startswith("demcal: cannot reach")
+    assert code == 2 and err.startswith("demcal: cannot reach the service at http://127.0.0.1:9 (from --url)")
+    assert "DEMCAL_URL" in err and err.count("\n") == 1  # how to point it elsewhere, in one line
 
 
 def test_job_commands(server, capsys):
@@ -171,7 +172,7 @@ def test_material_create_and_delete(server, capsys):
     code, _, err = run(capsys, "material", "create", "--url", url, "--name", "gravel 4/32")
     assert code == 2 and "HTTP 409" in err
     code, out, _ = run(capsys, "material", "add-measurement", str(material["id"]), "--url", url, "--test", "fill",
-                       "--quantity", "bulk_density_kg_m3", "--values", "1600,1610", "--json")
+                       "--quantity", "bulk_density_kg_m3", "--values", "1600 1610", "--json")
     measurement = json.loads(out)
     code, out, _ = run(capsys, "material", "delete-measurement", str(material["id"]), str(measurement["id"]),
                        "--url", url)
