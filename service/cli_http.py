@@ -122,6 +122,10 @@ def emit(args, data: Any, text: str | None = None) -> int:
         print(data["id"])
     else:
         print(json.dumps(data, indent=1) if args.json or text is None else text)
+    # what the service stored but doubts (a value outside what granular materials measure, the likely unit
+    # slip named): on stderr, so a script capturing the id with -q still sees it
+    for warning in (data.get("warnings") or []) if isinstance(data, dict) else []:
+        print(f"demcal: warning: {warning}", file=sys.stderr)
     return 0
 
 

@@ -403,6 +403,16 @@ def test_decimal_comma_is_one_value_and_ambiguity_is_refused(page, service, shot
     assert sorted(m["values"] for m in stored()) == [[0.4593, 0.46, 0.455], [1397.8]]
     page.screenshot(path=str(shots / "material-decimal-comma.png"))
 
+    # a confined modulus typed as Pa where kPa was meant: stored (it is physically possible), with the page
+    # saying which unit it was likely meant in (granular packings: 1 MPa to 1 GPa, docs/lab.md)
+    form = page.locator("form#add-measurement")
+    form.locator("select[name=test]").select_option("cct")
+    form.locator("select[name=quantity]").select_option("confined_modulus_pa")
+    form.locator("select[name=unit]").select_option("Pa")
+    form.locator("input[name=values]").fill("8690")
+    form.get_by_role("button", name="Add").click()
+    expect_text(page, "#flash .warning", "kPa")
+
     open_view(page, service, "#/submit")
     job = page.locator("form#submit-job")
     job.locator("select[name=evaluator]").select_option("analytic")

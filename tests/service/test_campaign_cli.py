@@ -59,6 +59,13 @@ def test_material_commands(server, capsys):
     code, _, err = run(capsys, "material", "add-measurement", str(copy["id"]), "--url", url, "--test", "dst",
                        "--quantity", "porosity", "--values", "1")
     assert code == 2 and "HTTP 422" in err and "quantity" in err
+    # a confined modulus typed in kPa where Pa was meant is stored, and the CLI says which unit it likely was
+    # (granular packings' confined moduli: 1 MPa to 1 GPa, docs/lab.md "Plausible ranges")
+    code, out, err = run(capsys, "material", "add-measurement", str(copy["id"]), "--url", url, "--test", "cct",
+                         "--quantity", "confined_modulus_pa", "--values", "8690", "--condition", "normal_stress_pa=30000",
+                         "-q")
+    assert code == 0 and out.strip().isdigit(), (out, err)  # -q: only the id on stdout
+    assert "demcal: warning:" in err and "kPa" in err, err
     code, _, err = run(capsys, "material", "show", "99", "--url", url)
     assert code == 2 and "HTTP 404" in err
     code, _, err = run(capsys, "material", "add-measurement", str(copy["id"]), "--url", url, "--test", "dst",

@@ -23,6 +23,8 @@ export function verdictSection(report) {
       h("span", { className: report.adequacy.fails ? "bad" : "" }, report.adequacy.fails ? "the model misses the measurements" : "no misfit beyond noise")) : "",
     ...((report.conflicts?.active_bounds) || []).map((b) => h("p", { className: "bad" }, `${b.parameter} is pinned at its ${b.side} bound: ${humanText(b.meaning)}`)),
     ...((report.conflicts?.priors_pulled) || []).map((p) => h("p", { className: "bad" }, humanText(p.meaning))),
+    // measurements stored despite a likely unit slip: repeated wherever they are used
+    ...(report.warnings || []).map((w) => h("p", { className: "warning" }, w)),
     report.surrogate_check ? h("p", { className: "muted" }, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${humanText(report.surrogate_check.reason)}`) : "",
     report.polish ? h("p", { className: "muted" }, h("b", {}, "Polishing on the batteries: "), report.polish.skipped
       ? `skipped, the surfaces predicted the confirmation (${humanText(report.polish.skipped)})`

@@ -61,8 +61,11 @@ export async function materialPage(view, id) {
       }
       return out;
     };
-    if (await submitForm(form, () => api(`/materials/${id}/measurements`, { method: "POST", body: body() }))) {
-      flash("measurement added", "ok");
+    const added = await submitForm(form, () => api(`/materials/${id}/measurements`, { method: "POST", body: body() }));
+    if (added) {
+      // stored, but outside what granular materials measure: say which unit it was likely meant in
+      const doubts = added.warnings || [];
+      flash(doubts.length ? `measurement added, but check it: ${doubts.join(" ")}` : "measurement added", doubts.length ? "warning" : "ok");
       refresh();
     }
   });
