@@ -374,6 +374,15 @@ def test_decimal_comma_is_one_value_and_ambiguity_is_refused(page, service, shot
     single numbers follow the same rule."""
     material = service.api("POST", "/materials", json={"name": "decimal comma"}).json()
     open_view(page, service, f"#/materials/{material['id']}")
+    # the page's rule is the CLI's: numbers.js on the cases service/materials/replicates.py is tested on
+    cases = json.loads((Path(__file__).parent / "data" / "number_lists.json").read_text())
+    parsed = page.evaluate("""async (cases) => {
+        const { parseNumberList } = await import("/static/js/numbers.js");
+        return { read: cases.read.map(([text]) => parseNumberList(text).values),
+                 refused: cases.refused.map((text) => parseNumberList(text).error) }; }""", cases)
+    for (text, values), got in zip(cases["read"], parsed["read"]):
+        assert got == pytest.approx(values), text
+    assert all(parsed["refused"]), [t for t, e in zip(cases["refused"], parsed["refused"]) if not e]
     form = page.locator("form#add-measurement")
     form.locator("select[name=test]").select_option("fill")
     form.locator("select[name=quantity]").select_option("bulk_density_kg_m3")

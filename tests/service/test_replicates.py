@@ -1,6 +1,9 @@
 """The one rule for replicate lists typed as text (service.materials.replicates)."""
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
 
 from service.materials.replicates import ReplicateError, parse_replicates
@@ -40,3 +43,18 @@ def test_ambiguous_or_unreadable_lists_are_refused_naming_the_field(text, needle
         parse_replicates(text, "--values")
     message = str(caught.value)
     assert message.startswith("--values: ") and needle in message and "\n" not in message
+
+
+CASES = json.loads((Path(__file__).parent / "data" / "number_lists.json").read_text())
+
+
+@pytest.mark.parametrize("text,values", CASES["read"])
+def test_the_shared_cases_read_as_the_page_reads_them(text, values):
+    # the page's numbers.js runs on the same file (tests/service/test_browser.py)
+    assert parse_replicates(text) == pytest.approx(values)
+
+
+@pytest.mark.parametrize("text", CASES["refused"])
+def test_the_shared_cases_refused_as_the_page_refuses_them(text):
+    with pytest.raises(ReplicateError):
+        parse_replicates(text, "--values")

@@ -9,8 +9,10 @@
 //     when the field uses no comma as a separator ("12,5, 24" is refused: 12.5 and 24, or 12, 5, 24?);
 //   - what could be read two ways is refused, naming the value: a number with both "." and ","
 //     ("1.397,8", "1,397.8"), with more than one comma ("1,397,8" or "6,12,24" meant as a list),
-//     or with a comma followed by exactly three digits ("1,397": 1397 or 1.397?), unless the part
-//     before the comma is 0 ("0,125").
+//     or whose comma could be a thousands separator: one to three leading digits, not all zeros, then
+//     exactly three ("1,397": 1397 or 1.397?); "0,125" and "1397,800" are decimals.
+// The CLI applies the same rule (service/materials/replicates.py); both are tested on the cases of
+// tests/service/data/number_lists.json.
 // Exponents are accepted ("1e8", "2,5e6"). The boxes for one real number (numberInput, read by
 // readNumber) follow the same rule for a single value, so "0,5" means 0.5 in every field of the page.
 import { ApiError, h } from "./core.js";
@@ -28,19 +30,20 @@ function parseValue(raw, commaSeparates) {
   if (commas > 1) return [null, `"${raw}" has more than one comma; separate values with ; or spaces`];
   if (commas === 1) {
     const [whole, rest] = raw.split(",");
-    if (/^\d{3}$/.test(rest) && !/^[+-]?0?$/.test(whole)) {
+    if (/^\d{3}$/.test(rest) && /^[+-]?0*[1-9]\d{0,2}$/.test(whole)) {
       return [null, `"${raw}" could be ${whole}${rest} or ${whole}.${rest}; write it without the comma or with a decimal point`];
     }
   }
   const text = raw.replace(",", ".");
   if (!NUMBER.test(text)) return [null, `"${raw}" is not a number`];
+  if (!Number.isFinite(Number(text))) return [null, `"${raw}" is not a finite number`];
   return [Number(text), null];
 }
 
 // text -> { values: [numbers], error: null } or { values: null, error: message }; empty text gives [].
 export function parseNumberList(text) {
   const commaSeparates = /,(\s|$)/.test(String(text ?? "").trim());
-  const tokens = String(text ?? "").split(SEPARATORS).map((t) => t.replace(/^,+|,+$/g, "")).filter(Boolean);
+  const tokens = String(text ?? "").trim().split(SEPARATORS).map((t) => t.replace(/,+$/, "")).filter(Boolean);
   const values = [];
   for (const token of tokens) {
     const [value, error] = parseValue(token, commaSeparates);
