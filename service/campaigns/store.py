@@ -152,6 +152,7 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
         except SettingsError as exc:
             raise from_settings_error(exc) from exc
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
+    check_targets_simulated(session, validated)  # new targets or test: still something to compare
     check_limits_with_targets(session, validated)
     config = validated.model_dump(mode="json")
     won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == CampaignStatus.COMPLETED)

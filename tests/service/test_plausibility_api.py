@@ -133,3 +133,20 @@ def test_the_catalogue_serves_each_typical_range_with_its_source(s2):
     modulus = quantities[("cct", "confined_modulus_pa")]["typical"]
     assert (modulus["low"], modulus["high"]) == (1.0e6, 1.0e9) and "Domenico" in modulus["source"]
     assert quantities[("fill", "bulk_mass_kg")]["typical"] is None  # the container sets it
+
+
+def test_a_next_iteration_whose_targets_its_test_does_not_run_is_refused_and_nothing_changes(s2):
+    """The same refusal when a completed campaign's next iteration changes its targets: the campaign stays
+    completed with its configuration, rather than running a design whose targets it cannot compare."""
+    client, app, settings = s2
+    material_id = next(m["id"] for m in client.get(f"{API}/materials").json() if m["bundled"])
+    cid = client.post(f"{API}/campaigns", json=campaign_body(material_id, diagnose=False, polish_steps=0)).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    before = client.get(f"{API}/campaigns/{cid}").json()
+    refused = client.post(f"{API}/campaigns/{cid}/iterations",
+                          json={"targets": [{"test": "aor", "quantity": "angle_of_repose_deg"}]})
+    assert refused.status_code == 422 and refused.json()["detail"][0]["loc"] == ["body", "targets"], refused.text
+    after = client.get(f"{API}/campaigns/{cid}").json()
+    assert (after["status"], after["config"], after["current_iteration"]) == \
+        ("completed", before["config"], before["current_iteration"])
