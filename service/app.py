@@ -17,6 +17,7 @@ from fastapi import FastAPI
 from service.config import Settings, get_settings
 from service.db import make_engine, make_session_factory
 from service.api.openapi import document_errors
+from service.browser_guard import BrowserGuard
 from service.errors import install_error_handlers
 from service.security import check_bind, install_token_guard
 
@@ -109,6 +110,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     from service.web.docs import mount_docs
 
-    mount_docs(app, API_PREFIX)
+    script_hashes = mount_docs(app, API_PREFIX)
     web.mount(app)  # at "/", after the API so /api/v1 routes win
+    # added last, so outermost: Host, Origin and Content-Type are checked before the token guard and
+    # every route, and every response (errors too) gets the security headers
+    app.add_middleware(BrowserGuard, settings=settings, script_hashes=script_hashes)
     return app

@@ -34,6 +34,10 @@ class Settings(BaseModel):
     tokens: str | None = Field(
         None, description="named bearer tokens 'alice:s3cret,bob:0ther'; the name is the client's identity "
                           "for per-client limits (DEMCAL_TOKENS)")
+    allowed_hosts: str | None = Field(
+        None, description="extra Host names the service answers to, comma-separated (DEMCAL_ALLOWED_HOSTS); "
+                          "loopback names and DEMCAL_HOST are always allowed, any other Host gets 400 (a web "
+                          "page that rebinds its DNS name to this machine is refused); '*' allows any")
     lease_s: float = Field(30.0, gt=0, description="a claimed job is lost unless heartbeated within this")
     heartbeat_s: float = Field(5.0, gt=0)
     poll_interval_s: float = Field(0.5, gt=0, description="idle worker wait between claim attempts")

@@ -16,7 +16,7 @@ from service.db import make_engine, make_session_factory
 from service.migrate import upgrade
 
 
-from service_net import LOOPBACK_PEER, free_port, wait_healthy  # noqa: F401  (re-exported for older imports)
+from service_net import LOCAL_BASE_URL, LOOPBACK_PEER, free_port, wait_healthy  # noqa: F401  (re-exported for older imports)
 
 
 @pytest.fixture
@@ -41,7 +41,7 @@ def session_factory(settings: Settings):
 
 @pytest.fixture
 def client(settings: Settings):
-    with TestClient(create_app(settings), client=LOOPBACK_PEER) as test_client:
+    with TestClient(create_app(settings), base_url=LOCAL_BASE_URL, client=LOOPBACK_PEER) as test_client:
         yield test_client
 
 

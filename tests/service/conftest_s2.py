@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
+from service_net import LOCAL_BASE_URL
 
 from service.app import create_app
 from service.campaigns.runner import CampaignRunner
@@ -30,7 +31,7 @@ def s2_settings(tmp_path: Path) -> Settings:
 def running_app(settings: Settings):
     """The real app with its lifespan (migrations, bundled material seed); yields (client, app)."""
     app = create_app(settings)
-    with TestClient(app) as client:
+    with TestClient(app, base_url=LOCAL_BASE_URL) as client:
         yield client, app
 
 

@@ -11,6 +11,9 @@ import httpx
 # The peer address TestClient reports: a loopback one, as for a local user (its default, "testclient", is
 # not an address, and the identity rules treat it as a remote peer).
 LOOPBACK_PEER = ("127.0.0.1", 50000)
+# The URL TestClient sends its requests to: the service answers only Host names it knows (loopback by default,
+# service.browser_guard), and TestClient's default "testserver" is not one of them.
+LOCAL_BASE_URL = "http://127.0.0.1"
 
 
 def free_port() -> int:

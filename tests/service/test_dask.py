@@ -6,6 +6,7 @@ import time
 
 import pytest
 from fastapi.testclient import TestClient
+from service_net import LOCAL_BASE_URL
 
 from engine.lab.spec import JobSpec
 from service import queue
@@ -34,7 +35,7 @@ def _wait(predicate, timeout_s=30.0):
 
 def test_serve_with_dask_scheduler_runs_jobs(settings, cluster):
     dask_settings = settings.model_copy(update={"dask_scheduler": cluster.scheduler_address, "start_workers": True})
-    with TestClient(create_app(dask_settings)) as client:
+    with TestClient(create_app(dask_settings), base_url=LOCAL_BASE_URL) as client:
         assert client.get("/api/v1/health").json()["executor"] == "dask"
         ids = [client.post("/api/v1/jobs", json={"evaluator": "analytic", "seed": s}).json()["id"] for s in range(3)]
         for job_id in ids:

@@ -10,7 +10,7 @@ import sys
 import time
 
 import pytest
-from service_net import LOOPBACK_PEER, free_port
+from service_net import LOCAL_BASE_URL, LOOPBACK_PEER, free_port
 from fastapi.testclient import TestClient
 
 from service.app import create_app
@@ -99,7 +99,7 @@ def _submit(client, seed: int) -> int:
 
 def test_dispatcher_recovers_after_a_scheduler_outage(settings, cluster):
     cluster.start_worker()
-    with TestClient(_app(settings, cluster), client=LOOPBACK_PEER) as client:
+    with TestClient(_app(settings, cluster), base_url=LOCAL_BASE_URL, client=LOOPBACK_PEER) as client:
         _wait(lambda: client.get(f"{API}/health").status_code == 200, 60, "a healthy dispatcher")
         first = _submit(client, 1)
         _wait(lambda: _job(client, first)["status"] == "succeeded", 60, "the first job")
@@ -125,7 +125,7 @@ def test_dispatcher_recovers_after_a_scheduler_outage(settings, cluster):
 def test_job_whose_dask_workers_are_gone_is_requeued_and_finishes_later(settings, cluster):
     worker = cluster.start_worker(DEMCAL_ANALYTIC_DURATION_S="60")  # long enough to die mid-job
     lease_s = 30.0
-    with TestClient(_app(settings, cluster, lease_s=lease_s), client=LOOPBACK_PEER) as client:
+    with TestClient(_app(settings, cluster, lease_s=lease_s), base_url=LOCAL_BASE_URL, client=LOOPBACK_PEER) as client:
         _wait(lambda: client.get(f"{API}/health").status_code == 200, 60, "a healthy dispatcher")
         job_id = _submit(client, 7)
         _wait(lambda: (j := _job(client, job_id))["status"] == "running" and j["progress"]["phase"] == "analytic",
@@ -147,7 +147,7 @@ def test_job_whose_dask_workers_are_gone_is_requeued_and_finishes_later(settings
 def test_dask_rerun_after_a_worker_death_counts_as_an_attempt(settings, cluster):
     """Dask re-runs the task of a dead worker on another one by itself; the re-run is an attempt."""
     slow = cluster.start_worker(DEMCAL_ANALYTIC_DURATION_S="60")
-    with TestClient(_app(settings, cluster), client=LOOPBACK_PEER) as client:
+    with TestClient(_app(settings, cluster), base_url=LOCAL_BASE_URL, client=LOOPBACK_PEER) as client:
         _wait(lambda: client.get(f"{API}/health").status_code == 200, 60, "a healthy dispatcher")
         job_id = _submit(client, 9)
         _wait(lambda: (j := _job(client, job_id))["status"] == "running" and j["progress"]["phase"] == "analytic",

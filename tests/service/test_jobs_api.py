@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import pytest
 from fastapi.testclient import TestClient
+from service_net import LOCAL_BASE_URL
 
 from service.app import create_app
 from service.migrate import head_revision
@@ -91,7 +92,7 @@ def test_idempotency_key_body_and_header(client):
 
 
 def test_queued_job_limit_per_client(settings):
-    with TestClient(create_app(settings.model_copy(update={"max_queued_jobs_per_client": 3})),
+    with TestClient(create_app(settings.model_copy(update={"max_queued_jobs_per_client": 3})), base_url=LOCAL_BASE_URL,
                     client=("127.0.0.1", 50000)) as client:
         for seed in range(3):
             assert submit(client, seed=seed).status_code == 201
@@ -200,7 +201,7 @@ def test_cancel_running_job_is_accepted(client):
 
 
 def test_token_guards_writes(settings):
-    with TestClient(create_app(settings.model_copy(update={"token": "s3cret"}))) as client:
+    with TestClient(create_app(settings.model_copy(update={"token": "s3cret"})), base_url=LOCAL_BASE_URL) as client:
         r = submit(client)
         assert r.status_code == 401 and locs(r) == [["header", "Authorization"]]
         assert client.post(f"{API}/jobs", json={}, headers={"Authorization": "Bearer wrong"}).status_code == 401
@@ -223,11 +224,11 @@ def test_limits_follow_settings(settings):
     particles, sim_s = estimated_particles(spec), estimated_simulated_time_s(spec)
     for update, loc in [({"max_particles": particles - 1}, ["body", "parameters", "particle_radius_m"]),
                         ({"max_simulated_time_s": sim_s * 0.99}, ["body", "options", "speed_factor"])]:
-        with TestClient(create_app(settings.model_copy(update=update))) as client:
+        with TestClient(create_app(settings.model_copy(update=update)), base_url=LOCAL_BASE_URL) as client:
             r = submit(client)
             assert r.status_code == 422 and locs(r) == [loc]
     roomy = {"max_particles": particles, "max_simulated_time_s": sim_s * 1.01}
-    with TestClient(create_app(settings.model_copy(update=roomy))) as client:
+    with TestClient(create_app(settings.model_copy(update=roomy)), base_url=LOCAL_BASE_URL) as client:
         assert submit(client).status_code == 201
 
 

@@ -9,6 +9,7 @@ import httpx
 import pytest
 from conftest_s2 import API, campaign_body, s2, s2_settings, thesis_material_id  # noqa: F401
 from fastapi.testclient import TestClient
+from service_net import LOCAL_BASE_URL
 
 from engine.lab.presets import SCREENING
 from service.app import create_app
@@ -110,7 +111,7 @@ def submit(client, headers=None):
 
 def test_identity_comes_from_the_token_name_not_a_header(settings):
     named = settings.model_copy(update={"tokens": "alice:a-secret,bob:b-secret", "max_queued_jobs_per_client": 2})
-    with TestClient(create_app(named), client=("203.0.113.7", 4000)) as client:  # a remote peer
+    with TestClient(create_app(named), base_url=LOCAL_BASE_URL, client=("203.0.113.7", 4000)) as client:  # a remote peer
         alice = {"Authorization": "Bearer a-secret"}
         for _ in range(2):
             r = submit(client, alice)
@@ -124,10 +125,10 @@ def test_identity_comes_from_the_token_name_not_a_header(settings):
 
 
 def test_remote_peer_without_token_cannot_choose_an_identity(settings):
-    with TestClient(create_app(settings), client=("203.0.113.9", 4000)) as client:
+    with TestClient(create_app(settings), base_url=LOCAL_BASE_URL, client=("203.0.113.9", 4000)) as client:
         r = submit(client, {"X-Client-Id": "lab-a"})
         assert r.status_code == 201 and r.json()["client_id"] == "203.0.113.9"
-    with TestClient(create_app(settings), client=("127.0.0.1", 4000)) as client:  # loopback may name itself
+    with TestClient(create_app(settings), base_url=LOCAL_BASE_URL, client=("127.0.0.1", 4000)) as client:  # loopback may name itself
         r = submit(client, {"X-Client-Id": "lab-a"})
         assert r.status_code == 201 and r.json()["client_id"] == "lab-a"
 
