@@ -69,14 +69,16 @@ def _origin_of(value: str) -> tuple[str, str, int | None] | None:
     return parts.scheme.lower(), parts.hostname.lower(), port or DEFAULT_PORTS.get(parts.scheme.lower())
 
 
-def same_site(claimed: str, host_header: str, scheme: str) -> bool:
+def same_site(claimed: str, host_header: str) -> bool:
     """Whether an Origin/Referer names this very service: the host and port the request was sent to.
-    Ports count: another local web app on localhost:3000 is another site."""
+    Ports count: another local web app on localhost:3000 is another site. A Host without a port was
+    sent to the default port of the browser's scheme, which the Origin names (behind a TLS proxy the
+    service itself sees plain http, so its own scheme cannot tell)."""
     origin = _origin_of(claimed)
     target = split_host(host_header)
     if origin is None or target is None:
         return False
-    target_port = target[1] or DEFAULT_PORTS.get(scheme)
+    target_port = target[1] or DEFAULT_PORTS.get(origin[0])
     return (origin[1], origin[2]) == (target[0], target_port)
 
 
@@ -126,7 +128,7 @@ class BrowserGuard:
             return None
         for name in ("origin", "referer"):  # Referer only when the browser sent no Origin
             if name in headers:
-                if not same_site(headers[name], host_header, scope.get("scheme", "http")):
+                if not same_site(headers[name], host_header):
                     return _error(403, f"cross-site request refused ({name.capitalize()} "
                                        f"{headers[name]!r} is not this service)", ["header", name.capitalize()],
                                   "cross_site")
@@ -158,4 +160,4 @@ class BrowserGuard:
         await self.app(scope, receive, send_with_headers)
 
 
-__all__ = ["BrowserGuard", "allowed_hosts", "same_site", "content_security_policy", "LOOPBACK_NAMES"]
+__all__ = ["LOOPBACK_NAMES", "BrowserGuard", "allowed_hosts", "content_security_policy", "same_site"]

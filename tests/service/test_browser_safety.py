@@ -12,6 +12,7 @@ from fastapi.testclient import TestClient
 from service_net import LOCAL_BASE_URL, LOOPBACK_PEER
 
 from service.app import create_app
+from service.browser_guard import same_site
 from service.config import settings_from_env
 
 API = "/api/v1"
@@ -95,6 +96,21 @@ def test_loopback_hosts_pass(client, host):
     job = queued_job(client)
     r = client.post(f"{API}/jobs/{job}/cancel", headers={"Host": host, "Origin": f"http://{host.lower()}"})
     assert r.status_code == 200, r.text
+
+
+@pytest.mark.parametrize(("origin", "host", "same"), [
+    ("https://calib.lab.example", "calib.lab.example", True),  # behind a TLS proxy: the service sees http
+    ("http://calib.lab.example", "calib.lab.example", True),
+    ("https://calib.lab.example:8443", "calib.lab.example:8443", True),
+    ("http://localhost:3000", "localhost", False),  # another local web app
+    ("http://localhost:8000", "localhost:8001", False),
+    ("http://127.0.0.1:8000", "localhost:8000", False),  # another name is another origin
+    ("http://[::1]:8000", "[::1]:8000", True),
+    ("null", "127.0.0.1:8000", False),
+    ("http://127.0.0.1:8000/path?q=1", "127.0.0.1:8000", True),  # a Referer
+])
+def test_same_site_compares_host_and_port(origin, host, same):
+    assert same_site(origin, host) is same
 
 
 def test_allowed_hosts_setting(settings):
