@@ -394,6 +394,8 @@ def test_decimal_comma_is_one_value_and_ambiguity_is_refused(page, service, shot
     expect_text(page, "#flash", "measurement added")
     stored = lambda: service.api("GET", f"/materials/{material['id']}").json()["measurements"]  # noqa: E731
     assert [m["values"] for m in stored()] == [[1397.8]]
+    # the page redraws itself with the new measurement: type into the redrawn form, not the one it replaces
+    expect_text(page, "main table", "1397.8")
 
     form = page.locator("form#add-measurement")
     form.locator("input[name=values]").fill("1412; 1,397")
