@@ -29,6 +29,15 @@ def _material_or_404(session: Session, material_id: int):
     return material
 
 
+def _built(session: Session, material_id: int) -> dict:
+    """The response of a write, validated and serialised before the transaction commits (after a flush, so
+    ids and timestamps exist): a material whose response could not be built (free-form JSON nested past the
+    serialiser's recursion guard) was stored although its creator got a 500, and then broke every listing.
+    Failing here rolls the write back with the session."""
+    out = MaterialOut.model_validate(material_dict(_material_or_404(session, material_id)))
+    return out.model_dump(mode="json")
+
+
 @router.get("/quantities",
             summary="Canonical tests, quantities, SI units, accepted input units and physical bounds (SI)",
             response_model=Quantities)
@@ -51,8 +60,10 @@ def create(body: MaterialIn, session: DbSession):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
     material = create_material(session, body)
+    session.flush()
+    response = _built(session, material.id)
     session.commit()
-    return material_dict(_material_or_404(session, material.id))
+    return response
 
 
 @router.post("/{material_id}/copy", response_model=MaterialOut, status_code=201,
@@ -63,8 +74,10 @@ def copy(material_id: MaterialId, body: MaterialCopy, session: DbSession):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
     created = copy_material(session, material, body.name)
+    session.flush()
+    response = _built(session, created.id)
     session.commit()
-    return material_dict(_material_or_404(session, created.id))
+    return response
 
 
 @router.get("/{material_id}", response_model=MaterialOut)
@@ -96,8 +109,10 @@ def add(material_id: MaterialId, body: MeasurementIn, session: DbSession):
     material = _material_or_404(session, material_id)
     require_editable(material)
     row = add_measurement(session, material, body)
+    session.flush()
+    response = MeasurementOut.model_validate(measurement_dict(row)).model_dump(mode="json")  # before commit: _built
     session.commit()
-    return measurement_dict(row)
+    return response
 
 
 @router.delete("/{material_id}/measurements/{measurement_id}", status_code=204,

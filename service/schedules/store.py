@@ -4,10 +4,11 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from engine.lab.spec import STRICT_INPUT
 from service.campaigns.schemas import CampaignCreate
 from service.errors import Invalid, NotFound
 from service.campaigns.store import check_limits_with_targets
@@ -18,7 +19,7 @@ from service.schedules.scheduler import naive_utc
 
 
 class ScheduleIn(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = STRICT_INPUT
 
     name: str = Field(..., min_length=1, max_length=200)
     cron: str = Field(..., max_length=200, description="5 fields, UTC: minute hour day-of-month month day-of-week; or @daily ...")
@@ -29,7 +30,7 @@ class ScheduleIn(BaseModel):
 
 
 class ScheduleUpdate(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = STRICT_INPUT
 
     cron: str | None = Field(None, max_length=200)
     enabled: bool | None = None
