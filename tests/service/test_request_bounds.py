@@ -232,3 +232,16 @@ def test_a_number_is_not_a_boolean_and_json_numbers_still_fit(s2):
         {"name": "particle_stiffness_n_per_m", "low": 1000000, "high": 3000000, "unit": "N/m"},
         {"name": "friction_pp", "low": 0.3, "high": 1}], options={"residual_window_strain": [0.08, 0.1]}))
     assert ok.status_code == 201, ok.text
+
+
+def test_health_is_503_when_a_row_cannot_be_read(client):
+    """Corrupted row contents: SELECT 1 answered, health said ok, /jobs answered 500."""
+    from sqlalchemy import text
+
+    job = client.post(f"{API}/jobs", json={"evaluator": "analytic"}).json()
+    assert client.get(f"{API}/health").status_code == 200
+    with client.app.state.engine.begin() as connection:
+        connection.execute(text("UPDATE jobs SET spec = '{not json' WHERE id = :id"), {"id": job["id"]})
+    r = client.get(f"{API}/health")
+    assert r.status_code == 503 and r.json()["status"] == "error"
+    assert r.json()["database"] == f"unreadable: jobs row {job['id']}: JSONDecodeError"
