@@ -33,6 +33,10 @@ _MIN_LAB_SPEED_M_S = 1e-6  # 1 um/s, a creep test; slower divides the lab's time
 _MIN_SPEED_FACTOR, _MAX_SPEED_FACTOR = 1e-3, 1e4
 _MAX_CCT_CYCLES = 1000
 _MAX_DST_STRESSES = 20
+# E' read at a few stresses of a compression curve; each is a key of every stored result.
+_MAX_CCT_WINDOW_STRESSES = 20
+# Contact effects on one material: the registry has a handful; more names than this is not a model.
+_MAX_EFFECTS = 16
 
 Fidelity = Literal["screening", "thesis"]
 
@@ -71,7 +75,7 @@ class MicroParameters(BaseModel):
         "(two spheres that still touch)",
     )
     effects: dict[str, dict[str, Any]] = Field(
-        default_factory=dict,
+        default_factory=dict, max_length=_MAX_EFFECTS,
         description="optional contact effects by registered name (engine.effects.REGISTRY), each with its "
                     "parameters, e.g. {'rolling_epsd2': {'rolling_friction': 0.1}}",
     )
@@ -116,7 +120,7 @@ class TestOptions(BaseModel):
     cct_cycles: int | None = Field(None, ge=1, le=_MAX_CCT_CYCLES,
                                    description="load-unload cycles; each counts in the simulated-time limit")
     cct_window_stresses_pa: list[float] | None = Field(
-        None,
+        None, max_length=_MAX_CCT_WINDOW_STRESSES,
         description="CCT: report the tangent confined modulus E' = d(sigma)/d(strain) at exactly these normal "
         "stresses (Pa; each > 0, strictly increasing, below the CCT maximum stress), keyed by the given floats, "
         "instead of five equal windows from 0 to the peak (docs/lab.md)",

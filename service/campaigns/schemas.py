@@ -95,7 +95,7 @@ class IterationIn(BaseModel):
     targets: list[TargetIn] | None = Field(None, max_length=1000)
     options: dict[str, Any] | None = None
     add_effect: str | None = Field(
-        None, description="a diagnosis candidate (GET /api/v1/effects) whose strength becomes one more design "
+        None, max_length=64, description="a diagnosis candidate (GET /api/v1/effects) whose strength becomes one more design "
         "factor, keeping the previous factors: from 'off' over its plausible range, or to twice the last "
         "diagnosis's estimate of the strength if larger (a switch-type effect: a log range of 4x about its "
         "value matched at the last optimum), or strength_range",

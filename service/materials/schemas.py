@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
@@ -32,7 +32,7 @@ class MeasurementIn(BaseModel):
                                 description="replicate values (at least one), each within the quantity's bounds")
     condition: dict[str, float] = Field(default_factory=dict, max_length=8,
                                         description="test condition, e.g. normal_stress_pa")
-    condition_units: dict[str, str] = Field(
+    condition_units: dict[str, Annotated[str, Field(max_length=16)]] = Field(
         default_factory=dict, max_length=8,
         description="unit per condition entry when not SI, e.g. {'normal_stress_pa': 'kPa'}",
     )

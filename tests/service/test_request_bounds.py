@@ -245,3 +245,42 @@ def test_health_is_503_when_a_row_cannot_be_read(client):
     r = client.get(f"{API}/health")
     assert r.status_code == 503 and r.json()["status"] == "error"
     assert r.json()["database"] == f"unreadable: jobs row {job['id']}: JSONDecodeError"
+
+
+def _unbounded(schemas: dict, schema: dict, where: str, seen: set) -> list[str]:
+    """Strings without maxLength, arrays without maxItems, maps without maxProperties under ``schema``."""
+    if "$ref" in schema:
+        name = schema["$ref"].rsplit("/", 1)[-1]
+        if name in seen:
+            return []
+        seen.add(name)
+        return _unbounded(schemas, schemas[name], name, seen)
+    found = [f for key in ("anyOf", "oneOf", "allOf") for s in schema.get(key, ()) for f in _unbounded(schemas, s, where, seen)]
+    kind = schema.get("type")
+    if kind == "string" and not {"maxLength", "enum", "const"} & set(schema):
+        found.append(where)
+    if kind == "array":
+        found += [] if "maxItems" in schema else [where]
+        for item in [schema.get("items", {}), *schema.get("prefixItems", ())]:
+            found += _unbounded(schemas, item, f"{where}[]", seen)
+    if kind == "object":
+        for name, sub in schema.get("properties", {}).items():
+            found += _unbounded(schemas, sub, f"{where}.{name}", seen)
+        values = schema.get("additionalProperties")
+        if isinstance(values, dict):
+            found += [] if "maxProperties" in schema else [where]
+            found += _unbounded(schemas, values, f"{where}{{}}", seen)
+    return found
+
+
+def test_every_string_list_and_map_a_body_can_hold_is_bounded(client):
+    """A prior's source, a measurement's condition units, an iteration's effect name, the CCT window stresses
+    and a material's effects had no bound. Free-form JSON values (``Any``) are bounded by the body's size and depth."""
+    document = client.get(f"{API}/openapi.json").json()
+    schemas, seen, found = document["components"]["schemas"], set(), []
+    for operations in document["paths"].values():
+        for operation in operations.values():
+            body = operation.get("requestBody", {}).get("content", {}).get("application/json", {}).get("schema")
+            if body is not None:
+                found += _unbounded(schemas, body, "body", seen)
+    assert found == []
