@@ -8,7 +8,7 @@ from sqlalchemy.orm import Session
 from service.api.openapi import errors
 from service.api.params import MaterialId, MeasurementId
 from service.api.responses.quantities import Quantities
-from service.db import DbSession
+from service.db import DbSession, built_then_committed
 from service.errors import Conflict, NotFound
 from service.materials.schemas import MaterialCopy, MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
 from service.materials.store import (add_measurement, copy_material, create_material, find_by_name, get_material,
@@ -27,15 +27,6 @@ def _material_or_404(session: Session, material_id: int):
     if material is None:
         raise NotFound(f"material {material_id} not found", ["path", "material_id"])
     return material
-
-
-def _built(session: Session, material_id: int) -> dict:
-    """The response of a write, validated and serialised before the transaction commits (after a flush, so
-    ids and timestamps exist): a material whose response could not be built (free-form JSON nested past the
-    serialiser's recursion guard) was stored although its creator got a 500, and then broke every listing.
-    Failing here rolls the write back with the session."""
-    out = MaterialOut.model_validate(material_dict(_material_or_404(session, material_id)))
-    return out.model_dump(mode="json")
 
 
 @router.get("/quantities",
@@ -60,10 +51,7 @@ def create(body: MaterialIn, session: DbSession):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
     material = create_material(session, body)
-    session.flush()
-    response = _built(session, material.id)
-    session.commit()
-    return response
+    return built_then_committed(session, lambda: material_dict(_material_or_404(session, material.id)), MaterialOut)
 
 
 @router.post("/{material_id}/copy", response_model=MaterialOut, status_code=201,
@@ -74,10 +62,7 @@ def copy(material_id: MaterialId, body: MaterialCopy, session: DbSession):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
     created = copy_material(session, material, body.name)
-    session.flush()
-    response = _built(session, created.id)
-    session.commit()
-    return response
+    return built_then_committed(session, lambda: material_dict(_material_or_404(session, created.id)), MaterialOut)
 
 
 @router.get("/{material_id}", response_model=MaterialOut)
@@ -109,10 +94,7 @@ def add(material_id: MaterialId, body: MeasurementIn, session: DbSession):
     material = _material_or_404(session, material_id)
     require_editable(material)
     row = add_measurement(session, material, body)
-    session.flush()
-    response = MeasurementOut.model_validate(measurement_dict(row)).model_dump(mode="json")  # before commit: _built
-    session.commit()
-    return response
+    return built_then_committed(session, lambda: measurement_dict(row), MeasurementOut)
 
 
 @router.delete("/{material_id}/measurements/{measurement_id}", status_code=204,

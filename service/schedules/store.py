@@ -45,7 +45,8 @@ def _cron(expression: str):
         raise Invalid(str(exc), "cron") from exc
 
 
-def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = None) -> Schedule:
+def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = None, commit: bool = True) -> Schedule:
+    """A schedule; ``commit=False`` leaves the commit to the caller (``service.db.built_then_committed``)."""
     cron = _cron(body.cron)
     if get_material(session, body.template.material_id) is None:
         raise NotFound(f"material {body.template.material_id} not found", "template.material_id")
@@ -55,7 +56,8 @@ def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = N
                         only_if_new_measurements=body.only_if_new_measurements, enabled=body.enabled,
                         missed_run_policy=body.missed_run_policy, next_run_at=cron.next_after(naive_utc(now)))
     session.add(schedule)
-    session.commit()
+    if commit:
+        session.commit()
     return schedule
 
 

@@ -284,3 +284,23 @@ def test_every_string_list_and_map_a_body_can_hold_is_bounded(client):
             if body is not None:
                 found += _unbounded(schemas, body, "body", seen)
     assert found == []
+
+
+def test_a_campaign_whose_response_cannot_be_built_leaves_no_row(s2, monkeypatch):
+    """As for materials: the campaign was committed before its summary was built."""
+    from service.api import campaigns as api
+
+    client, _app, _settings = s2
+    real, calls = api.campaign_summary, []
+
+    def fails_once(campaign):
+        calls.append(campaign.name)
+        if len(calls) == 1:
+            raise RecursionError("maximum recursion depth exceeded while serialising")
+        return real(campaign)
+
+    monkeypatch.setattr(api, "campaign_summary", fails_once)
+    client_500 = TestClient(client.app, raise_server_exceptions=False)
+    r = client_500.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client)))
+    assert r.status_code == 500
+    assert client.get(f"{API}/campaigns").json() == []
