@@ -64,20 +64,25 @@ def test_depth_scan_ignores_brackets_in_strings():
     assert json_depth(b"[[[1]]]", 2) == (3, None)
 
 
+def fails_once(view):
+    """``view`` (a row's API view), raising the first time as the serialiser did on a deep dict."""
+    calls = []
+
+    def failing(row):
+        calls.append(row)
+        if len(calls) == 1:
+            raise RecursionError("maximum recursion depth exceeded while serialising")
+        return view(row)
+
+    return failing
+
+
 def test_a_write_whose_response_cannot_be_built_leaves_no_row(settings, monkeypatch):
     """The create committed, then building the response raised: the client got a 500 and the row stayed.
     The response is now built before the commit, so the failure rolls the write back."""
     from service.api import materials as api
 
-    real, calls = api.material_dict, []
-
-    def fails_once(material):
-        calls.append(material.name)
-        if len(calls) == 1:
-            raise RecursionError("maximum recursion depth exceeded while serialising")
-        return real(material)
-
-    monkeypatch.setattr(api, "material_dict", fails_once)
+    monkeypatch.setattr(api, "material_dict", fails_once(api.material_dict))
     with TestClient(create_app(settings), raise_server_exceptions=False) as client:
         r = client.post(f"{API}/materials", json={"name": "unlucky"})
         assert r.status_code == 500
@@ -291,15 +296,7 @@ def test_a_campaign_whose_response_cannot_be_built_leaves_no_row(s2, monkeypatch
     from service.api import campaigns as api
 
     client, _app, _settings = s2
-    real, calls = api.campaign_summary, []
-
-    def fails_once(campaign):
-        calls.append(campaign.name)
-        if len(calls) == 1:
-            raise RecursionError("maximum recursion depth exceeded while serialising")
-        return real(campaign)
-
-    monkeypatch.setattr(api, "campaign_summary", fails_once)
+    monkeypatch.setattr(api, "campaign_summary", fails_once(api.campaign_summary))
     client_500 = TestClient(client.app, raise_server_exceptions=False)
     r = client_500.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client)))
     assert r.status_code == 500
