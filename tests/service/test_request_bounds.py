@@ -301,3 +301,10 @@ def test_a_campaign_whose_response_cannot_be_built_leaves_no_row(s2, monkeypatch
     r = client_500.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client)))
     assert r.status_code == 500
     assert client.get(f"{API}/campaigns").json() == []
+
+
+def test_an_effect_parameter_refuses_a_boolean(client):
+    body = {"evaluator": "analytic", "parameters": {"effects": {"rolling_epsd2": {"rolling_friction": True}}}}
+    r = client.post(f"{API}/jobs", json=body)
+    assert r.status_code == 422, r.text
+    assert client.get(f"{API}/jobs").json()["total"] == 0
