@@ -20,6 +20,7 @@ from service import queue
 from service.app import create_app
 
 MiB = 1024 * 1024
+LOCAL = "http://127.0.0.1"  # a loopback Host, which a Host allow-list admits
 
 
 def locs(response) -> list[list]:
@@ -83,7 +84,7 @@ def test_a_write_whose_response_cannot_be_built_leaves_no_row(settings, monkeypa
     from service.api import materials as api
 
     monkeypatch.setattr(api, "material_dict", fails_once(api.material_dict))
-    with TestClient(create_app(settings), raise_server_exceptions=False) as client:
+    with TestClient(create_app(settings), base_url=LOCAL, raise_server_exceptions=False) as client:
         r = client.post(f"{API}/materials", json={"name": "unlucky"})
         assert r.status_code == 500
         listing = client.get(f"{API}/materials")
@@ -128,7 +129,7 @@ def test_chunked_body_over_the_cap_is_refused_while_it_streams(settings):
 
 
 def test_body_over_the_cap_is_413_through_http(settings):
-    with TestClient(create_app(settings.model_copy(update={"max_body_bytes": 4096}))) as client:
+    with TestClient(create_app(settings.model_copy(update={"max_body_bytes": 4096})), base_url=LOCAL) as client:
         r = client.post(f"{API}/materials", json={"name": "big", "description": "x" * 5000})
         assert r.status_code == 413 and locs(r) == [["body"]] and "DEMCAL_MAX_BODY_BYTES" in r.text
         assert client.get(f"{API}/materials").json() == []
@@ -297,7 +298,7 @@ def test_a_campaign_whose_response_cannot_be_built_leaves_no_row(s2, monkeypatch
 
     client, _app, _settings = s2
     monkeypatch.setattr(api, "campaign_summary", fails_once(api.campaign_summary))
-    client_500 = TestClient(client.app, raise_server_exceptions=False)
+    client_500 = TestClient(client.app, base_url=LOCAL, raise_server_exceptions=False)
     r = client_500.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client)))
     assert r.status_code == 500
     assert client.get(f"{API}/campaigns").json() == []
