@@ -2,19 +2,25 @@
 rules of the loop. Validated once; a campaign stores them as JSON and the runner re-reads them."""
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 
 from calibration import parameters as factor_paths
-from doe.constraints import parse_constraint
+from doe.constraints import MAX_CONSTRAINT_CHARS, parse_constraint
 from doe.factors import DoeError
 from engine.lab.registry import BATTERY, JobTestName
-from engine.lab.spec import MicroParameters, TestOptions
+from engine.lab.spec import STRICT_INPUT, MicroParameters, TestOptions
 
 # Every schema here refuses NaN and infinities: stored, they come back as null and the campaign fails later
 # with an empty reason.
-_FINITE = ConfigDict(extra="forbid", allow_inf_nan=False)
+_FINITE = STRICT_INPUT  # no NaN, no infinities, no booleans for numbers (engine.lab.spec)
+
+# Free text (a prior's source) is stored with the campaign and returned by every listing: a 40 MB source was
+# accepted and every GET /campaigns then answered 42 MB. A reference fits in this.
+MAX_SOURCE_CHARS = 10_000
+# A generator ('D=ABC', or a factor's name, up to 64 characters, for D) names at most the 15 factors of a preview.
+MAX_GENERATOR_CHARS = 200
 
 # Design factors must be scalar MicroParameters fields (the lab varies those).
 FACTOR_NAMES = tuple(
@@ -46,7 +52,7 @@ class DesignIn(BaseModel):
     model_config = _FINITE
 
     type: Literal["full", "fractional"] = "full"
-    generators: list[str] | None = Field(
+    generators: list[Annotated[str, Field(max_length=MAX_GENERATOR_CHARS)]] | None = Field(
         None, max_length=14, description="fractional only, e.g. ['D=ABC'] for the thesis's 2^(4-1) design (Table A.8)"
     )
     centre_runs: int = Field(3, ge=0, le=50, description="centre replicates, each with its own seed")
@@ -78,7 +84,7 @@ class PriorIn(BaseModel):
     parameter: str = Field(..., max_length=64)
     value: float
     uncertainty: float = Field(..., gt=0)
-    source: str = ""
+    source: str = Field("", max_length=MAX_SOURCE_CHARS, description="where the value comes from (a reference)")
 
 
 class LoopSettings(BaseModel):
@@ -103,7 +109,7 @@ class LoopSettings(BaseModel):
         0.05, gt=0, le=1,
         description="standard uncertainty assumed, relative to the mean, for a target published without replicates",
     )
-    constraints: list[str] = Field(
+    constraints: list[Annotated[str, Field(max_length=MAX_CONSTRAINT_CHARS)]] = Field(
         default_factory=list, max_length=50, description="linear constraints on factors, e.g. 'friction_pw <= friction_pp'"
     )
     priors: list[PriorIn] = Field(

@@ -7,6 +7,7 @@ evaluated, so user text cannot run code.
 from __future__ import annotations
 
 import ast
+import re
 import math
 from dataclasses import dataclass, field
 from typing import Callable
@@ -156,8 +157,33 @@ def _linear(node) -> tuple[dict[str, float], float]:
     raise DoeError("constraint must be linear in the parameters (numbers, names, + - * /)")
 
 
+# A linear constraint among a handful of factors needs a few terms; the parser recurses once per operator,
+# so a 1,000-term expression exhausted Python's recursion limit (a 500 from the campaign API). Longer text
+# is refused before it is parsed.
+MAX_CONSTRAINT_TERMS = 64
+MAX_CONSTRAINT_CHARS = 1000
+_TERM = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?")
+_OPERATOR = re.compile(r"[-+*/()]")
+
+
+def check_constraint_size(text: str) -> None:
+    """DoeError when ``text`` is longer than ``MAX_CONSTRAINT_CHARS`` or has more than ``MAX_CONSTRAINT_TERMS``
+    names and numbers, or more operators and parentheses than that allows: it is then refused before the
+    recursive parser sees it."""
+    if len(text) > MAX_CONSTRAINT_CHARS:
+        raise DoeError(f"constraint has {len(text)} characters, over the limit of {MAX_CONSTRAINT_CHARS}")
+    terms = len(_TERM.findall(text))
+    if terms > MAX_CONSTRAINT_TERMS:
+        raise DoeError(f"constraint has {terms} terms, over the limit of {MAX_CONSTRAINT_TERMS}")
+    operators = len(_OPERATOR.findall(text))
+    if operators > 4 * MAX_CONSTRAINT_TERMS:
+        raise DoeError(f"constraint has {operators} operators and parentheses, over the limit of "
+                       f"{4 * MAX_CONSTRAINT_TERMS}")
+
+
 def parse_constraint(text: str, name: str = "") -> LinearConstraint:
     """'friction_pw <= friction_pp' -> LinearConstraint({'friction_pw': 1, 'friction_pp': -1}, upper=0)."""
+    check_constraint_size(text)
     for op in ("<=", ">="):
         if op in text:
             lhs, rhs = text.split(op, 1)

@@ -104,6 +104,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     install_error_handlers(app)
     document_errors(app)
     install_token_guard(app, settings)
+    from service.bounds import RequestBounds
+
+    app.add_middleware(RequestBounds, settings=settings)  # outermost: a body is bounded before anything reads it
     for name in ROUTERS:
         app.include_router(importlib.import_module(f"service.api.{name}").router, prefix=API_PREFIX)
     from service import web

@@ -30,10 +30,11 @@ class Settings(BaseModel):
     threads_per_job: int | None = Field(
         None, ge=1, description="numba threads of each local worker's jobs; None = cores // workers (at least 1): "
         "jobs side by side on one thread each give the most batteries per hour (bench/battery_threads.py)")
-    token: str | None = Field(None, description="bearer token for write endpoints (required off loopback)")
+    token: str | None = Field(None, description="bearer token for write endpoints (required off loopback); at least "
+                                                "16 characters (service.security.MIN_TOKEN_LENGTH)")
     tokens: str | None = Field(
-        None, description="named bearer tokens 'alice:s3cret,bob:0ther'; the name is the client's identity "
-                          "for per-client limits (DEMCAL_TOKENS)")
+        None, description="named bearer tokens 'alice:s3cret-0123456789ab,bob:0ther-0123456789ab'; the name is the client's identity "
+                          "for per-client limits (DEMCAL_TOKENS); each at least 16 characters, no two users sharing one")
     allowed_hosts: str | None = Field(
         None, description="extra Host names the service answers to, comma-separated (DEMCAL_ALLOWED_HOSTS); "
                           "loopback names and DEMCAL_HOST are always allowed, any other Host gets 400 (a web "
@@ -51,6 +52,12 @@ class Settings(BaseModel):
     max_simulated_time_s: float = Field(3600.0, gt=0)
     max_queued_jobs_per_client: int = Field(10_000, ge=1)
     max_design_runs: int = Field(512, ge=1, description="runs of one design (campaign or preview)")
+    max_body_bytes: int = Field(
+        16 * 1024 * 1024, ge=1024, description="largest request body (default 16 MiB); larger is a 413, refused on "
+        "Content-Length before it is read, or as soon as a chunked body passes it (service.bounds)")
+    max_json_depth: int = Field(
+        32, ge=4, le=200, description="deepest nesting of a JSON body (default 32); deeper is a 422 naming the "
+        "field: free-form JSON nested ~255 levels was stored and then broke every listing (service.bounds)")
     start_workers: bool = True
     start_background: bool = True
     seed_materials: bool = True

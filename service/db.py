@@ -6,9 +6,9 @@ second writer waits instead of failing, and foreign keys on (off by default ther
 """
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 from fastapi import Depends, Request
 from sqlalchemy import Engine, create_engine, event
@@ -64,6 +64,19 @@ def get_session(request: Request) -> Iterator[Session]:
         yield session
     finally:
         session.close()
+
+
+def built_then_committed(session: Session, build: Callable[[], Any], model: Any) -> dict:
+    """The response of a write, validated by its response ``model`` and serialised, then the commit.
+
+    Why this order: a write committed before its response was built left a row behind a 500 (a material
+    nested past the serialiser's recursion guard was stored, answered 500, and then broke every listing).
+    Built after a flush (ids and defaults exist) and before the commit, a failure rolls the write back
+    when the request's session closes."""
+    session.flush()
+    body = model.model_validate(build()).model_dump(mode="json", exclude_unset=True)
+    session.commit()
+    return body
 
 
 DbSession = Annotated[Session, Depends(get_session)]

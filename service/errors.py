@@ -119,12 +119,22 @@ def allowed_methods(request: Request) -> list[str]:
     import re
 
     path = request.url.path
+    paths = request.app.openapi().get("paths", {})
+    if path in paths:  # a fixed path (/materials/quantities) is not also /materials/{material_id}
+        return sorted(m.upper() for m in paths[path])
     methods: set[str] = set()
-    for template, operations in request.app.openapi().get("paths", {}).items():
+    for template, operations in paths.items():
         pattern = "^" + re.sub(r"\\\{[^/]+?\\\}", "[^/]+", re.escape(template)) + "$"
         if re.match(pattern, path):
             methods |= {m.upper() for m in operations}
     return sorted(methods)
+
+
+def _wrong_method_on_fixed_path(request: Request) -> bool:
+    """A method the API does not document for a fixed path, which a parameterised sibling route took
+    (DELETE /materials/quantities reached DELETE /materials/{material_id} and answered 422 on the id)."""
+    operations = request.app.openapi().get("paths", {}).get(request.url.path)
+    return operations is not None and request.method.lower() not in operations
 
 
 def install_error_handlers(app: FastAPI) -> None:
@@ -138,7 +148,10 @@ def install_error_handlers(app: FastAPI) -> None:
         return await _api_error(request, from_settings_error(exc))
 
     @app.exception_handler(RequestValidationError)
-    async def _request_validation(_request: Request, exc: RequestValidationError):
+    async def _request_validation(request: Request, exc: RequestValidationError):
+        if _wrong_method_on_fixed_path(request):
+            return JSONResponse({"detail": [{"loc": [], "msg": "Method Not Allowed", "type": "http_error"}]},
+                                status_code=405, headers={"Allow": ", ".join(allowed_methods(request))})
         detail = [
             {"loc": _field_of_model_error(list(err.get("loc", ())), err.get("msg", ""), getattr(exc, "body", None)),
              "msg": err.get("msg", ""), "type": err.get("type", "value_error")}

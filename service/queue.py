@@ -280,9 +280,13 @@ def heartbeat(session: Session, job_id: int, worker_id: str, lease_s: float,
 
 
 def complete_job(session: Session, job_id: int, worker_id: str, result: LabResult, wall_time_s: float) -> bool:
-    """Store the result and mark success in one transaction; False if the lease was lost."""
+    """Store the result and mark success in one transaction; False if the lease was lost.
+
+    The error is cleared: a job re-queued after a lost lease kept "attempt 1: ..." next to its result, which
+    read as a failure; the attempt count still says it took more than one."""
     done = _update(session, job_id, _owned(worker_id), {
         "status": JobStatus.SUCCEEDED, "result": result.model_dump(mode="json"), "finished_at": utcnow(),
+        "error": None,
         "engine_version": result.provenance.engine_version, "wall_time_s": wall_time_s,
         "progress_fraction": 1.0, "progress_phase": "done", "lease_expires_at": None,
     })

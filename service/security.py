@@ -2,7 +2,7 @@
 
 Off loopback, anyone on the network could queue hour-long DEM runs, so every write
 (POST/PUT/PATCH/DELETE) then needs ``Authorization: Bearer <token>``. Tokens can be named
-(``DEMCAL_TOKENS=alice:s3cret,bob:0ther``): the name is the client identity per-client limits
+(``DEMCAL_TOKENS=alice:<16+ chars>,bob:<16+ chars>``): the name is the client identity per-client limits
 count against, so it cannot be forged by a header. Only on loopback (tests, a single user's
 machine) may ``X-Client-Id`` choose the identity.
 
@@ -21,6 +21,9 @@ from service.errors import Unauthorized
 
 WRITE_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 DEFAULT_TOKEN_NAME = "token"
+# A guessable token is no token: one character (or whitespace) was accepted. 16 characters of a random
+# generator (e.g. ``python3 -c "import secrets; print(secrets.token_urlsafe(24))"``) are beyond guessing.
+MIN_TOKEN_LENGTH = 16
 
 
 def is_loopback(host: str | None) -> bool:
@@ -36,17 +39,30 @@ def is_loopback(host: str | None) -> bool:
 
 
 def token_names(settings: Settings) -> dict[str, str]:
-    """token -> client name, from DEMCAL_TOKEN (named "token") and DEMCAL_TOKENS ("name:token,...")."""
+    """token -> client name, from DEMCAL_TOKEN (named "token") and DEMCAL_TOKENS ("name:token,...").
+
+    Refused with one line (at start: ``check_bind`` calls this before the socket opens) when a token is
+    shorter than ``MIN_TOKEN_LENGTH`` or two users share one: a shared token silently merged two users
+    into whichever name came last."""
     table: dict[str, str] = {}
-    if settings.token:
-        table[settings.token] = DEFAULT_TOKEN_NAME
+    entries: list[tuple[str, str, str]] = []  # (variable, name, token)
+    if settings.token is not None and settings.token != "":
+        entries.append(("DEMCAL_TOKEN", DEFAULT_TOKEN_NAME, settings.token.strip()))
     for item in (settings.tokens or "").split(","):
         name, sep, token = item.strip().partition(":")
         if not item.strip():
             continue
         if not sep or not name.strip() or not token.strip():
             raise SystemExit(f"DEMCAL_TOKENS: {item.strip()!r} is not name:token")
-        table[token.strip()] = name.strip()
+        entries.append(("DEMCAL_TOKENS", name.strip(), token.strip()))
+    for variable, name, token in entries:
+        if len(token) < MIN_TOKEN_LENGTH:
+            raise SystemExit(f"{variable}: the token of {name!r} has {len(token)} characters (after trimming "
+                             f"spaces); at least {MIN_TOKEN_LENGTH} are needed")
+        if token in table and table[token] != name:
+            raise SystemExit(f"{variable}: {table[token]!r} and {name!r} have the same token; each user needs "
+                             "their own")
+        table[token] = name
     return table
 
 

@@ -33,7 +33,7 @@ from .base import Candidate, Effect
 
 
 class Params(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # no false for a number: engine.lab.spec.STRICT_INPUT
     # at most 50 x the plausible top: beyond it the attraction outweighs any contact's repulsion at the
     # lab's stresses and the packing collapses into itself
     surface_energy_j_m2: float = Field(ge=0, le=1.0e4, description="Gamma, J/m2: pull-off force 3/2 pi Gamma R*")

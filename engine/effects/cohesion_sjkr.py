@@ -19,7 +19,7 @@ from .base import Effect
 
 
 class Params(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # no false for a number: engine.lab.spec.STRICT_INPUT
     cohesion_energy_density_j_m3: float = Field(ge=0)
 
 

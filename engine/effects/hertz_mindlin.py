@@ -15,7 +15,7 @@ from .base import Candidate, Effect
 
 
 class Params(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # no false for a number: engine.lab.spec.STRICT_INPUT
     young_modulus_pa: float = Field(gt=0)
     poisson_ratio: float = Field(0.25, gt=-1, lt=0.5)
     wall_young_modulus_pa: float | None = Field(None, gt=0)

@@ -14,7 +14,7 @@ from .base import Effect
 
 
 class Params(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # no false for a number: engine.lab.spec.STRICT_INPUT
     rolling_friction: float = Field(ge=0, description="mu_r, dimensionless")
 
 

@@ -17,7 +17,7 @@ from .rolling_spring import rolling_velocity, spring_torque
 
 
 class Params(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # no false for a number: engine.lab.spec.STRICT_INPUT
     rolling_friction: float = Field(ge=0, description="mu_r, dimensionless")
     rolling_damping_ratio: float = Field(0.3, ge=0, le=1, description="eta_r, dimensionless (Ai et al.: 0.3)")
 

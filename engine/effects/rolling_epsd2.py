@@ -17,7 +17,7 @@ from .rolling_spring import spring_torque
 
 
 class Params(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # no false for a number: engine.lab.spec.STRICT_INPUT
     rolling_friction: float = Field(ge=0, description="mu_r, dimensionless")
 
 

@@ -38,7 +38,9 @@ def load_spec(path: str | Path) -> JobSpec:
     if not isinstance(data, dict):
         raise SpecError(f"spec {path} must be a mapping of fields (test, fidelity, seed, parameters, options)")
     try:
-        return JobSpec.model_validate(data)
+        # YAML 1.1 reads 2e6 (no decimal point) as a string: a hand-written spec file keeps lax number
+        # parsing; JSON, like the API, is strict (no false for a number)
+        return JobSpec.model_validate(data, strict=False if path.suffix.lower() in (".yaml", ".yml") else None)
     except ValidationError as exc:
         lines = [
             f"  {'.'.join(str(p) for p in err['loc']) or '(root)'}: {err['msg']}" for err in exc.errors()

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, Strict, field_validator
 
 from engine.lab.bounds import (CONTACT_STIFFNESS_TYPICAL, DENSEST_SOLID_KG_M3, FRICTION_COEFFICIENT_TYPICAL,
                                MAX_CONTACT_STIFFNESS_N_PER_M, MAX_FRICTION_COEFFICIENT, MAX_PARTICLE_RADIUS_M,
@@ -18,7 +18,13 @@ from engine.lab.registry import BATTERY, JobTestName
 
 # Every model here refuses NaN and infinities (``allow_inf_nan=False``): JSON cannot carry them back,
 # so a stored infinity would come back as null and a job "succeed" with a null result.
-_FINITE = ConfigDict(extra="forbid", allow_inf_nan=False)
+# Strict types: lax coercion took ``false`` as 0.0 for a number and ``0`` as false for a switch, so a
+# client's wrong type ran a job nobody asked for. JSON types map onto these without loss (an integer is a
+# valid float); tuples are validated from JSON lists with ``STRICT_PAIR``. The API's input models share it.
+STRICT_INPUT = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
+_FINITE = STRICT_INPUT
+# A pair of numbers sent as a JSON list: a strict tuple would refuse the list, a lax one take booleans.
+STRICT_PAIR = tuple[Annotated[float, Strict()], Annotated[float, Strict()]]
 # Speeds, lengths and counts of a laboratory test: ceilings well above any lab set-up, so that the
 # cost model (engine.lab.cost) rather than an overflow decides what is too big.
 _MAX_LAB_LENGTH_M = 100.0
@@ -27,6 +33,10 @@ _MIN_LAB_SPEED_M_S = 1e-6  # 1 um/s, a creep test; slower divides the lab's time
 _MIN_SPEED_FACTOR, _MAX_SPEED_FACTOR = 1e-3, 1e4
 _MAX_CCT_CYCLES = 1000
 _MAX_DST_STRESSES = 20
+# E' read at a few stresses of a compression curve; each is a key of every stored result.
+_MAX_CCT_WINDOW_STRESSES = 20
+# Contact effects on one material: the registry has a handful; more names than this is not a model.
+_MAX_EFFECTS = 16
 
 Fidelity = Literal["screening", "thesis"]
 
@@ -65,7 +75,7 @@ class MicroParameters(BaseModel):
         "(two spheres that still touch)",
     )
     effects: dict[str, dict[str, Any]] = Field(
-        default_factory=dict,
+        default_factory=dict, max_length=_MAX_EFFECTS,
         description="optional contact effects by registered name (engine.effects.REGISTRY), each with its "
                     "parameters, e.g. {'rolling_epsd2': {'rolling_friction': 0.1}}",
     )
@@ -110,7 +120,7 @@ class TestOptions(BaseModel):
     cct_cycles: int | None = Field(None, ge=1, le=_MAX_CCT_CYCLES,
                                    description="load-unload cycles; each counts in the simulated-time limit")
     cct_window_stresses_pa: list[float] | None = Field(
-        None,
+        None, max_length=_MAX_CCT_WINDOW_STRESSES,
         description="CCT: report the tangent confined modulus E' = d(sigma)/d(strain) at exactly these normal "
         "stresses (Pa; each > 0, strictly increasing, below the CCT maximum stress), keyed by the given floats, "
         "instead of five equal windows from 0 to the peak (docs/lab.md)",
@@ -125,8 +135,8 @@ class TestOptions(BaseModel):
     )
     shear_distance_m: float | None = Field(None, gt=0, le=_MAX_LAB_LENGTH_M,
                                            description="DST shear travel; unset: the fidelity's")
-    residual_window_strain: tuple[float, float] = Field(
-        (0.08, 0.10), description="DST shear-strain window for residual stresses and dilatancy"
+    residual_window_strain: STRICT_PAIR = Field(
+        (0.08, 0.10), strict=False, description="DST shear-strain window for residual stresses and dilatancy"
     )
     moving_average_span: int = Field(21, ge=1, le=100_001, description="DST smoothing span, points (odd)")
     aor_lift_speed_m_s: float | None = Field(None, ge=_MIN_LAB_SPEED_M_S, le=_MAX_LAB_SPEED_M_S)

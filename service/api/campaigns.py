@@ -15,7 +15,7 @@ from service.api.responses.common import typed
 from service.api.responses.diagnosis import DiagnosisOut
 from service.api.responses.history import History
 from service.api.responses.report import ReportOut
-from service.db import DbSession
+from service.db import DbSession, built_then_committed
 from service.errors import Conflict, NotFound
 from service.security import client_id
 from calibration.vocabulary import Phase, Verdict
@@ -31,7 +31,8 @@ _NOT_YET = errors(409, c409="the iteration has not produced this yet")
              responses=errors(404, c404="the material does not exist"))
 def create(body: CampaignCreate, session: DbSession,
            client: str = Depends(client_id)) -> dict:
-    return campaign_summary(create_campaign(session, body, client_id=client))
+    campaign = create_campaign(session, body, client_id=client, commit=False)
+    return built_then_committed(session, lambda: campaign_summary(campaign), CampaignSummary)
 
 
 @router.get("", summary="List campaigns, newest first", **typed(list[CampaignSummary]))

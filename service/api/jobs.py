@@ -5,13 +5,13 @@ from typing import Any
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
 from fastapi import Path as PathParam
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
 from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
 from engine.lab.plausibility import options_warnings, parameter_warnings
 from engine.lab.registry import BATTERY, JobTestName
-from engine.lab.spec import Fidelity, JobSpec, MicroParameters, TestOptions
+from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, TestOptions
 from service import queue
 from service.api.jsonsafe import json_safe
 from service.api.openapi import errors
@@ -31,7 +31,7 @@ router = APIRouter(prefix="/jobs", tags=["jobs"])
 class JobSubmit(BaseModel):
     """A single test or a battery: the job spec plus how to queue it."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    model_config = STRICT_INPUT
 
     test: JobTestName = BATTERY
     fidelity: Fidelity = "screening"

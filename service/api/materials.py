@@ -8,7 +8,7 @@ from sqlalchemy.orm import Session
 from service.api.openapi import errors
 from service.api.params import MaterialId, MeasurementId
 from service.api.responses.quantities import Quantities
-from service.db import DbSession
+from service.db import DbSession, built_then_committed
 from service.errors import Conflict, NotFound
 from service.materials.schemas import MaterialCopy, MaterialIn, MaterialOut, MeasurementIn, MeasurementOut
 from service.materials.store import (add_measurement, copy_material, create_material, find_by_name, get_material,
@@ -51,8 +51,7 @@ def create(body: MaterialIn, session: DbSession):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
     material = create_material(session, body)
-    session.commit()
-    return material_dict(_material_or_404(session, material.id))
+    return built_then_committed(session, lambda: material_dict(_material_or_404(session, material.id)), MaterialOut)
 
 
 @router.post("/{material_id}/copy", response_model=MaterialOut, status_code=201,
@@ -63,8 +62,7 @@ def copy(material_id: MaterialId, body: MaterialCopy, session: DbSession):
     if find_by_name(session, body.name) is not None:
         raise Conflict(f"a material named {body.name!r} exists", "name")
     created = copy_material(session, material, body.name)
-    session.commit()
-    return material_dict(_material_or_404(session, created.id))
+    return built_then_committed(session, lambda: material_dict(_material_or_404(session, created.id)), MaterialOut)
 
 
 @router.get("/{material_id}", response_model=MaterialOut)
@@ -96,8 +94,7 @@ def add(material_id: MaterialId, body: MeasurementIn, session: DbSession):
     material = _material_or_404(session, material_id)
     require_editable(material)
     row = add_measurement(session, material, body)
-    session.commit()
-    return measurement_dict(row)
+    return built_then_committed(session, lambda: measurement_dict(row), MeasurementOut)
 
 
 @router.delete("/{material_id}/measurements/{measurement_id}", status_code=204,

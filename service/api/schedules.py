@@ -6,7 +6,7 @@ from fastapi import APIRouter, Query, Response
 from service.api.openapi import errors
 from service.api.params import ScheduleId
 from service.api.responses.schedules import CronPreview, Firing, Schedule
-from service.db import DbSession
+from service.db import DbSession, built_then_committed
 from service.errors import Invalid
 from service.schedules.cron import CronError, parse_cron
 from service.schedules.scheduler import naive_utc
@@ -29,7 +29,8 @@ def cron_preview(expr: str = Query(..., max_length=200, description="e.g. '0 2 *
 @router.post("", status_code=201, summary="Create a schedule", response_model=Schedule,
              responses=errors(404, c404="the template's material does not exist"))
 def create(body: ScheduleIn, session: DbSession) -> dict:
-    return schedule_view(create_schedule(session, body))
+    schedule = create_schedule(session, body, commit=False)
+    return built_then_committed(session, lambda: schedule_view(schedule), Schedule)
 
 
 @router.get("", summary="List schedules", response_model=list[Schedule])

@@ -13,7 +13,7 @@ from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from calibration.settings import _FINITE, DesignIn, DesignPreviewIn, FactorIn, LoopSettings, PriorIn  # noqa: F401
 from engine.lab.bounds import SQLITE_INT_MAX, CONDITION_BOUNDS
 from engine.lab.registry import known_quantity, known_test
-from engine.lab.spec import MicroParameters, TestOptions
+from engine.lab.spec import STRICT_PAIR, MicroParameters, TestOptions
 from engine.lab.units import UnitError, condition_si_unit
 
 # One priority scale for jobs and campaigns (service.api.params mirrors it for jobs).
@@ -95,12 +95,12 @@ class IterationIn(BaseModel):
     targets: list[TargetIn] | None = Field(None, max_length=1000)
     options: dict[str, Any] | None = None
     add_effect: str | None = Field(
-        None, description="a diagnosis candidate (GET /api/v1/effects) whose strength becomes one more design "
+        None, max_length=64, description="a diagnosis candidate (GET /api/v1/effects) whose strength becomes one more design "
         "factor, keeping the previous factors: from 'off' over its plausible range, or to twice the last "
         "diagnosis's estimate of the strength if larger (a switch-type effect: a log range of 4x about its "
         "value matched at the last optimum), or strength_range",
     )
-    strength_range: tuple[float, float] | None = Field(None, description="low, high of the added effect's strength")
+    strength_range: STRICT_PAIR | None = Field(None, strict=False, description="low, high of the added effect's strength")
     proposed_design: bool = Field(
         False, description="run the design the last iteration's surface check proposed (report.surrogate_check: "
         "a narrowed factorial about the optimum, or face-centred axial runs for a central composite design)",

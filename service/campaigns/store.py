@@ -81,7 +81,9 @@ def check_targets_simulated(session: Session, body: CampaignCreate) -> None:
 
 
 def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = "anonymous",
-                    schedule_id: int | None = None) -> Campaign:
+                    schedule_id: int | None = None, commit: bool = True) -> Campaign:
+    """A draft campaign; ``commit=False`` leaves the commit to the caller (the API builds its response first:
+    ``service.db.built_then_committed``)."""
     if get_material(session, body.material_id) is None:
         raise NotFound(f"material {body.material_id} not found", "material_id")
     check_targets_simulated(session, body)
@@ -91,7 +93,8 @@ def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = 
                         fidelity=body.fidelity, config=body.model_dump(mode="json"), current_iteration=0,
                         schedule_id=schedule_id, client_id=client_id)
     session.add(campaign)
-    session.commit()
+    if commit:
+        session.commit()
     return campaign
 
 

@@ -2,11 +2,12 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
+from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree
+from engine.lab.spec import STRICT_INPUT
 from engine.lab.registry import known_quantity, known_test, quantity
 from service.errors import Invalid
 from engine.lab.units import UnitError, condition_si_unit, to_si
@@ -20,7 +21,7 @@ MAX_TEXT = 10_000
 class MeasurementIn(BaseModel):
     """A measurement as a user sends it: any accepted unit, converted to SI on validation."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    model_config = STRICT_INPUT
 
     test: str = Field(..., max_length=32, description="a test that reports quantities (GET /api/v1/tests)")
     quantity: str = Field(..., max_length=64,
@@ -31,7 +32,7 @@ class MeasurementIn(BaseModel):
                                 description="replicate values (at least one), each within the quantity's bounds")
     condition: dict[str, float] = Field(default_factory=dict, max_length=8,
                                         description="test condition, e.g. normal_stress_pa")
-    condition_units: dict[str, str] = Field(
+    condition_units: dict[str, Annotated[str, Field(max_length=16)]] = Field(
         default_factory=dict, max_length=8,
         description="unit per condition entry when not SI, e.g. {'normal_stress_pa': 'kPa'}",
     )
@@ -105,7 +106,7 @@ class FieldError(Invalid):
 
 
 class MaterialIn(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    model_config = STRICT_INPUT
 
     name: str = Field(..., min_length=1, max_length=200)
     description: str = Field("", max_length=MAX_TEXT)
@@ -160,6 +161,6 @@ class MaterialOut(BaseModel):
 
 
 class MaterialCopy(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = STRICT_INPUT
 
     name: str = Field(..., min_length=1, max_length=200, description="name of the editable copy")

@@ -4,10 +4,11 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from engine.lab.spec import STRICT_INPUT
 from service.campaigns.schemas import CampaignCreate
 from service.errors import Invalid, NotFound
 from service.campaigns.store import check_limits_with_targets
@@ -18,7 +19,7 @@ from service.schedules.scheduler import naive_utc
 
 
 class ScheduleIn(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = STRICT_INPUT
 
     name: str = Field(..., min_length=1, max_length=200)
     cron: str = Field(..., max_length=200, description="5 fields, UTC: minute hour day-of-month month day-of-week; or @daily ...")
@@ -29,7 +30,7 @@ class ScheduleIn(BaseModel):
 
 
 class ScheduleUpdate(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = STRICT_INPUT
 
     cron: str | None = Field(None, max_length=200)
     enabled: bool | None = None
@@ -44,7 +45,8 @@ def _cron(expression: str):
         raise Invalid(str(exc), "cron") from exc
 
 
-def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = None) -> Schedule:
+def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = None, commit: bool = True) -> Schedule:
+    """A schedule; ``commit=False`` leaves the commit to the caller (``service.db.built_then_committed``)."""
     cron = _cron(body.cron)
     if get_material(session, body.template.material_id) is None:
         raise NotFound(f"material {body.template.material_id} not found", "template.material_id")
@@ -54,7 +56,8 @@ def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = N
                         only_if_new_measurements=body.only_if_new_measurements, enabled=body.enabled,
                         missed_run_policy=body.missed_run_policy, next_run_at=cron.next_after(naive_utc(now)))
     session.add(schedule)
-    session.commit()
+    if commit:
+        session.commit()
     return schedule
 
 

@@ -201,11 +201,11 @@ def test_cancel_running_job_is_accepted(client):
 
 
 def test_token_guards_writes(settings):
-    with TestClient(create_app(settings.model_copy(update={"token": "s3cret"})), base_url=LOCAL_BASE_URL) as client:
+    with TestClient(create_app(settings.model_copy(update={"token": "s3cret-0123456789ab"})), base_url=LOCAL_BASE_URL) as client:
         r = submit(client)
         assert r.status_code == 401 and locs(r) == [["header", "Authorization"]]
         assert client.post(f"{API}/jobs", json={}, headers={"Authorization": "Bearer wrong"}).status_code == 401
-        ok = client.post(f"{API}/jobs", json={"evaluator": "analytic"}, headers={"Authorization": "Bearer s3cret"})
+        ok = client.post(f"{API}/jobs", json={"evaluator": "analytic"}, headers={"Authorization": "Bearer s3cret-0123456789ab"})
         assert ok.status_code == 201
         assert client.get(f"{API}/jobs").status_code == 200  # reads stay open
 
@@ -213,7 +213,7 @@ def test_token_guards_writes(settings):
 def test_refuses_public_bind_without_token(settings):
     with pytest.raises(SystemExit, match="DEMCAL_TOKEN"):
         create_app(settings.model_copy(update={"host": "0.0.0.0"}))
-    create_app(settings.model_copy(update={"host": "0.0.0.0", "token": "t"}))
+    create_app(settings.model_copy(update={"host": "0.0.0.0", "token": "t-0123456789abcdef"}))
 
 
 def test_limits_follow_settings(settings):

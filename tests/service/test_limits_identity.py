@@ -110,15 +110,15 @@ def submit(client, headers=None):
 
 
 def test_identity_comes_from_the_token_name_not_a_header(settings):
-    named = settings.model_copy(update={"tokens": "alice:a-secret,bob:b-secret", "max_queued_jobs_per_client": 2})
+    named = settings.model_copy(update={"tokens": "alice:a-secret-0123456789,bob:b-secret-0123456789", "max_queued_jobs_per_client": 2})
     with TestClient(create_app(named), base_url=LOCAL_BASE_URL, client=("203.0.113.7", 4000)) as client:  # a remote peer
-        alice = {"Authorization": "Bearer a-secret"}
+        alice = {"Authorization": "Bearer a-secret-0123456789"}
         for _ in range(2):
             r = submit(client, alice)
             assert r.status_code == 201 and r.json()["client_id"] == "token:alice"
         dodge = submit(client, {**alice, "X-Client-Id": "somebody-else"})  # changing the header does not help
         assert dodge.status_code == 429 and ["header", "X-Client-Id"] in locs(dodge)
-        forged = submit(client, {"Authorization": "Bearer b-secret", "X-Client-Id": "token:alice"})
+        forged = submit(client, {"Authorization": "Bearer b-secret-0123456789", "X-Client-Id": "token:alice"})
         assert forged.status_code == 201 and forged.json()["client_id"] == "token:bob"
         assert submit(client, {"Authorization": "Bearer wrong"}).status_code == 401
         assert client.get(f"{API}/jobs").json()["total"] == 3
@@ -155,8 +155,8 @@ def test_burst_of_50_admits_exactly_the_limit(live_server):
 def test_bind_refuses_every_non_loopback_host_without_token(host):
     with pytest.raises(SystemExit, match="refusing to bind"):
         check_bind(Settings(host=host))
-    check_bind(Settings(host=host, token="t"))
-    check_bind(Settings(host=host, tokens="alice:a-secret"))
+    check_bind(Settings(host=host, token="t-0123456789abcdef"))
+    check_bind(Settings(host=host, tokens="alice:a-secret-0123456789"))
 
 
 @pytest.mark.parametrize("host", ["127.0.0.1", "127.0.0.2", "localhost", "::1"])

@@ -22,6 +22,7 @@ class Health(Out):
     local_workers_alive: int
     local_worker_pids: list[int]
     dask: Dask | None = None
-    database: str = Field(description="'ok' or 'unavailable: <error type>'")
+    database: str = Field(description="'ok', 'unavailable: <error type>' or 'unreadable: <table> row <id>: <error type>' "
+                                      "(the newest row of a table cannot be read back)")
     schema_revision: str | None = None
     jobs: dict[str, int] | None = Field(None, description="per job status: how many")
