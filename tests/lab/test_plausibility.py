@@ -18,7 +18,8 @@ from engine.lab.bounds import CONDITION_TYPICAL
 from engine.lab.plausibility import (factor_warnings, measurement_warnings, options_warnings, parameter_warnings,
                                      record_warnings, settings_warnings)
 from engine.lab import registry
-from engine.lab.spec import MicroParameters, TestOptions
+from engine.lab.spec import MicroParameters
+from engine.lab.spec import TestOptions as LabTestOptions  # not "Test*": pytest would try to collect it
 from engine.lab.units import to_si
 
 BUNDLED = Path(__file__).resolve().parents[2] / "service" / "materials" / "thesis_coarse_aggregate.json"
@@ -123,7 +124,7 @@ def test_every_typical_range_lies_inside_its_bound(test_name):
 
 
 def test_micro_parameter_and_condition_ranges_lie_inside_their_bounds():
-    for model in (MicroParameters, TestOptions):
+    for model in (MicroParameters, LabTestOptions):
         for name, field in model.model_fields.items():
             for typical in (m for m in field.metadata if hasattr(m, "what")):
                 # the field's own bound refuses what lies outside it: the typical ends must pass it

@@ -53,8 +53,10 @@ def test_sigkill_worker_mid_job_job_finishes_on_the_other(live_server):
 
         done = _wait_for(lambda: finished(victim_job["id"]), 60, "the killed worker's job to finish elsewhere")
         assert done["status"] == "succeeded", done
-        assert done["attempts"] >= 2  # the killed attempt counted; the job ran again
-        assert str(victim_pid) in done["error"]  # the lost attempt is on record
+        assert done["attempts"] >= 2  # the killed attempt counted (it is on record there); the job ran again
+        # the lost attempt's error ("worker ...:<pid> lost") does not outlive the success (issue 32: a stale
+        # error beside "succeeded" misleads)
+        assert done["error"] is None
         survivor_pid = int(done["lease_owner"].split(":")[2])
         assert survivor_pid != victim_pid and workers[survivor_pid].poll() is None
         record = api.get(f"/jobs/{victim_job['id']}/result").json()
