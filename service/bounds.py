@@ -25,6 +25,8 @@ def json_depth(body: bytes, limit: int) -> tuple[int, str | None]:
     A scan of brackets outside strings, linear in the body and without recursion. The key is the last string
     seen at depth 1 before the container that goes too deep (the member it belongs to), None for a top-level list.
     """
+    if body.count(b"{") + body.count(b"[") <= limit:  # cannot nest deeper than it opens: skip the byte loop
+        return 0, None
     depth = 0
     in_string = escaped = False
     start = 0
