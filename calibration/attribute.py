@@ -8,7 +8,10 @@ score test asks how much of the remaining misfit e explains (``stats.score_test`
 
 Effects whose projected signatures are nearly collinear (|cos| > ALIAS_COS) cannot be told apart by
 these measurements: they form an alias group, reported with the measurement where their
-signatures differ most, i.e. the one that would separate them.
+signatures differ most, i.e. the one that would separate them. Less collinear effects can still be
+indistinguishable on these data: when the leading candidate's score is not significantly above a
+rival's (``separation_z``), the two join one group too, since naming either alone would be a claim the
+measurements do not support.
 """
 from __future__ import annotations
 
@@ -25,6 +28,9 @@ from .keys import find
 from .localise import ALPHA, Localisation
 
 ALIAS_COS = 0.9
+# One-sided 5 % point of the normal: the leading candidate is told apart from a rival only when its
+# projected score exceeds the rival's by this many standard deviations of their difference.
+SEPARATION_Z = 1.645
 # An effect must explain at least this share of the misfit left after the baseline parameters
 # have absorbed what they can, or it is not "the" missing effect, whatever its p-value.
 MIN_EXPLAINED = 0.3
@@ -178,6 +184,33 @@ def observed_fingerprint(loc: Localisation) -> dict[str, str]:
     return {c: out.get(c, "") for c in FINGERPRINT_COLUMNS}
 
 
+def separation_z(lm_lead: float, lm_rival: float, cos: float) -> float:
+    """How many standard deviations the leading candidate's projected score exceeds a rival's.
+
+    With whitened residuals r ~ N(mu, I) and unit projected signatures u_a, u_b (u_a . u_b = cos), the
+    two scores u.r have unit variance and covariance cos, so sqrt(LM_a) - sqrt(LM_b) = (u_a - u_b).r has
+    standard deviation sqrt(2 (1 - cos)). A large z says the data prefer the lead whichever of the two is
+    true; a small one says either could have produced these residuals."""
+    spread = math.sqrt(max(2.0 * (1.0 - cos), 0.0))
+    gap = math.sqrt(max(lm_lead, 0.0)) - math.sqrt(max(lm_rival, 0.0))
+    return math.inf if spread <= 1e-12 and gap > 0 else (gap / spread if spread > 1e-12 else 0.0)
+
+
+def _not_separated(ranked: list[Ranked], cos: np.ndarray) -> list[tuple[int, int, float]]:
+    """(lead, rival, z) for the rivals the leading candidate (ranked[0]) is not told apart from: both
+    explain the misfit in the direction the effect acts (gamma > 0) and z < SEPARATION_Z."""
+    if not ranked or ranked[0].score.gamma <= 0 or ranked[0].score.lm <= 0:
+        return []
+    out = []
+    for b in range(1, len(ranked)):
+        if ranked[b].score.gamma <= 0 or cos[0, b] <= 0:
+            continue
+        z = separation_z(ranked[0].score.lm, ranked[b].score.lm, cos[0, b])
+        if z < SEPARATION_Z:
+            out.append((0, b, z))
+    return out
+
+
 def _alias_groups(ranked: list[Ranked], labels: list[str]) -> list[dict]:
     n = len(ranked)
     unit = []
@@ -200,6 +233,9 @@ def _alias_groups(ranked: list[Ranked], labels: list[str]) -> list[dict]:
             cos[a, b] = cos[b, a] = float(unit[a] @ unit[b])
             if abs(cos[a, b]) > ALIAS_COS:
                 parent[root(b)] = root(a)
+    close = {(a, b): z for a, b, z in _not_separated(ranked, cos)}
+    for a, b in close:
+        parent[root(b)] = root(a)
     groups: dict[int, list[int]] = {}
     for i in range(n):
         groups.setdefault(root(i), []).append(i)
@@ -214,12 +250,14 @@ def _alias_groups(ranked: list[Ranked], labels: list[str]) -> list[dict]:
                 a, b = members[x], members[y]
                 diff = unit[a] - np.sign(cos[a, b]) * unit[b]
                 k = int(np.argmax(np.abs(diff[:len(labels)])))
+                z = close.get((a, b), close.get((b, a)))
                 separators.append({"effects": [ranked[a].name, ranked[b].name], "cos": cos[a, b],
-                                   "separating_measurement": labels[k]})
+                                   "separation_z": z, "separating_measurement": labels[k]})
         for i in members:
             ranked[i].alias_group = gid
         out.append({"group": gid, "effects": [ranked[i].name for i in members], "separators": separators,
-                    "message": "these effects change the measured quantities in nearly the same proportions; "
+                    "message": "these effects change the measured quantities in nearly the same proportions, "
+                               "or explain these residuals about equally well; "
                                "refitting each as a factor, or measuring "
                                + " / ".join(sorted({s["separating_measurement"] for s in separators}))
                                + " more precisely, tells them apart"})

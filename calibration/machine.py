@@ -209,6 +209,8 @@ def _report(ctx: Context, it) -> Transition:
         s.diagnose and diagnosable and (misfit or s.diagnose_always) and not rejected) else []
     if plan:
         runs = [NewRun(RunKind.DIAGNOSIS, k + 1, k + 1, natural, {}, seed) for k, (_, natural, seed) in enumerate(plan)]
+        # which battery is which (by standard order), stored so the diagnosis reads it rather than planning again
+        report = {**report, "diagnosis_plan": [{"effect": name, "seed": seed} for name, _, seed in plan]}
         return Transition(Phase.REPORT, Phase.DIAGNOSIS, {"report": report, "confirmation": stored}, runs)
     return _finish(ctx, it, Phase.REPORT, report, confirmation=stored)
 
@@ -218,11 +220,14 @@ def _diagnosed(ctx: Context, it) -> Transition:
     confirmations = polish.final_runs(it)
     seeds = [r.seed for r in confirmations]
     runs = sorted(runs_of(it, RunKind.DIAGNOSIS), key=lambda r: r.std_order)
-    plan = analysis.diagnosis_plan(s, it.optimum, it.parameters, seeds)
+    stored_plan = (it.report or {}).get("diagnosis_plan")
+    # iterations stored before the plan was kept with the report are planned again (the same pure function)
+    plan = ([(p["effect"], p["seed"]) for p in stored_plan] if stored_plan is not None else
+            [(name, seed) for name, _, seed in analysis.diagnosis_plan(s, it.optimum, it.parameters, seeds)])
     diagnosis = analysis.diagnose(s, it.design["doe"], runs_of(it, RunKind.DESIGN), ctx.targets, it.optimum,
                                   records(confirmations), seeds,
                                   [(name, seed, list((r.responses or {}).values()))
-                                   for (name, _, seed), r in zip(plan, runs)])
+                                   for (name, seed), r in zip(plan, runs)])
     return _finish(ctx, it, Phase.DIAGNOSED, analysis.diagnosed_report(it.report or {}, diagnosis))
 
 

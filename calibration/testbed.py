@@ -115,16 +115,40 @@ def _strength(name: str, u: float, rng: np.random.Generator, truth: dict) -> flo
     return off + u * (c.plausible_range[1] - off)
 
 
+# Single-effect cases drawn for a detectability bin (kind -> lambda range): the strengths of 0.1-1 of the
+# plausible range put almost every single effect at lambda >= 30, so the bins where "inconclusive" is the
+# honest answer would be nearly empty; these kinds redraw (weaker strengths, other worlds) until the
+# hidden effect's lambda falls in the bin, and are scored with the single effects.
+LAMBDA_BINS = {"weak": (0.0, 10.0), "mid": (10.0, 30.0)}
+WEAK_STRENGTH = (0.01, 0.4)
+MAX_REDRAWS = 500
+
+
 def make_case(seed: int, kind: str, effects: dict[str, float] | None = None) -> Case:
-    """A case drawn from ``seed``; ``effects`` ({name: strength}) replaces the drawn hidden effects."""
-    rng = np.random.default_rng([seed, 20261122])
+    """A case drawn from ``seed``; ``effects`` ({name: strength}) replaces the drawn hidden effects.
+
+    ``kind`` "null", "single" or "two"; or a key of ``LAMBDA_BINS``: a single effect whose lambda lies in
+    that bin (the case's kind is then "single")."""
+    if kind in LAMBDA_BINS:
+        low, high = LAMBDA_BINS[kind]
+        for attempt in range(MAX_REDRAWS):
+            case = _drawn_case(np.random.default_rng([seed, 20261122, 1 + attempt]), seed, "single", effects,
+                               WEAK_STRENGTH)
+            if all(low <= lam < high for lam in case.detectability.values()):
+                return case
+        raise RuntimeError(f"no draw of seed {seed} put a single effect at {low} <= lambda < {high}")
+    return _drawn_case(np.random.default_rng([seed, 20261122]), seed, kind, effects, (0.1, 1.0))
+
+
+def _drawn_case(rng: np.random.Generator, seed: int, kind: str, effects: dict[str, float] | None,
+                strength_range: tuple[float, float]) -> Case:
     truth: dict[str, Any] = {name: float(rng.uniform(*TRUE_RANGE[name])) for name in TRUE_RANGE}
     names = sorted(candidates())
     count = {"null": 0, "single": 1, "two": 2}[kind]
     chosen = [names[i] for i in rng.choice(len(names), size=count, replace=False)] if count else []
     drawn = {}
     for name in chosen:
-        drawn[name] = _strength(name, float(rng.uniform(0.1, 1.0)), rng, truth)
+        drawn[name] = _strength(name, float(rng.uniform(*strength_range)), rng, truth)
     effects = dict(drawn if effects is None else effects)
     for name, strength in effects.items():
         truth = params_mod.apply(truth, {candidates()[name].factor: strength})
@@ -231,11 +255,13 @@ MACHINE_KEYS = ("null_false_alarm", "null_wrong_effect", "single_detected", "sin
                 "single_strength_within30", "mid_rank1", "two_first_pick")
 
 
-def case_kinds(n_cases: int) -> list[str]:
-    """A sixth null, half one effect, a third two effects (design note 3.1), in a fixed order."""
+def case_kinds(n_cases: int, per_weak_bin: int = 0) -> list[str]:
+    """A sixth null, half one effect, a third two effects (design note 3.1), in a fixed order; then
+    ``per_weak_bin`` single effects drawn into each of ``LAMBDA_BINS`` (the bins below lambda 30)."""
     n_null = n_cases // 6
     n_two = n_cases // 3
-    return ["null"] * n_null + ["single"] * (n_cases - n_null - n_two) + ["two"] * n_two
+    base = ["null"] * n_null + ["single"] * (n_cases - n_null - n_two) + ["two"] * n_two
+    return base + [b for b in LAMBDA_BINS for _ in range(per_weak_bin)]
 
 
 def _same_or_alias(name: str, truth: set[str], o: dict) -> bool:
@@ -254,7 +280,14 @@ class Row:
     at_most: bool
 
     @property
+    def informational(self) -> bool:
+        """A rate printed for what it tells (the design note sets no target for it)."""
+        return math.isnan(self.target)
+
+    @property
     def passes(self) -> bool:
+        if self.informational:
+            return True
         if self.n == 0 or math.isnan(self.value):
             return False
         return self.value <= self.target if self.at_most else self.value >= self.target
@@ -294,6 +327,10 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
         claimed = o["diagnosis_verdict"] == "effect indicated" and (o["top_p_holm"] or 1.0) < 0.01
         return not claimed or rank1(o)
 
+    def no_wrong_added(o):
+        truth = set(o["effects"])
+        return all(_same_or_alias(name, truth, o) for name in o["accepted"])
+
     def first_pick(o):
         return bool(o["tried"]) and _same_or_alias(o["tried"][0], set(o["effects"]), o)
 
@@ -318,7 +355,10 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
             *frac(strong, strength_ok), 0.80, False),
         Row("single, 10 <= lambda < 30", "rank 1 (or top alias group)", "mid_rank1", *frac(mid, rank1), 0.70, False),
         Row("single, 10 <= lambda < 30", "top 2", None, *frac(mid, top2), 0.90, False),
+        Row("single, 10 <= lambda < 30", "no wrong effect added", None, *frac(mid, no_wrong_added), 0.90, False),
         Row("single, lambda < 10", "no wrong claim at p < 0.01", None, *frac(weak, no_wrong_claim), 0.90, False),
+        Row("single, lambda < 10", "no wrong effect added", None, *frac(weak, no_wrong_added), 0.90, False),
+        Row("single, lambda < 10", "true effect in the top two", None, *frac(weak, top2), math.nan, False),
         Row("two, both lambda >= 30", "first pick one of the pair", "two_first_pick", *frac(two, first_pick),
             0.85, False),
         Row("two, both lambda >= 30", "both recovered within 3 iterations", None, *frac(two, both), 0.60, False),
@@ -330,8 +370,9 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
 def table_text(rows: list[Row]) -> str:
     lines = [f"{'case':<28}{'criterion':<48}{'n':>5}{'value':>9}{'target':>10}  ok"]
     for r in rows:
-        target = ("<= " if r.at_most else ">= ") + f"{r.target:g}"
-        lines.append(f"{r.case:<28}{r.criterion:<48}{r.n:>5}{r.value:>9.3f}{target:>10}  {'yes' if r.passes else 'NO'}")
+        target = "-" if r.informational else ("<= " if r.at_most else ">= ") + f"{r.target:g}"
+        ok = "-" if r.informational else "yes" if r.passes else "NO"
+        lines.append(f"{r.case:<28}{r.criterion:<48}{r.n:>5}{r.value:>9.3f}{target:>10}  {ok}")
     return "\n".join(lines)
 
 

@@ -10,7 +10,8 @@ import pytest
 from calibration.testbed import acceptance, case_kinds, machine_line, table_text
 
 N_BENCH = 300
-SUBSET = {"null": 8, "single": 24, "two": 12}
+PER_WEAK_BIN = 50
+SUBSET = {"null": 8, "single": 24, "two": 12, "weak": 6, "mid": 6}
 
 
 def _one(args):
@@ -23,7 +24,7 @@ def _one(args):
 @pytest.fixture(scope="module")
 def outcomes():
     work, taken = [], {k: 0 for k in SUBSET}
-    for seed, kind in enumerate(case_kinds(N_BENCH)):
+    for seed, kind in enumerate(case_kinds(N_BENCH, PER_WEAK_BIN)):
         if taken[kind] < SUBSET[kind]:
             work.append((seed, kind))
             taken[kind] += 1
@@ -36,8 +37,8 @@ def test_acceptance_on_the_fixed_seed_subset(outcomes):
     print()
     print(table_text(rows))
     print(machine_line(rows))
-    # every row the subset has cases for meets the design note's target (the lambda < 10 bin is empty
-    # in this subset: the draws rarely give so weak an effect, see docs/diagnosis.md)
+    # every row the subset has cases for meets the design note's target (the bins below lambda 30 are
+    # filled by the bench's cases drawn into them, calibration.testbed.LAMBDA_BINS)
     failing = [f"{r.case}: {r.criterion} = {r.value:.3f}" for r in rows if r.n > 0 and not r.passes]
     assert not failing, f"rows below target on the subset: {failing}"
-    assert sum(r.n > 0 for r in rows) >= 11
+    assert sum(r.n > 0 for r in rows) >= 15

@@ -31,6 +31,9 @@ class RankedEffect(Out):
 class Separator(Out):
     effects: list[str] = Field(description="the two effects")
     cos: float = Field(description="cosine of their projected signatures")
+    separation_z: float | None = Field(
+        None, description="how far (standard deviations) the data prefer the leader, where below 1.645 joined "
+                          "them; absent when their signatures alone are collinear enough (abs(cos) > 0.9)")
     separating_measurement: str = Field(description="the measurement that tells them apart best")
 
 

@@ -185,6 +185,11 @@ class Trends(Out):
     dilatancy: Trend | None = Field(None, description="dilatancy residual (deg) against normal stress (Pa)")
 
 
+class DiagnosisBattery(Out):
+    effect: str = Field(description="candidate effect switched on, or 'baseline' (the optimum as it is)")
+    seed: int
+
+
 class Report(Out):
     """As stored on the iteration (GET /campaigns/{id}/iterations' ``report``)."""
 
@@ -208,6 +213,8 @@ class Report(Out):
     surrogate_check: SurrogateCheck | None = None
     polish: Polish | None = None
     diagnosis: Diagnosis | None = None
+    diagnosis_plan: list[DiagnosisBattery] | None = Field(
+        None, description="the diagnosis batteries in standard order: which effect each ran and its seed")
     adequacy: Adequacy | None = None
     automatic: Automatic | None = None
     warnings: list[str] | None = Field(
