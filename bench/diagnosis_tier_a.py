@@ -5,7 +5,7 @@ runs the whole loop of calibration/ (design, fits, optimum, confirmation, locali
 add, accept). Prints one line per case, the acceptance table of the design note next to its
 targets, and a last machine-readable line.
 
-    python3 bench/diagnosis_tier_a.py                 # 300 cases + 50 in each bin below lambda 30, 2 processes
+    python3 bench/diagnosis_tier_a.py                 # 300 cases + 50 per bin below lambda 30 + 40 per other-form kind
     python3 bench/diagnosis_tier_a.py --cases 60 --jobs 1
 """
 from __future__ import annotations
@@ -35,6 +35,9 @@ def main(argv=None) -> int:
     ap.add_argument("--cases", type=int, default=300)
     ap.add_argument("--per-weak-bin", type=int, default=50,
                     help="single effects drawn into each detectability bin below lambda 30 (LAMBDA_BINS)")
+    ap.add_argument("--per-form-kind", type=int, default=40,
+                    help="cases of each kind of another model form (FORM_KINDS: nulls with and without the "
+                         "model-form discrepancy, strong single effects with it)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", help="write every case's outcome to this file")
     ap.add_argument("--from-json", help="print the table of outcomes written earlier by --json (no runs)")
@@ -49,7 +52,7 @@ def main(argv=None) -> int:
         print(machine_line(rows))
         return 0
 
-    work = list(enumerate(case_kinds(args.cases, args.per_weak_bin)))
+    work = list(enumerate(case_kinds(args.cases, args.per_weak_bin, args.per_form_kind)))
     started = time.perf_counter()
     outcomes = []
     ctx = mp.get_context("spawn")

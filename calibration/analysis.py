@@ -17,7 +17,7 @@ from calibration.attribute import signature_seeds
 from calibration import fits
 from calibration.fitting import TargetModel
 from calibration.localise import ALPHA, localise
-from calibration.records import Measured, measurement_variances
+from calibration.records import Measured
 from calibration.verdict import verdict
 from doe.confirm import confirm
 from doe.designs import Design
@@ -62,6 +62,7 @@ def analyse(config, design_dict: dict, runs, targets) -> dict[str, Any]:
             if problems or unmatched else "no target could be modelled: no measurement matches a simulated response")
     try:
         result = cal.optimum(models, default_relative=config.default_relative_uncertainty,
+                             discrepancy=config.model_discrepancy,
                              priors=[p.model_dump() for p in config.priors], constraints=list(config.constraints),
                              seed=config.seed, allow_extrapolation=config.allow_extrapolation)
     except DoeError as exc:
@@ -70,7 +71,8 @@ def analyse(config, design_dict: dict, runs, targets) -> dict[str, Any]:
     parameters = {name: result.parameters[name] for name in design.names}
     predictions, target_rows = {}, []
     by_name = {m.key.name: m for m in modelled}
-    variances = measurement_variances([m.target for m in models], config.default_relative_uncertainty)
+    variances = cal.target_variances([m.target for m in models], config.default_relative_uncertainty,
+                                     config.model_discrepancy)
     for row in result.targets:
         name = row["response"]
         predictions[name] = {"value": row["predicted"], "pi_low": row["pi_low"], "pi_high": row["pi_high"],
@@ -80,7 +82,7 @@ def analyse(config, design_dict: dict, runs, targets) -> dict[str, Any]:
         target_rows.append({
             "measurement_id": meas.id, "response": name, "test": meas.key.test, "quantity": meas.key.quantity,
             "condition": meas.key.condition_dict, "measured": meas.mean, "uncertainty": math.sqrt(var.variance),
-            "uncertainty_assumed": var.source == "assumed", "uncertainty_source": var.source,
+            "uncertainty_assumed": var.source.startswith("assumed"),  # "assumed + model-form discrepancy" too "uncertainty_source": var.source,
             "predicted": row["predicted"], "pi_low": row["pi_low"],
             "pi_high": row["pi_high"], "standardised_residual": row["standardised_residual"],
             "reachability": reach[name]["min_standardised_misfit"], "reachable": reach[name]["reachable"],
@@ -110,7 +112,8 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
     priors = [p.model_dump() for p in config.priors]
     localisation = None
     if surrogate["verdict"] != "not testable":  # a modelled response was confirmed
-        residuals = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty)
+        residuals = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty,
+                                     config.model_discrepancy)
         localisation = localise(residuals, active_bounds=cal.active_bounds(design, theta),
                                 priors=cal.prior_rows(priors, theta), reachability=optimum.get("reachability", []),
                                 seed=config.seed)
@@ -217,7 +220,8 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
     conf = cal.confirm(modelled, list(confirmation_records), list(confirmation_seeds))
     theta = dict(optimum["parameters"])
     priors = [p.model_dump() for p in config.priors]
-    res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty)
+    res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty,
+                                     config.model_discrepancy)
     loc = localise(res, active_bounds=cal.active_bounds(design, theta), priors=cal.prior_rows(priors, theta),
                    reachability=optimum.get("reachability", []), seed=config.seed)
     table = candidates()

@@ -36,9 +36,20 @@ def generators_for(k: int) -> list[str] | None:
     return [f"{letters[-1]}={letters[:-1]}"]
 
 
-def doe_targets(models: Sequence[TargetModel], default_relative: float) -> list[Target]:
+def target_variances(targets: Sequence, default_relative: float, discrepancy: Sequence = ()) -> dict:
+    """Each target's variance: the measurement's (``records.measurement_variances``) plus its test's
+    model-form discrepancy (``calibration.discrepancy``): the one noise model the optimum, the report, the
+    lack of fit and the diagnosis share."""
+    from .discrepancy import with_discrepancy
+
+    targets = list(targets)
+    return with_discrepancy(measurement_variances(targets, default_relative), {t.key: t.mean for t in targets},
+                            discrepancy)
+
+
+def doe_targets(models: Sequence[TargetModel], default_relative: float, discrepancy: Sequence = ()) -> list[Target]:
     out = []
-    variances = measurement_variances([m.target for m in models], default_relative)
+    variances = target_variances([m.target for m in models], default_relative, discrepancy)
     for m in models:
         if m.fit is None:
             continue
@@ -48,9 +59,10 @@ def doe_targets(models: Sequence[TargetModel], default_relative: float) -> list[
 
 
 def optimum(models: Sequence[TargetModel], *, default_relative: float, priors=(), constraints=(), fixed=None,
-            seed: int = 0, bounds=None, n_starts: int = 6, allow_extrapolation: bool = False) -> CalibrationResult:
+            seed: int = 0, bounds=None, n_starts: int = 6, allow_extrapolation: bool = False,
+            discrepancy: Sequence = ()) -> CalibrationResult:
     fits = {m.key.name: m.fit for m in models if m.fit is not None}
-    targets = doe_targets(models, default_relative)
+    targets = doe_targets(models, default_relative, discrepancy)
     if not targets:
         raise DoeError("no target could be modelled")
     return calibrate(fits, targets, priors=list(priors), constraints=list(constraints), fixed=fixed,
@@ -171,7 +183,7 @@ def move(design: Design, theta: dict[str, float], free: Sequence[str], du: np.nd
 
 
 def residuals_at(design: Design, models: Sequence[TargetModel], theta: dict[str, float], conf: Confirmation,
-                 priors: Sequence[dict], default_relative: float) -> Residuals:
+                 priors: Sequence[dict], default_relative: float, discrepancy: Sequence = ()) -> Residuals:
     """Whitened residuals of the confirmation batteries at ``theta`` against the measurements, the
     priors as pseudo-observations, and the Jacobian from the fitted surfaces (coded units).
 
@@ -182,7 +194,7 @@ def residuals_at(design: Design, models: Sequence[TargetModel], theta: dict[str,
     free = list(design.names)
     keys, measured, model, noise, rows = [], [], [], [], []
     m = len(conf.seeds)
-    variances = measurement_variances([tm.target for tm in models], default_relative)
+    variances = target_variances([tm.target for tm in models], default_relative, discrepancy)
     for tm in models:
         if tm.fit is None or tm.key not in conf.mean:
             continue

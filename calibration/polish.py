@@ -36,7 +36,7 @@ def _residuals(config, design, modelled, theta: dict, records: list[list[dict]],
     """Residuals of one point from its batteries at ``seeds`` (one record list per seed)."""
     conf = cal.confirm(modelled, records, seeds)
     return cal.residuals_at(design, modelled, theta, conf, [p.model_dump() for p in config.priors],
-                            config.default_relative_uncertainty)
+                            config.default_relative_uncertainty, config.model_discrepancy)
 
 
 def _point(design, theta: dict) -> tuple[dict, dict]:

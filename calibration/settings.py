@@ -7,6 +7,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, Field, field_validator, model_validator
 
 from calibration import parameters as factor_paths
+from calibration.discrepancy import Discrepancy
 from doe.constraints import MAX_CONSTRAINT_CHARS, parse_constraint
 from doe.factors import DoeError
 from engine.lab.registry import BATTERY, JobTestName
@@ -109,6 +110,11 @@ class LoopSettings(BaseModel):
         0.05, gt=0, le=1,
         description="standard uncertainty assumed, relative to the mean, for a target published without replicates",
     )
+    model_discrepancy: list[Discrepancy] = Field(
+        default_factory=list, max_length=64,
+        description="model-form discrepancy per test (calibration.discrepancy): a mismatch of this size, which "
+                    "no parameter and no effect is meant to fix, is not read as a missing effect; none: the "
+                    "model is taken as exact apart from its parameters and the candidate effects")
     constraints: list[Annotated[str, Field(max_length=MAX_CONSTRAINT_CHARS)]] = Field(
         default_factory=list, max_length=50, description="linear constraints on factors, e.g. 'friction_pw <= friction_pp'"
     )

@@ -43,6 +43,8 @@ def test_create_and_read(s2):
     ({"diagnose_always": True, "diagnose": False}, ["body", "diagnose_always"]),
     ({"polish_when": "surrogate_misses", "polish_steps": 0}, ["body", "polish_when"]),
     ({"name": ""}, ["body", "name"]),
+    ({"model_discrepancy": [{"test": "shear", "relative_sd": 0.1}]}, ["body", "model_discrepancy", 0]),
+    ({"model_discrepancy": [{"test": "cct", "relative_sd": 2.0}]}, ["body", "model_discrepancy", 0, "relative_sd"]),
 ])
 def test_create_rejects_bad_input_naming_the_field(s2, change, loc):
     client, _, _ = s2
