@@ -17,6 +17,7 @@ from calibration.attribute import signature_seeds
 from calibration import fits
 from calibration.fitting import TargetModel
 from calibration.localise import ALPHA, localise
+from calibration.intervals import parameter_intervals
 from calibration.records import Measured
 from calibration.verdict import verdict
 from doe.confirm import confirm
@@ -117,8 +118,10 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
         localisation = localise(residuals, active_bounds=cal.active_bounds(design, theta),
                                 priors=cal.prior_rows(priors, theta), reachability=optimum.get("reachability", []),
                                 seed=config.seed)
+        intervals = parameter_intervals(residuals, design, theta, localisation.lack_of_fit)
     return _json_safe({"surrogate_check": surrogate,
                        "localisation": localisation.to_dict() if localisation is not None else None,
+                       "intervals": intervals if localisation is not None else None,
                        "simulator_sd": {m.key.name: conf.sim_sd.get(m.key) for m in modelled}})
 
 

@@ -102,5 +102,7 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
         # conflicts or unreachable targets: the diagnosis runs (and its directed test) even if the lack of fit passes
         "suspect": bool(loc and loc.get("suspect")),
         "surrogate_check": assessment.get("surrogate_check"),
+        # intervals on the free parameters with every noise term, widened by a failing fit; trades named
+        "intervals": assessment.get("intervals"),
         "warnings": record_warnings(targets),
     }

@@ -22,6 +22,7 @@ from . import parameters as params_mod
 from . import standin, stats
 from .conditions import standin_conditions
 from .discrepancy import from_comparison
+from .intervals import covers
 from .evaluators import StandinEvaluator
 from .keys import ResponseKey
 from .loop import CalibrationLoop, LoopResult
@@ -278,7 +279,20 @@ def outcome(case: Case, result: LoopResult, runs: int) -> dict[str, Any]:
             "top_alias_group": sorted(top_group), "tried": tried, "accepted": accepted,
             "rms_before": _rms(first), "rms_after": _rms(final), "strength_within_30": strengths,
             "stop_reason": result.stop_reason, "batteries": runs,
-            "top_p_holm": top.get("p_holm") if top else None}
+            "top_p_holm": top.get("p_holm") if top else None,
+            "coverage": _coverage(case, final)}
+
+
+def _coverage(case: Case, final) -> dict[str, bool]:
+    """Does the final iteration's 95 % interval hold each free parameter's true value? (Effects' strengths
+    count where the effect is in the true world; an effect added wrongly has no true strength to hold.)"""
+    intervals = (final.report or {}).get("intervals") or {}
+    truth = {}
+    for name in (intervals.get("parameters") or {}):
+        value = params_mod.read(case.truth, name)
+        if value is not None:
+            truth[name] = float(value)
+    return covers(intervals, truth)
 
 
 def _rms(it) -> float:
@@ -288,7 +302,8 @@ def _rms(it) -> float:
 
 # ---------------------------------------------------------------------------- acceptance
 MACHINE_KEYS = ("null_false_alarm", "null_wrong_effect", "single_detected", "single_rank1", "single_error_ratio",
-                "single_strength_within30", "mid_rank1", "two_first_pick", "form_null_false_alarm")
+                "single_strength_within30", "mid_rank1", "two_first_pick", "form_null_false_alarm",
+                "interval_coverage")
 
 
 def case_kinds(n_cases: int, per_weak_bin: int = 0, per_form_kind: int = 0) -> list[str]:
@@ -408,6 +423,8 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
             0.85, False),
         Row("two, both lambda >= 30", "both recovered within 3 iterations", None, *frac(two, both), 0.60, False),
         Row("two, both lambda >= 30", "median weighted RMS after / before", None, *ratio(two), 0.3, True),
+        Row("every case", "95 % intervals holding the truth (case-parameter pairs)", "interval_coverage",
+            *_coverage_rate(outcomes), 0.90, False),
         Row("null, other form, discrepancy", "effect indicated or added", "form_null_false_alarm",
             *frac(form_null, claims_effect), 0.10, True),
         Row("null, other form, discrepancy", "lack-of-fit fires", None, *frac(form_null, lambda o: o["lof_fired"]),
@@ -424,6 +441,11 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
             0.90, False),
     ]
     return rows
+
+
+def _coverage_rate(outcomes: list[dict]) -> tuple[float, int]:
+    pairs = [held for o in outcomes for held in (o.get("coverage") or {}).values()]
+    return (sum(pairs) / len(pairs) if pairs else math.nan), len(pairs)
 
 
 def table_text(rows: list[Row]) -> str:

@@ -185,6 +185,32 @@ class Trends(Out):
     dilatancy: Trend | None = Field(None, description="dilatancy residual (deg) against normal stress (Pa)")
 
 
+class ParameterInterval(Out):
+    value: float = Field(description="the optimum (natural units)")
+    sd: float | None = Field(None, description="standard deviation; none when the data do not identify it")
+    low: float | None = Field(None, description="lower end of the interval, cut at the factor's box")
+    high: float | None = Field(None, description="upper end of the interval, cut at the factor's box")
+    at_bound: list[str] | None = Field(None, description="sides where the interval was cut at the box")
+
+
+class Trade(Out):
+    parameters: list[str]
+    correlation: float
+    message: str
+
+
+class Intervals(Out):
+    level: float = Field(description="coverage the intervals are built for")
+    scale: float = Field(description="chi2/dof the covariance was widened by (1 while the lack of fit passes)")
+    quantile: float = Field(description="normal, or t on the lack of fit's dof when widened")
+    scaled_by_misfit: bool
+    parameters: dict[str, ParameterInterval]
+    correlation: dict[str, dict[str, float | None]]
+    trades: list[Trade] = Field(description="parameter pairs the measurements fix only in combination")
+    unidentified: list[str]
+    about: str
+
+
 class DiagnosisBattery(Out):
     effect: str = Field(description="candidate effect switched on, or 'baseline' (the optimum as it is)")
     seed: int
@@ -213,6 +239,9 @@ class Report(Out):
     surrogate_check: SurrogateCheck | None = None
     polish: Polish | None = None
     diagnosis: Diagnosis | None = None
+    intervals: Intervals | None = Field(
+        None, description="intervals on the free parameters (calibration.intervals): every noise term, widened "
+                          "by a failing fit, parameters that trade named")
     diagnosis_plan: list[DiagnosisBattery] | None = Field(
         None, description="the diagnosis batteries in standard order: which effect each ran and its seed")
     adequacy: Adequacy | None = None

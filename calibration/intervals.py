@@ -1,0 +1,91 @@
+"""Intervals on the calibrated parameters that say what the data fix and what they do not.
+
+The optimiser's standard deviations (``doe.optimise``: Gauss-Newton on the targets' measurement
+uncertainty alone) leave out the simulator's scatter in the confirmation batteries, any model-form
+discrepancy and the model's own misfit, and they print one optimum for parameters that trade. Here the
+covariance is built from the localisation's whitened Jacobian (``calibrate.residuals_at``), whose rows are
+divided by each target's full noise (measurement, discrepancy, simulator over the confirmation seeds) and
+include the priors, so
+
+    cov(u) = s^2 (J^T J)^-1          (coded units; natural = coded x d natural / d coded)
+
+with s^2 = 1 while the lack of fit passes, and s^2 = chi2 / dof (Birge's ratio) when it fails: a model that
+misses the measurements by more than their noise cannot know its parameters better than that misfit
+allows, and the intervals widen with it (the t quantile on the lack of fit's dof then replaces the normal).
+Parameters whose correlation reaches TRADE_CORRELATION are reported as trading: the data fix a
+combination of them, not each, and the report says so next to the intervals rather than letting a falsely
+precise optimum stand. An interval is cut at the factor's box, where the design says nothing beyond.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy import stats as sps
+
+from calibration.calibrate import natural_per_coded
+from calibration.localise import ALPHA
+
+LEVEL = 0.95
+# |correlation| at which two parameters are reported as trading (the data fix their combination)
+TRADE_CORRELATION = 0.9
+
+
+def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level: float = LEVEL) -> dict[str, Any]:
+    """{"level", "scale", "quantile", "parameters": {name: {value, sd, low, high, at_bound}},
+    "correlation": {a: {b: r}}, "trades": [...], "unidentified": [...]} at the optimum ``theta``."""
+    free = list(res.free)
+    J = np.asarray(res.J, float)
+    JtJ = J.T @ J
+    eigval, eigvec = np.linalg.eigh(JtJ)
+    tiny = max(float(eigval.max(initial=0.0)), 1.0) * 1e-10
+    inv = sum(np.outer(eigvec[:, k], eigvec[:, k]) / eigval[k] for k in range(len(free)) if eigval[k] > tiny) \
+        if len(free) else np.zeros((0, 0))
+    unidentified = [free[int(np.argmax(np.abs(eigvec[:, k])))] for k in range(len(free)) if eigval[k] <= tiny]
+    fails = lack_of_fit.dof > 0 and lack_of_fit.p_value < ALPHA and lack_of_fit.per_dof > 1.0
+    scale = float(lack_of_fit.per_dof) if fails else 1.0
+    quantile = float(sps.t.ppf(0.5 + level / 2, lack_of_fit.dof) if fails else sps.norm.ppf(0.5 + level / 2))
+    cov = scale * np.asarray(inv, float)
+    per_coded = np.array([natural_per_coded(design.factor(n), theta[n]) for n in free])
+    cov_natural = cov * np.outer(per_coded, per_coded)
+    sd = np.sqrt(np.clip(np.diag(cov_natural), 0.0, None))
+    params = {}
+    for j, name in enumerate(free):
+        f = design.factor(name)
+        value = float(theta[name])
+        if name in unidentified or not math.isfinite(sd[j]):
+            params[name] = {"value": value, "sd": None, "low": None, "high": None, "at_bound": None}
+            continue
+        low, high = value - quantile * sd[j], value + quantile * sd[j]
+        cut = [side for side, hit in (("low", low < f.low), ("high", high > f.high)) if hit]
+        params[name] = {"value": value, "sd": float(sd[j]), "low": float(max(low, f.low)),
+                        "high": float(min(high, f.high)), "at_bound": cut or None}
+    corr = {}
+    trades = []
+    for a in range(len(free)):
+        corr[free[a]] = {}
+        for b in range(len(free)):
+            denom = math.sqrt(cov[a, a] * cov[b, b]) if cov[a, a] > 0 and cov[b, b] > 0 else 0.0
+            r = float(cov[a, b] / denom) if denom > 0 else None
+            corr[free[a]][free[b]] = r
+            if b > a and r is not None and abs(r) >= TRADE_CORRELATION:
+                trades.append({"parameters": [free[a], free[b]], "correlation": r,
+                               "message": f"{free[a]} and {free[b]} trade (correlation {r:+.2f}): the measurements "
+                                          "fix a combination of the two, not each; their intervals are wide along "
+                                          "that line, and a prior or a test that moves only one of them separates "
+                                          "them"})
+    return {"level": level, "scale": scale, "quantile": quantile,
+            "scaled_by_misfit": bool(fails), "parameters": params, "correlation": corr, "trades": trades,
+            "unidentified": sorted(set(unidentified)),
+            "about": "from the whitened Jacobian of every target (measurement, discrepancy and simulator noise) "
+                     "and the priors; widened by chi2/dof when the lack of fit fails; cut at the factor's box"}
+
+
+def covers(intervals: dict[str, Any], truth: dict[str, float]) -> dict[str, bool]:
+    """For each parameter with an interval and a known true value: does the interval hold it?"""
+    out = {}
+    for name, row in (intervals or {}).get("parameters", {}).items():
+        if name in truth and row.get("low") is not None:
+            out[name] = bool(row["low"] <= truth[name] <= row["high"])
+    return out

@@ -1,0 +1,66 @@
+"""Parameter intervals (calibration.intervals) on linear cases whose covariance is known by hand."""
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from scipy import stats as sps
+
+from calibration.intervals import TRADE_CORRELATION, covers, parameter_intervals
+from calibration.stats import LackOfFit
+
+
+def _design(**factors):
+    made = {name: SimpleNamespace(name=name, low=lo, high=hi, log=False, half_range_t=(hi - lo) / 2)
+            for name, (lo, hi) in factors.items()}
+    return SimpleNamespace(factor=lambda n: made[n])
+
+
+def _lof(per_dof: float, dof: int, p: float):
+    return LackOfFit(per_dof * dof, dof, p, per_dof, (0.0, 2.0))
+
+
+def test_one_parameter_by_hand():
+    # whitened residual r = y - 2 u: J = -2 (one row), so var(u) = 1/4 in coded units; the factor spans
+    # 0.2-1.0 (0.4 per coded unit): sd = 0.5 x 0.4 = 0.2, 95 % interval 0.6 +- 1.96 x 0.2 = 0.208-0.992
+    res = SimpleNamespace(free=["friction_pp"], J=np.array([[-2.0]]))
+    out = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6}, _lof(1.0, 5, 0.4))
+    row = out["parameters"]["friction_pp"]
+    z = sps.norm.ppf(0.975)
+    assert row["sd"] == pytest.approx(0.2)
+    assert row["low"] == pytest.approx(0.6 - z * 0.2) and row["high"] == pytest.approx(0.6 + z * 0.2)
+    assert row["at_bound"] is None and out["scale"] == 1.0
+    # J = -1: sd 0.4, 0.6 +- 0.784 leaves the box on both sides and is cut there
+    res = SimpleNamespace(free=["friction_pp"], J=np.array([[-1.0]]))
+    row = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6},
+                              _lof(1.0, 5, 0.4))["parameters"]["friction_pp"]
+    assert (row["low"], row["high"], row["at_bound"]) == (0.2, 1.0, ["low", "high"])
+
+
+def test_a_failing_fit_widens_by_birge_ratio_with_t_quantile():
+    # chi2/dof 4 on 5 dof, p < 0.05: sd x 2 and the t(5) quantile (2.571) replaces 1.96
+    res = SimpleNamespace(free=["friction_pp"], J=np.array([[-20.0]]))
+    out = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6}, _lof(4.0, 5, 0.001))
+    row = out["parameters"]["friction_pp"]
+    assert out["scaled_by_misfit"] and out["scale"] == 4.0
+    assert row["sd"] == pytest.approx(2 * 0.4 / 20)
+    assert out["quantile"] == pytest.approx(sps.t.ppf(0.975, 5))
+    assert row["high"] - 0.6 == pytest.approx(out["quantile"] * row["sd"])
+
+
+def test_parameters_that_trade_are_named():
+    # two columns nearly parallel: rows (1, 1) and (1, 1.1) -> correlation of (J^T J)^-1 is -0.995
+    J = np.array([[1.0, 1.0], [1.0, 1.1], [0.0, 0.0]]) * 10
+    res = SimpleNamespace(free=["a", "b"], J=J)
+    out = parameter_intervals(res, _design(a=(0.0, 1.0), b=(0.0, 1.0)), {"a": 0.5, "b": 0.5}, _lof(1.0, 1, 0.5))
+    inv = np.linalg.inv(J.T @ J)
+    r = inv[0, 1] / math.sqrt(inv[0, 0] * inv[1, 1])
+    assert out["correlation"]["a"]["b"] == pytest.approx(r) and abs(r) >= TRADE_CORRELATION
+    assert out["trades"] and out["trades"][0]["parameters"] == ["a", "b"]
+
+
+def test_an_unidentified_direction_gets_no_interval():
+    res = SimpleNamespace(free=["a", "b"], J=np.array([[1.0, 0.0], [2.0, 0.0]]))
+    out = parameter_intervals(res, _design(a=(0.0, 1.0), b=(0.0, 1.0)), {"a": 0.5, "b": 0.5}, _lof(1.0, 1, 0.5))
+    assert out["unidentified"] == ["b"] and out["parameters"]["b"]["sd"] is None
+    assert covers(out, {"a": 0.5, "b": 0.5}) == {"a": True}
