@@ -1,0 +1,134 @@
+"""The material card from the database: of a campaign's calibrated iteration, of a material imported
+from a card, and the import itself (card -> material with fixed parameters).
+
+An imported material keeps what the card says in the places demcal keeps such things: its name,
+description and source in the material's columns, the measurements as measurement rows (SI, with their
+replicates), and the rest under ``direct_estimates["material_card"]``: the fixed micro parameters, the
+rig, the calibration's provenance and the result per measurement. Its card is rebuilt from those
+(``material_card``): the particles, contact law and rig are derived again from the parameters, so the
+round trip card -> material -> card checks the derivation as well as the storage.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from sqlalchemy.orm import Session
+
+from service.errors import Conflict, Invalid, NotFound
+from service.export import card as cards
+
+STORED_KEY = "material_card"
+
+
+def demcal_version() -> str:
+    from service.api.health import _version
+
+    return _version()
+
+
+def calibrated_iteration(campaign, number: int | None = None):
+    """The iteration whose report the card is built from: ``number``, else the latest with a report; a
+    409 when there is none (a card states calibrated values, and there are none before the report)."""
+    done = sorted((it for it in campaign.iterations if it.report), key=lambda it: it.number)
+    if number is not None:
+        it = next((it for it in campaign.iterations if it.number == number), None)
+        if it is None:
+            raise NotFound(f"campaign {campaign.id} has no iteration {number}", ["query", "number"])
+        if not it.report:
+            raise Conflict(f"campaign {campaign.id} iteration {number} is not calibrated yet (phase {it.phase}): "
+                           "its report comes first", ["path", "campaign_id"])
+        return it
+    if not done:
+        current = next((it for it in campaign.iterations if it.number == campaign.current_iteration), None)
+        raise Conflict(f"campaign {campaign.id} is not calibrated yet (status {campaign.status}, phase "
+                       f"{current.phase if current else '-'}): a material card states calibrated values, which "
+                       "come with the first iteration's report", ["path", "campaign_id"])
+    return done[-1]
+
+
+def campaign_card(session: Session, campaign_id: int, number: int | None = None) -> dict[str, Any]:
+    from service.campaigns.store import get_campaign
+    from service.materials.store import get_material, material_dict
+
+    campaign = get_campaign(session, campaign_id)
+    it = calibrated_iteration(campaign, number)
+    material = get_material(session, campaign.material_id)
+    view = material_dict(material)
+    return cards.build_card(
+        material=view, measurements=view["measurements"],
+        campaign={"id": campaign.id, "name": campaign.name, "evaluator": campaign.evaluator,
+                  "fidelity": campaign.fidelity, "config": campaign.config},
+        iteration=it.number, report=it.report, parameter_std=(it.optimum or {}).get("parameter_std"),
+        demcal_version=demcal_version())
+
+
+def material_card(session: Session, material_id: int) -> dict[str, Any]:
+    """The card of a material imported from one (409 for any other material: it has no calibrated values)."""
+    from engine.lab.spec import MicroParameters
+    from service.materials.store import get_material, material_dict
+
+    material = get_material(session, material_id)
+    if material is None:
+        raise NotFound(f"material {material_id} not found", ["path", "material_id"])
+    stored = (material.direct_estimates or {}).get(STORED_KEY)
+    if not stored:
+        raise Conflict(f"material {material_id} ({material.name!r}) was not imported from a material card, so it "
+                       "has no calibrated parameters; export the card of a campaign that calibrated it "
+                       "(GET /api/v1/campaigns/{id}/material-card)", ["path", "material_id"])
+    view = material_dict(material)
+    params = MicroParameters.model_validate(stored["fixed_parameters"])
+    rig = stored["rig"]
+    card = {
+        "card_version": stored["card_version"], "format": cards.CARD_FORMAT, "demcal_version": stored["demcal_version"],
+        "material": {"name": view["name"], "description": view["description"], "source": view["source"]},
+        **cards.physics_sections(params, rig["fidelity"], rig["test"], rig["options"]),
+        "calibration": stored["calibration"],
+        "measurements": [cards.measurement_card(m, result)
+                         for m, result in zip(view["measurements"], stored["results"])],
+    }
+    return cards.canonical(card)
+
+
+def import_card(session: Session, data: Any, name: str | None = None):
+    """A new material with the card's fixed parameters and measurements (not committed); 422 naming the
+    card's field when it is not a card demcal can build, 409 when the name is taken."""
+    from service.materials.schemas import MeasurementIn
+    from service.materials.store import add_measurement, find_by_name
+    from service.models.material import Material
+
+    try:
+        card = cards.validate(data)
+        params = cards.micro_parameters(card)
+    except cards.CardError as exc:
+        raise Invalid(str(exc), exc.field) from None
+    name = name or card.material.name
+    if find_by_name(session, name) is not None:
+        raise Conflict(f"a material named {name!r} exists; import under another name (?name=... or --name)", "name")
+    stored = {"card_version": card.card_version, "demcal_version": card.demcal_version,
+              "fixed_parameters": params.model_dump(mode="json"),
+              "rig": {"fidelity": card.rig.fidelity, "test": card.rig.test, "options": card.rig.options},
+              "calibration": card.calibration.model_dump(mode="json"),
+              "results": [m.result.model_dump(mode="json") if m.result is not None else None
+                          for m in card.measurements]}
+    material = Material(name=name, description=card.material.description, source=card.material.source,
+                        bundled=False, direct_estimates={STORED_KEY: stored})
+    session.add(material)
+    for index, m in enumerate(card.measurements):
+        try:
+            measurement = MeasurementIn.model_validate({
+                "test": m.test, "quantity": m.quantity, "unit": m.unit, "values": m.values,
+                "condition": m.condition, "reported_replicates": m.reported_replicates,
+                "standard_uncertainty": m.stated_uncertainty, "source": m.source})
+            add_measurement(session, material, measurement)
+        except Invalid as exc:
+            raise Invalid(f"measurements.{index}: {exc.message}", f"measurements.{index}.{exc.field}") from None
+        except ValueError as exc:  # pydantic's ValidationError
+            errors = getattr(exc, "errors", None)
+            first = errors(include_url=False)[0] if errors else {"loc": (), "msg": str(exc)}
+            where = ".".join(["measurements", str(index), *(str(p) for p in first.get("loc", ()))])
+            raise Invalid(f"{where}: {first.get('msg')}", where) from None
+        stored_unit = material.measurements[-1].unit
+        if stored_unit != m.unit:
+            raise Invalid(f"measurements.{index}.unit: {m.unit!r}; a card states measurements in SI, {stored_unit!r}",
+                          f"measurements.{index}.unit")
+    return material
