@@ -47,7 +47,8 @@ CONTACT_LAW_TEXT = (
     "particles, friction_pw against walls). Effects below replace the normal spring (stage stiffness), add a "
     "normal force (normal_extra) or a rolling torque (rolling).")
 
-_STRICT = ConfigDict(extra="forbid", allow_inf_nan=False)
+# strict like the API's input (engine.lab.spec.STRICT_INPUT): "0.5" or false is not a number
+_STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 
 
 class Value(BaseModel):
@@ -64,7 +65,7 @@ class Value(BaseModel):
 class Sphere(BaseModel):
     model_config = _STRICT
 
-    centre_m: tuple[float, float, float] = Field(..., description="in the body's principal frame, centre of mass at 0")
+    centre_m: list[float] = Field(..., min_length=3, max_length=3, description="in the body's principal frame, centre of mass at 0")
     radius_m: float = Field(..., gt=0)
 
 
@@ -149,7 +150,7 @@ class CalibratedParameter(BaseModel):
     value: float
     unit: str = Field(..., max_length=16)
     standard_uncertainty: float | None = Field(None, description="of the estimate, from the fitted response surfaces")
-    design_range: tuple[float, float] = Field(..., description="low, high of the design factor")
+    design_range: list[float] = Field(..., min_length=2, max_length=2, description="low, high of the design factor")
 
 
 class Calibration(BaseModel):
@@ -179,7 +180,7 @@ class TargetResult(BaseModel):
     uncertainty_assumed: bool | None = Field(None, description="true: the campaign's default relative uncertainty, not the data's")
     confirmed: float | None = None
     predicted: float | None = None
-    prediction_interval: tuple[float | None, float | None] | None = None
+    prediction_interval: list[float | None] | None = Field(None, min_length=2, max_length=2)
     standardised_residual: float | None = None
     reachability: float | None = None
 
@@ -425,8 +426,15 @@ def micro_parameters(card: MaterialCard) -> MicroParameters:
         if name not in REGISTRY:
             raise CardError(f"contact.effects.{name}", f"contact.effects.{name}: unknown contact effect; known: "
                                                        f"{sorted(REGISTRY)}")
-        effects[name] = _read_values(effect.parameters, tuple(REGISTRY[name].params_model.model_fields),
-                                     f"contact.effects.{name}.parameters")
+        where = f"contact.effects.{name}.parameters"
+        effects[name] = _read_values(effect.parameters, tuple(REGISTRY[name].params_model.model_fields), where)
+        try:
+            REGISTRY[name].params_model.model_validate(effects[name])
+        except ValidationError as exc:
+            first = exc.errors(include_url=False)[0]
+            param = ".".join(str(p) for p in first.get("loc", ()))
+            field = f"{where}.{param}.value" if param else where
+            raise CardError(field, f"{field}: {first.get('msg')}") from None
     try:
         params = MicroParameters.model_validate({**values, "effects": effects})
     except ValidationError as exc:

@@ -74,7 +74,7 @@ def _parameters(report: dict[str, Any], factors: list[dict], parameter_std: dict
 
 def _targets(report: dict[str, Any]) -> str:
     rows = [[t["test"], t["quantity"], t.get("condition") or {}, t.get("unit"), t.get("measured"),
-             t.get("measured_uncertainty"), t.get("predicted"), t.get("prediction_interval"), t.get("confirmed"),
+             _f(t.get("measured_uncertainty")) + (" (assumed)" if t.get("uncertainty_assumed") else ""), t.get("predicted"), t.get("prediction_interval"), t.get("confirmed"),
              t.get("standardised_residual"), t.get("reachability"), t["status"]] for t in report.get("targets", [])]
     return _table(["test", "quantity", "condition", "unit", "measured", "u", "predicted", "95 % interval", "confirmed",
                    "z", "min |z| in box", "status"], rows, {4, 5, 6, 8, 9, 10})
@@ -93,11 +93,21 @@ def _parity_charts(report: dict[str, Any]) -> str:
     return "".join(svg.parity_plot(points, unit) for unit, points in sorted(by_unit.items()))
 
 
+def _strength(row: dict[str, Any]) -> Any:
+    """A negative estimate is no strength: the misfit points the other way from what the effect does (as
+    the CLI's diagnosis table says)."""
+    value = row.get("strength")
+    if value is None and row.get("fraction_of_switch") is not None:
+        value = row["fraction_of_switch"]
+        return "none (opposite sign)" if value < 0 else f"{100 * value:.3g} % of the switch"
+    return "none (opposite sign)" if value is not None and value < 0 else value
+
+
 def _diagnosis(report: dict[str, Any]) -> str:
     d = report.get("diagnosis")
     if not d:
         return '<p class="note">No diagnosis in this iteration.</p>'
-    rows = [[r["effect"], r.get("title"), r.get("lm"), r.get("p_holm"), r.get("explained"), r.get("strength"),
+    rows = [[r["effect"], r.get("title"), r.get("lm"), r.get("p_holm"), r.get("explained"), _strength(r),
              r.get("unit"), r.get("plausible"), r.get("alias_group")] for r in d.get("ranking", [])]
     text = (f"<p><strong>{escape(_f(d.get('verdict')))}</strong>: {escape(_f(d.get('message')))}</p>"
             + _table(["effect", "physics", "LM", "Holm p", "explained", "strength", "unit", "plausible", "alias group"],

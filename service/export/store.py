@@ -89,6 +89,16 @@ def material_card(session: Session, material_id: int) -> dict[str, Any]:
     return cards.canonical(card)
 
 
+def _si_unit(test: str, quantity_name: str) -> str | None:
+    """The quantity's SI unit, or None for an unknown test or quantity (MeasurementIn names those)."""
+    from engine.lab.registry import quantity
+
+    try:
+        return quantity(test, quantity_name).unit
+    except (KeyError, ValueError):
+        return None
+
+
 def import_card(session: Session, data: Any, name: str | None = None):
     """A new material with the card's fixed parameters and measurements (not committed); 422 naming the
     card's field when it is not a card demcal can build, 409 when the name is taken."""
@@ -114,6 +124,10 @@ def import_card(session: Session, data: Any, name: str | None = None):
                         bundled=False, direct_estimates={STORED_KEY: stored})
     session.add(material)
     for index, m in enumerate(card.measurements):
+        si_unit = _si_unit(m.test, m.quantity)
+        if si_unit is not None and m.unit != si_unit:
+            raise Invalid(f"measurements.{index}.unit: {m.unit!r}; a card states measurements in SI, {si_unit!r}",
+                          f"measurements.{index}.unit")
         try:
             measurement = MeasurementIn.model_validate({
                 "test": m.test, "quantity": m.quantity, "unit": m.unit, "values": m.values,
@@ -127,8 +141,4 @@ def import_card(session: Session, data: Any, name: str | None = None):
             first = errors(include_url=False)[0] if errors else {"loc": (), "msg": str(exc)}
             where = ".".join(["measurements", str(index), *(str(p) for p in first.get("loc", ()))])
             raise Invalid(f"{where}: {first.get('msg')}", where) from None
-        stored_unit = material.measurements[-1].unit
-        if stored_unit != m.unit:
-            raise Invalid(f"measurements.{index}.unit: {m.unit!r}; a card states measurements in SI, {stored_unit!r}",
-                          f"measurements.{index}.unit")
     return material

@@ -134,4 +134,10 @@ def error_history(entries: list[dict]) -> str:
         for n, v in pts:
             body.append(f'<circle cx="{f.x(n):.1f}" cy="{f.y(v):.1f}" r="3.5" class="{css}-point"><title>iteration {n}: '
                         f'{name} {escape(_fmt(v))}</title></circle>')
+    legend_y = MARGIN_T + 12
+    for k, (css, name) in enumerate((("line", "RMS z"), ("line2", "chi2/dof"), ("band", "noise band"))):
+        x = MARGIN_L + 8 + 78 * k
+        mark = (f'<rect x="{x}" y="{legend_y - 7}" width="14" height="8" class="band"/>' if css == "band" else
+                f'<line x1="{x}" y1="{legend_y - 3}" x2="{x + 14}" y2="{legend_y - 3}" class="{css}"/>')
+        body.append(mark + f'<text x="{x + 18}" y="{legend_y}" class="tick" text-anchor="start">{name}</text>')
     return _svg(body, "error history", width=width)
