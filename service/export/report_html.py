@@ -23,11 +23,13 @@ h1{font-size:1.5rem;margin-bottom:.2rem}h2{font-size:1.15rem;margin-top:2rem;bor
 .sub{color:#5a6475}.verdict{padding:.8rem 1rem;border-radius:6px;background:#eef2f8;border-left:5px solid #3d6fb6}
 .verdict.ok{background:#eaf6ee;border-color:#2e8b57}.verdict.bad{background:#fbeeee;border-color:#b33a3a}
 .verdict strong{font-size:1.1rem}table{border-collapse:collapse;font-size:.88rem;margin:.5rem 0}
+table{display:block;overflow-x:auto;max-width:100%}
 th,td{border-bottom:1px solid #e2e6ee;padding:.25rem .55rem;text-align:left;vertical-align:top}
 th{background:#f4f6fa}td.num{text-align:right;font-variant-numeric:tabular-nums}
 .charts{display:flex;flex-wrap:wrap;gap:1rem}.note{color:#5a6475;font-size:.85rem}
 svg{background:#fff;border:1px solid #e2e6ee}svg .frame{fill:none;stroke:#9aa3b2}svg .axis{stroke:#9aa3b2}
-svg .tick{font-size:10px;fill:#5a6475;text-anchor:middle}svg .title{font-size:12px;text-anchor:middle;fill:#1d2330}
+svg .tick{font-size:10px;fill:#5a6475;text-anchor:middle}svg .tick-y{font-size:10px;fill:#5a6475;text-anchor:end}
+svg .legend{font-size:10px;fill:#1d2330;text-anchor:start}svg .title{font-size:12px;text-anchor:middle;fill:#1d2330}
 svg .label{font-size:11px;text-anchor:middle;fill:#1d2330}svg .diagonal{stroke:#9aa3b2;stroke-dasharray:4 3}
 svg .bar{stroke:#3d6fb6;stroke-width:1.4}svg .point{fill:#3d6fb6}svg .band{fill:#dfeadf}
 svg .line{fill:none;stroke:#3d6fb6;stroke-width:2}svg .line-point{fill:#3d6fb6}

@@ -36,10 +36,10 @@ def nice_ticks(low: float, high: float, count: int = 5) -> list[float]:
 class _Frame:
     """A plot area with linear scales from data to pixels (y up)."""
 
-    def __init__(self, x_range, y_range, width=WIDTH, height=HEIGHT):
+    def __init__(self, x_range, y_range, width=WIDTH, height=HEIGHT, top=MARGIN_T):
         self.x0, self.x1 = x_range
         self.y0, self.y1 = y_range
-        self.width, self.height = width, height
+        self.width, self.height, self.top = width, height, top
 
     def x(self, value: float) -> float:
         span = (self.x1 - self.x0) or 1.0
@@ -47,11 +47,11 @@ class _Frame:
 
     def y(self, value: float) -> float:
         span = (self.y1 - self.y0) or 1.0
-        return self.height - MARGIN_B - (value - self.y0) / span * (self.height - MARGIN_T - MARGIN_B)
+        return self.height - MARGIN_B - (value - self.y0) / span * (self.height - self.top - MARGIN_B)
 
     def axes(self, title: str, x_label: str, y_label: str, x_ticks=None, y_ticks=None) -> list[str]:
         left, right = MARGIN_L, self.width - MARGIN_R
-        top, bottom = MARGIN_T, self.height - MARGIN_B
+        top, bottom = self.top, self.height - MARGIN_B
         out = [f'<rect x="{left}" y="{top}" width="{right - left}" height="{bottom - top}" class="frame"/>',
                f'<text x="{self.width / 2:.1f}" y="16" class="title">{escape(title)}</text>',
                f'<text x="{(left + right) / 2:.1f}" y="{self.height - 6}" class="label">{escape(x_label)}</text>',
@@ -66,7 +66,7 @@ class _Frame:
             py = self.y(t)
             if top - 0.5 <= py <= bottom + 0.5:
                 out.append(f'<line x1="{left - 4}" y1="{py:.1f}" x2="{left}" y2="{py:.1f}" class="axis"/>'
-                           f'<text x="{left - 6}" y="{py + 3:.1f}" class="tick" text-anchor="end">{escape(_fmt(t))}</text>')
+                           f'<text x="{left - 6}" y="{py + 3:.1f}" class="tick-y">{escape(_fmt(t))}</text>')
         return out
 
 
@@ -120,7 +120,10 @@ def error_history(entries: list[dict]) -> str:
     chi = [e.get("chi2_per_dof") for e in entries]
     bands = [e.get("noise_band") for e in entries]
     values = [v for v in rms + chi if v is not None] + [b[1] for b in bands if b] + [0.0]
-    f = _Frame((min(numbers) - 0.5, max(numbers) + 0.5), (0.0, _padded(values)[1]), width=width)
+    # the legend gets a strip of its own between the title and the plot
+    legend_y = MARGIN_T + 6
+    f = _Frame((min(numbers) - 0.5, max(numbers) + 0.5), (0.0, _padded(values)[1]), width=width,
+               height=HEIGHT + 18, top=MARGIN_T + 18)
     body = f.axes("weighted error per iteration", "iteration", "RMS z, chi2/dof", x_ticks=numbers)
     for n, band in zip(numbers, bands):
         if band:
@@ -134,10 +137,9 @@ def error_history(entries: list[dict]) -> str:
         for n, v in pts:
             body.append(f'<circle cx="{f.x(n):.1f}" cy="{f.y(v):.1f}" r="3.5" class="{css}-point"><title>iteration {n}: '
                         f'{name} {escape(_fmt(v))}</title></circle>')
-    legend_y = MARGIN_T + 12
     for k, (css, name) in enumerate((("line", "RMS z"), ("line2", "chi2/dof"), ("band", "noise band"))):
         x = MARGIN_L + 8 + 78 * k
         mark = (f'<rect x="{x}" y="{legend_y - 7}" width="14" height="8" class="band"/>' if css == "band" else
                 f'<line x1="{x}" y1="{legend_y - 3}" x2="{x + 14}" y2="{legend_y - 3}" class="{css}"/>')
-        body.append(mark + f'<text x="{x + 18}" y="{legend_y}" class="tick" text-anchor="start">{name}</text>')
-    return _svg(body, "error history", width=width)
+        body.append(mark + f'<text x="{x + 18}" y="{legend_y}" class="legend">{name}</text>')
+    return _svg(body, "error history", width=width, height=HEIGHT + 18)

@@ -139,18 +139,9 @@ def test_the_page_links_the_report_and_the_file_reads_offline_in_chromium(server
     from playwright.sync_api import sync_playwright
 
     from browser_support import launch, screenshot_dir, watch_page
-    from conftest_s2 import drain
-    from service.campaigns.runner import CampaignRunner
-
     url, app, settings = server
-    cid = httpx.post(f"{url}{API}/campaigns", json=campaign_body(1, name="shared report")).json()["id"]
-    httpx.post(f"{url}{API}/campaigns/{cid}/start")
-    runner = CampaignRunner(app.state.session_factory, settings)
-    for _ in range(20):
-        runner.tick()
-        drain(app, settings)
-        if httpx.get(f"{url}{API}/campaigns/{cid}").json()["status"] == "completed":
-            break
+    with httpx.Client(base_url=url) as http:
+        cid = _two_iterations(http, app, settings)
     shots = screenshot_dir(tmp_path / "shots")
     with sync_playwright() as playwright:
         browser = launch(playwright)
@@ -162,8 +153,9 @@ def test_the_page_links_the_report_and_the_file_reads_offline_in_chromium(server
             page.goto(f"{url}/#/campaigns/{cid}")
             link = page.locator('a[data-export="report.html"]')
             link.wait_for()
-            assert link.get_attribute("href") == f"{API}/campaigns/{cid}/report.html?number=1&download=true"
+            assert link.get_attribute("href") == f"{API}/campaigns/{cid}/report.html?number=2&download=true"
             assert page.locator('a[data-export="material-card"]').count() == 1
+            page.locator("p.exports").screenshot(path=str(shots / "campaign-export-links.png"))
             with page.expect_download() as download:
                 link.click()
             saved = tmp_path / download.value.suggested_filename
