@@ -20,7 +20,7 @@ Python's shortest round-trip float repr, so a card read and written again is the
 from __future__ import annotations
 
 import json
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
@@ -98,7 +98,8 @@ class Shape(BaseModel):
 class Particles(BaseModel):
     model_config = _STRICT
 
-    parameters: dict[str, Value] = Field(..., description=f"the particle micro parameters: {', '.join(PARTICLE_FIELDS)}")
+    parameters: dict[str, Value] = Field(..., max_length=32,
+                                         description=f"the particle micro parameters: {', '.join(PARTICLE_FIELDS)}")
     shapes: list[Shape] = Field(..., min_length=1, max_length=32,
                                 description="follow from the rig and the parameters (checked on import)")
 
@@ -108,7 +109,7 @@ class EffectCard(BaseModel):
 
     stage: str = Field(..., max_length=32)
     description: str = Field("", max_length=10_000)
-    parameters: dict[str, Value]
+    parameters: dict[str, Value] = Field(..., max_length=16)
 
 
 class Contact(BaseModel):
@@ -116,7 +117,7 @@ class Contact(BaseModel):
 
     law: Literal["linear_spring_dashpot_pfc"]
     description: str = Field("", max_length=10_000)
-    parameters: dict[str, Value]
+    parameters: dict[str, Value] = Field(..., max_length=32)
     effects: dict[str, EffectCard] = Field(default_factory=dict, max_length=16)
 
 
@@ -128,7 +129,8 @@ class Rig(BaseModel):
 
     fidelity: Fidelity
     test: str = Field(..., max_length=32)
-    options: dict[str, Any] = Field(default_factory=dict, description="the campaign's lab options (TestOptions)")
+    options: dict[str, Any] = Field(default_factory=dict, max_length=64,
+                                    description="the campaign's lab options (TestOptions)")
     container_radius_m: float
     container_height_m: float
     smallest_sphere_radius_m: float
@@ -166,7 +168,7 @@ class Calibration(BaseModel):
     meaning: str | None = Field(None, max_length=10_000)
     confirmation_seeds: list[int] = Field(default_factory=list, max_length=1000)
     calibrated: list[CalibratedParameter] = Field(default_factory=list, max_length=64)
-    fixed_by_campaign: list[str] = Field(default_factory=list, max_length=64,
+    fixed_by_campaign: list[Annotated[str, Field(max_length=128)]] = Field(default_factory=list, max_length=64,
                                          description="parameters the campaign fixed; the others are demcal's defaults")
 
 

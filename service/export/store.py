@@ -89,6 +89,13 @@ def material_card(session: Session, material_id: int) -> dict[str, Any]:
     return cards.canonical(card)
 
 
+def _loc(index: int, field) -> list:
+    """``["body", "measurements", 0, "values", 1]``: list indices as numbers, as FastAPI's own 422s give them."""
+    parts = field if isinstance(field, (list, tuple)) else str(field or "").split(".")
+    parts = [p for p in parts if p not in ("", "body")]
+    return ["body", "measurements", index, *(int(p) if isinstance(p, str) and p.isdigit() else p for p in parts)]
+
+
 def _si_unit(test: str, quantity_name: str) -> str | None:
     """The quantity's SI unit, or None for an unknown test or quantity (MeasurementIn names those)."""
     from engine.lab.registry import quantity
@@ -127,7 +134,7 @@ def import_card(session: Session, data: Any, name: str | None = None):
         si_unit = _si_unit(m.test, m.quantity)
         if si_unit is not None and m.unit != si_unit:
             raise Invalid(f"measurements.{index}.unit: {m.unit!r}; a card states measurements in SI, {si_unit!r}",
-                          f"measurements.{index}.unit")
+                          _loc(index, "unit"))
         try:
             measurement = MeasurementIn.model_validate({
                 "test": m.test, "quantity": m.quantity, "unit": m.unit, "values": m.values,
@@ -135,10 +142,10 @@ def import_card(session: Session, data: Any, name: str | None = None):
                 "standard_uncertainty": m.stated_uncertainty, "source": m.source})
             add_measurement(session, material, measurement)
         except Invalid as exc:
-            raise Invalid(f"measurements.{index}: {exc.message}", f"measurements.{index}.{exc.field}") from None
+            raise Invalid(f"measurements.{index}: {exc.message}", _loc(index, exc.field)) from None
         except ValueError as exc:  # pydantic's ValidationError
             errors = getattr(exc, "errors", None)
             first = errors(include_url=False)[0] if errors else {"loc": (), "msg": str(exc)}
-            where = ".".join(["measurements", str(index), *(str(p) for p in first.get("loc", ()))])
-            raise Invalid(f"{where}: {first.get('msg')}", where) from None
+            where = ".".join(str(p) for p in first.get("loc", ()))
+            raise Invalid(f"measurements.{index}.{where}: {first.get('msg')}", _loc(index, where)) from None
     return material

@@ -188,10 +188,10 @@ BAD_CARDS = [
     ("particles.shapes.0.volume_fraction", 0.5, ["body", "particles", "shapes"]),
     ("rig.fidelity", "screening", ["body", "particles", "shapes"]),
     ("rig.fidelity", "production", ["body", "rig", "fidelity"]),
-    ("measurements.0.quantity", "bulk_density", ["body", "measurements", "0", "quantity"]),
-    ("measurements.0.unit", "g/cm3", ["body", "measurements", "0", "unit"]),
-    ("measurements.0.values", [], ["body", "measurements", "0", "values"]),
-    ("measurements.0.values", [1412.0, -5.0], ["body", "measurements", "0", "values", "1"]),
+    ("measurements.0.quantity", "bulk_density", ["body", "measurements", 0, "quantity"]),
+    ("measurements.0.unit", "g/cm3", ["body", "measurements", 0, "unit"]),
+    ("measurements.0.values", [], ["body", "measurements", 0, "values"]),
+    ("measurements.0.values", [1412.0, -5.0], ["body", "measurements", 0, "values", 1]),
 ]
 
 
