@@ -50,7 +50,9 @@ def campaign_material_card(campaign_id: CampaignId, request: Request, session: D
     return _card_response(request, campaign_card(session, campaign_id, number), format, f"campaign-{campaign_id}")
 
 
-@router.get("/campaigns/{campaign_id}/export", responses=_NOT_CALIBRATED, response_model=str,
+@router.get("/campaigns/{campaign_id}/export", response_model=str,
+            responses={**_NOT_CALIBRATED, 200: {"description": "the file, in its format's media type", "content": {
+                media: {"schema": {"type": "string"}} for media in sorted({f.media_type for f in formats.FORMATS.values()})}}},
             response_class=PlainTextResponse,
             summary="The calibrated material in a registered export format (service.export.formats), as a file")
 def export(campaign_id: CampaignId, session: DbSession,

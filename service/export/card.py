@@ -27,6 +27,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from engine.effects import REGISTRY
 from engine.lab.presets import fidelity as fidelity_preset
+from engine.lab.registry import JobTestName
 from engine.lab.spec import Fidelity, MicroParameters, TestOptions
 from engine.lab.units import parameter_si_unit
 
@@ -128,7 +129,7 @@ class Rig(BaseModel):
     model_config = _STRICT
 
     fidelity: Fidelity
-    test: str = Field(..., max_length=32)
+    test: JobTestName
     options: dict[str, Any] = Field(default_factory=dict, max_length=64,
                                     description="the campaign's lab options (TestOptions)")
     container_radius_m: float

@@ -64,7 +64,6 @@ def campaign_card(session: Session, campaign_id: int, number: int | None = None)
 
 def material_card(session: Session, material_id: int) -> dict[str, Any]:
     """The card of a material imported from one (409 for any other material: it has no calibrated values)."""
-    from engine.lab.spec import MicroParameters
     from service.materials.store import get_material, material_dict
 
     material = get_material(session, material_id)
@@ -76,6 +75,16 @@ def material_card(session: Session, material_id: int) -> dict[str, Any]:
                        "has no calibrated parameters; export the card of a campaign that calibrated it "
                        "(GET /api/v1/campaigns/{id}/material-card)", ["path", "material_id"])
     view = material_dict(material)
+    try:
+        return _rebuilt(view, stored)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:  # written by hand into direct_estimates
+        raise Conflict(f"material {material_id}'s direct_estimates.{STORED_KEY} is not what an import stores "
+                       f"({type(exc).__name__}: {str(exc).splitlines()[0][:200]}); import the card again", ["path", "material_id"]) from None
+
+
+def _rebuilt(view: dict[str, Any], stored: dict[str, Any]) -> dict[str, Any]:
+    from engine.lab.spec import MicroParameters
+
     params = MicroParameters.model_validate(stored["fixed_parameters"])
     rig = stored["rig"]
     card = {
