@@ -226,7 +226,8 @@ class MaterialCard(BaseModel):
     particles: Particles
     contact: Contact
     rig: Rig
-    calibration: Calibration
+    calibration: Calibration | None = Field(..., description="null: a card of given parameters (parameters_card), "
+                                                             "not of a calibration")
     measurements: list[MeasurementCard] = Field(default_factory=list, max_length=1000)
 
 
@@ -385,6 +386,19 @@ def build_card(*, material: dict[str, Any], measurements: list[dict[str, Any]], 
         "measurements": [measurement_card(m, row) for m, row in used],
     }
     return canonical(card)
+
+
+def parameters_card(params: MicroParameters, *, fidelity: str = "screening", test: str = "battery",
+                    options: dict[str, Any] | None = None, name: str = "given parameters",
+                    demcal_version: str = "unknown") -> dict[str, Any]:
+    """A card of given micro parameters, without a calibration behind them (``calibration`` null, no
+    measurements): what an export format's tests and a cross-engine check at chosen parameters start from."""
+    return canonical({
+        "card_version": CARD_VERSION, "format": CARD_FORMAT, "demcal_version": demcal_version,
+        "material": {"name": name, "description": "", "source": ""},
+        **physics_sections(params, fidelity, test, dict(options or {})),
+        "calibration": None, "measurements": [],
+    })
 
 
 # -- reading ---------------------------------------------------------------------------------------

@@ -133,7 +133,7 @@ def import_card(session: Session, data: Any, name: str | None = None):
     stored = {"card_version": card.card_version, "demcal_version": card.demcal_version,
               "fixed_parameters": params.model_dump(mode="json"),
               "rig": {"fidelity": card.rig.fidelity, "test": card.rig.test, "options": card.rig.options},
-              "calibration": card.calibration.model_dump(mode="json"),
+              "calibration": card.calibration.model_dump(mode="json") if card.calibration is not None else None,
               "results": [m.result.model_dump(mode="json") if m.result is not None else None
                           for m in card.measurements]}
     material = Material(name=name, description=card.material.description, source=card.material.source,

@@ -275,3 +275,24 @@ def test_cli_exports_the_card_and_imports_it(server, capsys, tmp_path: Path):
     bad.write_text(card_file.read_text().replace("unit: N/m", "unit: kN/m", 1))
     code, _, err = run(capsys, "material", "import-card", str(bad), "--url", url, "--name", "bad")
     assert code == 2 and "HTTP 422" in err and "particle_stiffness_n_per_m.unit" in err
+
+
+def test_a_card_of_given_parameters_round_trips_too(s2):
+    """``parameters_card``: no calibration behind it (an export format's tests start from one)."""
+    from service.export.card import dump_json, parameters_card
+
+    client, _, _ = s2
+    params = MicroParameters(friction_pp=0.5, particle_radius_m=0.015,
+                             effects={"hertz_mindlin": {"young_modulus_pa": 5e8}})
+    card = parameters_card(params, name="given", demcal_version="test")
+    assert card["calibration"] is None and card["measurements"] == []
+    hertz = card["contact"]["effects"]["hertz_mindlin"]["parameters"]
+    # every parameter stated, the defaults too (Poisson's ratio 0.25; no separate wall modulus)
+    assert {k: (v["value"], v["unit"]) for k, v in hertz.items()} == {
+        "young_modulus_pa": (5e8, "Pa"), "poisson_ratio": (0.25, "1"), "wall_young_modulus_pa": (None, "Pa"),
+        "wall_poisson_ratio": (None, "1")}
+    # 15 mm screening spheres: the 400 mm container is 400 / 30 = 13.3 grains across
+    assert card["rig"]["container_diameter_in_largest_grains"] == pytest.approx(0.400 / 0.030, rel=1e-12)
+    response = client.post(f"{API}/materials/import-card", json=card)
+    assert response.status_code == 201, response.text
+    assert client.get(f"{API}/materials/{response.json()['id']}/material-card").text == dump_json(card)
