@@ -30,6 +30,8 @@ class ExportFormatOut(BaseModel):
     media_type: str
     suffix: str
     description: str
+
+
 IterationQ = Query(None, ge=1, le=2**63 - 1, description="iteration number; default the latest with a report")
 CardFormat = Query(None, description="json (default) or yaml; an Accept of application/yaml also gives YAML")
 
@@ -111,7 +113,9 @@ def report_html(campaign_id: CampaignId, session: DbSession, number: int | None 
     material = get_material(session, campaign.material_id)
     html = render(summary=campaign_summary(campaign), report=it.report, iteration=it.number,
                   history=history(campaign.iterations), material_name=material.name if material else "?",
-                  parameter_std=(it.optimum or {}).get("parameter_std"), demcal_version=demcal_version())
+                  parameter_std=(it.optimum or {}).get("parameter_std"),
+                  factors=(it.parameters or {}).get("factors", (campaign.config or {}).get("factors", [])),
+                  demcal_version=demcal_version())
     disposition = "attachment" if download else "inline"
     return HTMLResponse(html, headers={"Content-Disposition": f'{disposition}; filename="campaign-{campaign_id}-report.html"'})
 

@@ -355,16 +355,16 @@ def build_card(*, material: dict[str, Any], measurements: list[dict[str, Any]], 
                demcal_version: str) -> dict[str, Any]:
     """The card of one calibrated iteration, as a validated dict in the schema's order.
 
-    ``campaign``: id, name, evaluator, fidelity, config (the stored CampaignCreate); ``report``: the
-    iteration's report (calibration.report.build_report); ``measurements``: the material's stored
-    measurements (measurement_dict), of which the report's targets are kept, in the report's order.
+    ``campaign``: id, name, and the iteration's evaluator, fidelity, test, options and factors (each
+    iteration may have its own: an added effect, a narrowed range); ``report``: the iteration's report
+    (calibration.report.build_report); ``measurements``: the material's stored measurements
+    (measurement_dict), of which the report's targets are kept, in the report's order.
     """
     from calibration import parameters as factor_paths
 
-    config = campaign["config"]
     params = MicroParameters.model_validate(factor_paths.apply(report.get("fixed_parameters") or {},
                                                                report.get("optimum") or {}))
-    ranges = {f["name"]: (float(f["low"]), float(f["high"])) for f in config.get("factors", [])}
+    ranges = {f["name"]: (float(f["low"]), float(f["high"])) for f in campaign.get("factors") or []}
     calibrated = [{"name": name, "value": float(value), "unit": parameter_si_unit(name.split(".")[-1]),
                    "standard_uncertainty": (parameter_std or {}).get(name),
                    "design_range": list(ranges.get(name, (float(value), float(value))))}
@@ -376,13 +376,13 @@ def build_card(*, material: dict[str, Any], measurements: list[dict[str, Any]], 
         "card_version": CARD_VERSION, "format": CARD_FORMAT, "demcal_version": demcal_version,
         "material": {"name": material["name"], "description": material.get("description") or "",
                      "source": material.get("source") or ""},
-        **physics_sections(params, campaign["fidelity"], config.get("test", "battery"), config.get("options") or {}),
+        **physics_sections(params, campaign["fidelity"], campaign["test"], campaign.get("options") or {}),
         "calibration": {"campaign_id": campaign["id"], "campaign_name": campaign["name"], "iteration": iteration,
                         "evaluator": campaign["evaluator"], "verdict": report.get("verdict"),
                         "meaning": report.get("meaning"),
                         "confirmation_seeds": list(report.get("confirmation_seeds") or []),
                         "calibrated": calibrated,
-                        "fixed_by_campaign": sorted(config.get("fixed_parameters") or {})},
+                        "fixed_by_campaign": sorted(report.get("fixed_parameters") or {})},
         "measurements": [measurement_card(m, row) for m, row in used],
     }
     return canonical(card)

@@ -135,8 +135,9 @@ def _history(history: dict[str, Any]) -> str:
 
 
 def render(*, summary: dict[str, Any], report: dict[str, Any], iteration: int, history: dict[str, Any],
-           material_name: str, parameter_std: dict | None, demcal_version: str) -> str:
-    """The report of ``iteration`` (its report, the campaign's summary and history) as one HTML document."""
+           material_name: str, parameter_std: dict | None, factors: list[dict], demcal_version: str) -> str:
+    """The report of ``iteration`` (its report, design ``factors`` and the parameters' standard
+    uncertainties; the campaign's summary and history) as one HTML document."""
     verdict = report.get("verdict")
     lof = report.get("lack_of_fit")
     lof_text = (f"lack of fit: chi2 {_f(lof['statistic'])} on {_f(lof['dof'])} dof (per dof {_f(lof['chi2_per_dof'])}, "
@@ -157,7 +158,7 @@ def render(*, summary: dict[str, Any], report: dict[str, Any], iteration: int, h
         f'<p>{escape(_f(report.get("meaning")))}</p>'
         + (f'<p class="note">{escape(lof_text)}</p>' if lof_text else "")
         + (f'<p class="note">automatic mode stopped: {escape(stop)}</p>' if stop else "") + "</div>",
-        "<h2>Calibrated parameters</h2>", _parameters(report, summary["config"].get("factors", []), parameter_std),
+        "<h2>Calibrated parameters</h2>", _parameters(report, factors, parameter_std),
         '<h2 id="targets">Targets</h2>', _targets(report),
         f'<div class="charts" id="parity">{_parity_charts(report)}</div>',
         '<p class="note">Error bars: measured ± 2 standard uncertainties (horizontal), the 95 % prediction interval '

@@ -54,10 +54,15 @@ def campaign_card(session: Session, campaign_id: int, number: int | None = None)
     it = calibrated_iteration(campaign, number)
     material = get_material(session, campaign.material_id)
     view = material_dict(material)
+    config, settings = campaign.config or {}, it.parameters or {}
     return cards.build_card(
         material=view, measurements=view["measurements"],
-        campaign={"id": campaign.id, "name": campaign.name, "evaluator": campaign.evaluator,
-                  "fidelity": campaign.fidelity, "config": campaign.config},
+        campaign={"id": campaign.id, "name": campaign.name, "test": config.get("test", "battery"),
+                  # the iteration's own settings (an added effect, a narrowed range), else the campaign's
+                  "evaluator": settings.get("evaluator", campaign.evaluator),
+                  "fidelity": settings.get("fidelity", campaign.fidelity),
+                  "options": settings.get("options", config.get("options") or {}),
+                  "factors": settings.get("factors", config.get("factors") or [])},
         iteration=it.number, report=it.report, parameter_std=(it.optimum or {}).get("parameter_std"),
         demcal_version=demcal_version())
 
