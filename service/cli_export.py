@@ -12,7 +12,7 @@ from pathlib import Path
 
 import httpx
 
-from service.cli_http import CliError, POINT_ELSEWHERE, client, service_url
+from service.cli_http import POINT_ELSEWHERE, CliError, client, service_url
 from service.cli_http import call as _call
 from service.cli_http import emit as _emit
 from service.cli_http import leaf as _leaf

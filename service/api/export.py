@@ -119,5 +119,3 @@ def report_html(campaign_id: CampaignId, session: DbSession, number: int | None 
     disposition = "attachment" if download else "inline"
     return HTMLResponse(html, headers={"Content-Disposition": f'{disposition}; filename="campaign-{campaign_id}-report.html"'})
 
-
-__all__ = ["router", "cards"]

@@ -7,8 +7,8 @@ NAME``) list and serve every entry without further code.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from service.export.card import dump_json, dump_yaml
 
