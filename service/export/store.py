@@ -97,10 +97,18 @@ def _rebuilt(view: dict[str, Any], stored: dict[str, Any]) -> dict[str, Any]:
         "material": {"name": view["name"], "description": view["description"], "source": view["source"]},
         **cards.physics_sections(params, rig["fidelity"], rig["test"], rig["options"]),
         "calibration": stored["calibration"],
-        "measurements": [cards.measurement_card(m, result)
-                         for m, result in zip(view["measurements"], stored["results"])],
+        "measurements": [cards.measurement_card(m, _result_of(m, stored["results"])) for m in view["measurements"]],
     }
     return cards.canonical(card)
+
+
+def _result_of(measurement: dict[str, Any], results: list[dict[str, Any]]):
+    """The stored result of this measurement, found by its key (a measurement deleted or added since the
+    import shifts no other's result); None for one the card did not have."""
+    from calibration.keys import ResponseKey
+
+    key = ResponseKey.from_record(measurement)
+    return next((r["result"] for r in results if ResponseKey.from_record(r).matches(key)), None)
 
 
 def _loc(index: int, field) -> list:
@@ -139,7 +147,9 @@ def import_card(session: Session, data: Any, name: str | None = None):
               "fixed_parameters": params.model_dump(mode="json"),
               "rig": {"fidelity": card.rig.fidelity, "test": card.rig.test, "options": card.rig.options},
               "calibration": card.calibration.model_dump(mode="json") if card.calibration is not None else None,
-              "results": [m.result.model_dump(mode="json") if m.result is not None else None
+              # by measurement key, as the calibration matches them
+              "results": [{"test": m.test, "quantity": m.quantity, "condition": m.condition,
+                           "result": m.result.model_dump(mode="json") if m.result is not None else None}
                           for m in card.measurements]}
     material = Material(name=name, description=card.material.description, source=card.material.source,
                         bundled=False, direct_estimates={STORED_KEY: stored})

@@ -136,6 +136,11 @@ def test_card_to_material_to_card_is_the_same_bytes(s2, tmp_path):
         mid = material["id"]
         assert other.get(f"{API}/materials/{mid}/material-card").content == as_json
         assert other.get(f"{API}/materials/{mid}/material-card?format=yaml").content == as_yaml
+        # a measurement deleted since: the others keep their own results
+        first = material["measurements"][0]["id"]
+        assert other.delete(f"{API}/materials/{mid}/measurements/{first}").status_code == 204
+        assert other.get(f"{API}/materials/{mid}/material-card").json()["measurements"] == \
+            json.loads(as_json)["measurements"][1:]
         # a second import of the same card: the name is taken
         again = other.post(f"{API}/materials/import-card", json=json.loads(as_json))
         assert again.status_code == 409 and again.json()["detail"][0]["loc"] == ["body", "name"]
