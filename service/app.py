@@ -22,7 +22,8 @@ from service.errors import install_error_handlers
 from service.security import check_bind, install_token_guard
 
 API_PREFIX = "/api/v1"
-ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules", "effects", "evaluators", "tests")
+ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules", "effects", "evaluators", "tests",
+           "export")
 
 
 def _seed(session_factory) -> None:

@@ -12,6 +12,7 @@ from types import SimpleNamespace
 from calibration.awaiting import awaited
 from calibration.evaluator_registry import names as evaluator_names
 from calibration.vocabulary import Phase
+from service import cli_export
 from service.cli_http import CliError, bar, watch, watch_options
 from service.cli_http import call as _call
 from service.cli_http import emit as _emit
@@ -366,6 +367,7 @@ def register(subparsers) -> None:
     add.add_argument("--condition", action="append", help="NAME=VALUE, e.g. normal_stress_pa=24 (repeatable)")
     add.add_argument("--condition-unit", action="append", help="NAME=UNIT, e.g. normal_stress_pa=kPa")
     add.add_argument("--source")
+    cli_export.register_material(msub)
 
     campaign = subparsers.add_parser("campaign", help="calibration campaigns")
     csub = campaign.add_subparsers(dest="campaign_command", required=True)
@@ -419,6 +421,7 @@ def register(subparsers) -> None:
     nxt.add_argument("--strength-range", help="LOW:HIGH of the added effect's strength (SI)")
     nxt.add_argument("--proposed-design", action="store_true",
                      help="run the design the surface check proposed (narrowed factorial or axial runs)")
+    cli_export.register_campaign(csub)
 
     schedule = subparsers.add_parser("schedule", help="cron schedules that start campaigns")
     ssub = schedule.add_subparsers(dest="schedule_command", required=True)

@@ -20,7 +20,7 @@ from .base import Effect
 
 class Params(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)  # no false for a number: engine.lab.spec.STRICT_INPUT
-    cohesion_energy_density_j_m3: float = Field(ge=0)
+    cohesion_energy_density_j_m3: float = Field(ge=0, description="k_c: attraction k_c A over the contact area A")
 
 
 def pair_props(params: Params, contact_type: str, mat_i, mat_other) -> list[float]:

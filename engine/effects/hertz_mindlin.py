@@ -16,10 +16,10 @@ from .base import Candidate, Effect
 
 class Params(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)  # no false for a number: engine.lab.spec.STRICT_INPUT
-    young_modulus_pa: float = Field(gt=0)
-    poisson_ratio: float = Field(0.25, gt=-1, lt=0.5)
-    wall_young_modulus_pa: float | None = Field(None, gt=0)
-    wall_poisson_ratio: float | None = Field(None, gt=-1, lt=0.5)
+    young_modulus_pa: float = Field(gt=0, description="E of the particles")
+    poisson_ratio: float = Field(0.25, gt=-1, lt=0.5, description="nu of the particles")
+    wall_young_modulus_pa: float | None = Field(None, gt=0, description="E of the walls; null: the particles'")
+    wall_poisson_ratio: float | None = Field(None, gt=-1, lt=0.5, description="nu of the walls; null: the particles'")
 
 
 def _shear_modulus(e: float, nu: float) -> float:

@@ -57,13 +57,14 @@ class MicroParameters(BaseModel):
                                           description="kw, PFC-style per-entity normal stiffness")
     # ks/kn of elastic spheres is 2(1 - nu)/(2 - nu): 2/3 to 4/3 over Poisson's ratios -1..0.5; 10 leaves
     # room for linear-model conventions while refusing typos.
-    shear_to_normal_stiffness_ratio: float = Field(1.0, gt=0, le=10.0)
+    shear_to_normal_stiffness_ratio: float = Field(1.0, gt=0, le=10.0,
+                                                   description="ks/kn: each contact's tangential over normal stiffness")
     friction_pp: Annotated[float, FRICTION_COEFFICIENT_TYPICAL] = Field(0.86, ge=0, le=MAX_FRICTION_COEFFICIENT,
                                description="inter-particle Coulomb friction coefficient")
     friction_pw: Annotated[float, FRICTION_COEFFICIENT_TYPICAL] = Field(0.62, ge=0, le=MAX_FRICTION_COEFFICIENT,
                                description="particle-wall Coulomb friction coefficient")
     damping_ratio: float = Field(0.8, ge=0, lt=1, description="critical viscous damping ratio")
-    local_damping: float = Field(0.0, ge=0, lt=1)
+    local_damping: float = Field(0.0, ge=0, lt=1, description="Cundall non-viscous damping coefficient")
     particle_radius_m: float | None = Field(
         None, ge=MIN_PARTICLE_RADIUS_M, le=MAX_PARTICLE_RADIUS_M,
         description="screening fidelity only: mono-sized sphere radius (default 0.02 m)",

@@ -56,6 +56,24 @@ def to_si(value: float, unit: str, si_unit: str) -> float:
     return float(value) * table[unit]
 
 
+# Micro parameters (engine.lab.spec.MicroParameters, engine/effects/ parameters) also end with their SI
+# unit, except dimensionless ones (friction and damping coefficients, ratios); longest suffix first.
+_PARAMETER_SUFFIXES = (("_n_per_m", "N/m"), ("_kg_m3", "kg/m3"), ("_j_m2", "J/m2"), ("_j_m3", "J/m3"),
+                       ("_m_s", "m/s"), ("_pa", "Pa"), ("_deg", "deg"), ("_kg", "kg"), ("_s", "s"), ("_m", "m"))
+
+
+def parameter_si_unit(name: str) -> str:
+    """The SI unit of a micro or effect parameter, read from its name's suffix ("1": dimensionless).
+
+    Why by name: every dimensional parameter is named with its unit (``particle_stiffness_n_per_m``,
+    ``surface_energy_j_m2``), so the name is the one declaration; the exported material card
+    (service.export.card) states each value with this unit."""
+    for suffix, unit in _PARAMETER_SUFFIXES:
+        if name.endswith(suffix):
+            return unit
+    return "1"
+
+
 # Dimensionless condition names the lab emits (angle-of-repose sector 1..8).
 _UNITLESS_CONDITIONS = ("sector",)
 

@@ -1,7 +1,7 @@
 // A campaign's page, the calibration loop's cockpit: drive it (start, pause, resume), pick an
 // iteration, read its verdict, targets, conditions and diagnosis, add the indicated effect to run
 // the next iteration, and follow the error and the parameters across iterations.
-import { api, attempt, fmt, h, optional, status, table } from "./core.js";
+import { API, api, attempt, fmt, h, optional, status, table } from "./core.js";
 import { humanText } from "./labels.js";
 import { refresh } from "./live.js";
 import { targetsSection, verdictSection } from "./campaign_report.js";
@@ -23,6 +23,18 @@ function controls(c, id) {
     c.status === "running" ? act("Pause", () => api(`/campaigns/${id}/pause`, { method: "POST" })) : "",
     c.status === "paused" ? act("Resume", () => api(`/campaigns/${id}/resume`, { method: "POST" })) : "",
     " ", h("a", { href: `#/jobs?campaign_id=${id}` }, "its jobs"), " · ", h("a", { href: `#/materials/${c.material_id}` }, "its material"));
+}
+
+// The calibrated iteration travels as files: the shareable report (one self-contained HTML file) and the
+// neutral material card (docs/export.md); plain links, as reads need no token.
+function exportLinks(id, n) {
+  const file = (path, name, text, title) => h("a", { href: `${API}/campaigns/${id}/${path}`, download: name, title,
+    className: "button secondary", "data-export": path.split("?")[0] }, text);
+  return h("p", { className: "exports" }, h("b", {}, `Iteration ${n} as a file: `),
+    file(`report.html?number=${n}&download=true`, `campaign-${id}-report.html`, "Report (HTML)",
+      "verdict, targets, diagnosis and history in one self-contained HTML file that reads offline"), " ",
+    file(`material-card?number=${n}&format=yaml`, `campaign-${id}.card.yaml`, "Material card (YAML)",
+      "the calibrated material: particles, contact law and effects in SI with units, rig and provenance"));
 }
 
 function progressCard(c) {
@@ -77,7 +89,7 @@ export async function campaignPage(view, id, params) {
     const n = it.number;
     const [report, models] = await Promise.all([api(`/campaigns/${id}/report?number=${n}`), optional(`/campaigns/${id}/models?number=${n}`)]);
     const confirmation = report.confirmation_job_id ? await optional(`/jobs/${report.confirmation_job_id}/result`) : null;
-    parts.push(verdictSection(report), targetsSection(report), conditionsSection(report.targets, confirmation));
+    parts.push(verdictSection(report), exportLinks(id, n), targetsSection(report), conditionsSection(report.targets, confirmation));
     if (report.diagnosis) {
       parts.push(diagnosisSection(id, report.diagnosis, {
         canAdd: c.status === "completed" && n === latest, nextNumber: latest + 1,

@@ -1,0 +1,103 @@
+"""``demcal campaign export ID --format NAME``, ``demcal material card ID`` and ``demcal material import-card FILE``.
+
+Exports are files, not JSON views: the commands fetch the service's text (a material card in YAML or
+JSON, or any other registered format: ``GET /api/v1/export-formats``) and write it to ``--output`` or
+stdout. The import reads a card in YAML or JSON and posts it as JSON. Errors are one line on stderr
+and exit status 2, as for every client command (service.cli_http).
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import httpx
+
+from service.cli_http import POINT_ELSEWHERE, CliError, client, service_url
+from service.cli_http import call as _call
+from service.cli_http import emit as _emit
+from service.cli_http import leaf as _leaf
+
+
+def _text(args, path: str, params: dict) -> str:
+    """The body of a GET as text; an HTTP error as the API's first message, like ``cli_http.call``."""
+    url, source = service_url(args)
+    try:
+        with client(args, url) as http:
+            response = http.get(path, params=params)
+    except httpx.HTTPError as exc:
+        raise CliError(f"cannot reach the service at {url} (from {source}): {exc}; {POINT_ELSEWHERE}") from exc
+    if response.status_code >= 400:
+        try:
+            first = response.json()["detail"][0]
+            where = ".".join(str(p) for p in first.get("loc", []))
+            message = first.get("msg") + (f" (at {where})" if where else "")
+        except (ValueError, KeyError, IndexError, TypeError, AttributeError):
+            message = response.text[:200]
+        raise CliError(f"HTTP {response.status_code}: {message}")
+    return response.text
+
+
+def _write(text: str, output: str | None, what: str) -> int:
+    if output is None or output == "-":
+        sys.stdout.write(text)
+        return 0
+    try:
+        Path(output).write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise CliError(f"cannot write {output}: {exc}") from exc
+    print(f"{what} written to {output}", file=sys.stderr)
+    return 0
+
+
+def campaign_export(args) -> int:
+    params = {"format": args.format}
+    if args.iteration:
+        params["number"] = args.iteration
+    text = _text(args, f"/campaigns/{args.id}/export", params)
+    return _write(text, args.output, f"campaign {args.id} ({args.format})")
+
+
+def material_card(args) -> int:
+    text = _text(args, f"/materials/{args.id}/material-card", {"format": args.format})
+    return _write(text, args.output, f"material {args.id}'s card")
+
+
+def material_import_card(args) -> int:
+    from service.export.card import CardError, load_text
+
+    try:
+        text = sys.stdin.read() if args.file == "-" else Path(args.file).read_text(encoding="utf-8")
+        data = load_text(text)
+    except OSError as exc:
+        raise CliError(f"cannot read {args.file}: {exc}") from exc
+    except CardError as exc:
+        raise CliError(f"{args.file}: {exc}") from exc
+    if not isinstance(data, dict):
+        raise CliError(f"{args.file}: a material card is a mapping (YAML or JSON object), not {type(data).__name__}")
+    m = _call(args, "POST", "/materials/import-card", data, params={"name": args.name} if args.name else None)
+    return _emit(args, m, f"material {m['id']}: {m['name']} (from a material card, "
+                          f"{len(m['measurements'])} measurements)")
+
+
+def register_campaign(csub) -> None:
+    """``demcal campaign export``; ``csub``: the campaign command's subparsers."""
+    export = _leaf(csub, "export", campaign_export, "the calibrated material as a file: the material card "
+                   "(docs/export.md) or another registered format")
+    export.add_argument("id", type=int)
+    export.add_argument("--format", default="card",
+                        help="card (YAML, default), card-json, or another format the service lists at "
+                             "GET /api/v1/export-formats")
+    export.add_argument("--output", "-o", help="file to write (default stdout)")
+    export.add_argument("--iteration", type=int, help="a calibrated iteration (default the latest with a report)")
+
+
+def register_material(msub) -> None:
+    """``demcal material import-card`` and ``demcal material card``; ``msub``: the material command's subparsers."""
+    imp = _leaf(msub, "import-card", material_import_card, "create a material with fixed parameters from a "
+                "material card (YAML or JSON)", creates=True)
+    imp.add_argument("file", help="the card, '-' for stdin")
+    imp.add_argument("--name", help="the new material's name (default the card's)")
+    card = _leaf(msub, "card", material_card, "the material card of a material imported from one")
+    card.add_argument("id", type=int)
+    card.add_argument("--format", choices=["yaml", "json"], default="yaml")
+    card.add_argument("--output", "-o", help="file to write (default stdout)")

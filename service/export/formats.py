@@ -1,0 +1,46 @@
+"""The export formats of a calibrated material: name -> media type, file suffix and a function of the card.
+
+Why a registry: every format is written from the material card alone (``service.export.card``), so a new
+format (the LIGGGHTS include, say) is one function ``(card: dict) -> str`` and one entry here; the API
+(``GET /api/v1/campaigns/{id}/export?format=NAME``) and the CLI (``demcal campaign export ID --format
+NAME``) list and serve every entry without further code.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from service.export.card import dump_json, dump_yaml
+
+
+@dataclass(frozen=True)
+class ExportFormat:
+    name: str
+    media_type: str
+    suffix: str  # of the file the CLI writes and the API suggests (Content-Disposition)
+    render: Callable[[dict], str]  # the material card (a dict of MaterialCard's schema) -> the file's text
+    description: str
+
+
+FORMATS: dict[str, ExportFormat] = {}
+
+
+def register(fmt: ExportFormat) -> None:
+    FORMATS[fmt.name] = fmt
+
+
+register(ExportFormat("card", "application/yaml", ".card.yaml", dump_yaml,
+                      "the neutral material card, YAML (docs/export.md)"))
+register(ExportFormat("card-json", "application/json", ".card.json", dump_json,
+                      "the neutral material card, JSON"))
+
+
+def get(name: str) -> ExportFormat:
+    try:
+        return FORMATS[name]
+    except KeyError:
+        raise ValueError(f"unknown export format {name!r}; known: {', '.join(sorted(FORMATS))}") from None
+
+
+def names() -> list[str]:
+    return sorted(FORMATS)
