@@ -152,7 +152,11 @@ class CalibratedParameter(BaseModel):
     name: str = Field(..., max_length=128, description="a micro parameter or effects.<effect>.<parameter>")
     value: float
     unit: str = Field(..., max_length=16)
-    standard_uncertainty: float | None = Field(None, description="of the estimate, from the fitted response surfaces")
+    standard_uncertainty: float | None = Field(
+        None, description="of the estimate: the report's intervals (every noise term, widened when the fit fails; "
+                          "calibration.intervals), else the optimiser's from the fitted response surfaces")
+    interval_95: list[float] | None = Field(None, min_length=2, max_length=2,
+                                            description="95 % interval (low, high), cut at the design range")
     design_range: list[float] = Field(..., min_length=2, max_length=2, description="low, high of the design factor")
 
 
@@ -169,6 +173,9 @@ class Calibration(BaseModel):
     meaning: str | None = Field(None, max_length=10_000)
     confirmation_seeds: list[int] = Field(default_factory=list, max_length=1000)
     calibrated: list[CalibratedParameter] = Field(default_factory=list, max_length=64)
+    trades: list[Annotated[str, Field(max_length=1000)]] = Field(
+        default_factory=list, max_length=64,
+        description="parameter pairs the measurements fix only in combination (their correlation reaches 0.9)")
     fixed_by_campaign: list[Annotated[str, Field(max_length=128)]] = Field(default_factory=list, max_length=64,
                                          description="parameters the campaign fixed; the others are demcal's defaults")
 
@@ -365,10 +372,18 @@ def build_card(*, material: dict[str, Any], measurements: list[dict[str, Any]], 
     params = MicroParameters.model_validate(factor_paths.apply(report.get("fixed_parameters") or {},
                                                                report.get("optimum") or {}))
     ranges = {f["name"]: (float(f["low"]), float(f["high"])) for f in campaign.get("factors") or []}
+    intervals = (report.get("intervals") or {}).get("parameters") or {}
+
+    def interval(name):
+        row = intervals.get(name) or {}
+        return None if row.get("low") is None else [float(row["low"]), float(row["high"])]
+
     calibrated = [{"name": name, "value": float(value), "unit": parameter_si_unit(name.split(".")[-1]),
-                   "standard_uncertainty": (parameter_std or {}).get(name),
+                   "standard_uncertainty": (intervals.get(name) or {}).get("sd", (parameter_std or {}).get(name)),
+                   "interval_95": interval(name),
                    "design_range": list(ranges.get(name, (float(value), float(value))))}
                   for name, value in (report.get("optimum") or {}).items()]
+    trades = [t["message"] for t in (report.get("intervals") or {}).get("trades") or []]
     by_id = {m["id"]: m for m in measurements}
     used = [(by_id[row["measurement_id"]], row) for row in report.get("targets", [])
             if row.get("measurement_id") in by_id]
@@ -381,7 +396,7 @@ def build_card(*, material: dict[str, Any], measurements: list[dict[str, Any]], 
                         "evaluator": campaign["evaluator"], "verdict": report.get("verdict"),
                         "meaning": report.get("meaning"),
                         "confirmation_seeds": list(report.get("confirmation_seeds") or []),
-                        "calibrated": calibrated,
+                        "calibrated": calibrated, "trades": trades,
                         "fixed_by_campaign": sorted(report.get("fixed_parameters") or {})},
         "measurements": [measurement_card(m, row) for m, row in used],
     }

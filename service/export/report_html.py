@@ -65,10 +65,21 @@ def _verdict_class(verdict: str | None) -> str:
 
 def _parameters(report: dict[str, Any], factors: list[dict], parameter_std: dict | None) -> str:
     ranges = {f["name"]: (f["low"], f["high"]) for f in factors}
-    rows = [[name, value, parameter_si_unit(name.split(".")[-1]), (parameter_std or {}).get(name), ranges.get(name)]
-            for name, value in (report.get("optimum") or {}).items()]
+    intervals = report.get("intervals") or {}
+    rows = []
+    for name, value in (report.get("optimum") or {}).items():
+        row = (intervals.get("parameters") or {}).get(name) or {}
+        sd = row.get("sd", (parameter_std or {}).get(name))
+        ci = [row["low"], row["high"]] if row.get("low") is not None else None
+        rows.append([name, value, parameter_si_unit(name.split(".")[-1]), sd, ci, ranges.get(name)])
     fixed = report.get("fixed_parameters") or {}
-    text = _table(["parameter", "value", "unit", "standard uncertainty", "design range"], rows, {1, 3})
+    text = _table(["parameter", "value", "unit", "standard uncertainty", "95 % interval", "design range"], rows,
+                  {1, 3})
+    if intervals.get("scaled_by_misfit"):
+        text += (f'<p class="note">intervals widened by chi2/dof {escape(_f(intervals.get("scale")))}: the model '
+                 "misses the measurements by more than their noise</p>")
+    for trade in intervals.get("trades") or []:
+        text += f'<p class="note">{escape(trade["message"])}</p>'
     if fixed:
         text += f'<p class="note">fixed by the campaign: {escape(_f(fixed))}</p>'
     return text
