@@ -68,7 +68,10 @@ def packing_spheres(solid_m3: float, margin: float, shapes: tuple[ShapeFraction,
     spheres; the others count as one sphere of their mean radius."""
     spheres_per_m3 = 0.0
     for s in shapes:
-        if s.template is not None:
+        if s.template is not None and s.size is not None:  # a custom clump scaled to a mean-sized largest sphere
+            scale = 0.5 * (s.radius_min_m + s.radius_max_m) / float(max(s.template.sphere_radii_m))
+            volume, spheres = s.template.volume_m3 * scale**3, s.template.n_spheres
+        elif s.template is not None:
             volume, spheres = s.template.volume_m3, s.template.n_spheres
         else:
             volume, spheres = 4.0 / 3.0 * math.pi * (0.5 * (s.radius_min_m + s.radius_max_m)) ** 3, 1
