@@ -19,11 +19,11 @@ in the quasi-static range (docs/lab.md).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from engine.lab.errors import SpecFieldError
-from engine.lab.rigs import Rig, bundled_rig
+from engine.lab.rigs import Rig, bundled_rig, check_for_particles
 from engine.particles.description import Particles, thesis_particles
 
 
@@ -112,6 +112,12 @@ class Fidelity:
     # particles of the angle-of-repose test when they differ from the fill's (None: the same)
     aor_shapes: tuple[ShapeFraction, ...] | None = None
     anchor: AnchorGeometry | None = None
+    rig: Rig | None = field(default=None, repr=False, compare=False)  # the record it was built from
+
+    def rig_warnings(self) -> list[str]:
+        """The rig checked against the shear-box particles (``engine.lab.rigs.check_for_particles``): raises
+        ``SpecFieldError`` naming the rig's field when they cannot run in it, else the size warnings."""
+        return [] if self.rig is None else check_for_particles(self.rig, particles_of(self.shapes))
 
     @property
     def container_area_m2(self) -> float:
@@ -140,6 +146,24 @@ def shape_fractions(particles: Particles) -> tuple[ShapeFraction, ...]:
     return tuple(out)
 
 
+def particles_of(shapes: tuple[ShapeFraction, ...]) -> Particles:
+    """The lab's shape list as a ``Particles`` description (the other way from ``shape_fractions``), for the
+    checks that take one: sizes as their radius bounds, a fixed template as a custom clump of its size."""
+    out = []
+    for s in shapes:
+        size = ({"form": "constant", "radius_m": s.radius_min_m} if s.radius_min_m == s.radius_max_m
+                else {"form": "uniform", "radius_min_m": s.radius_min_m, "radius_max_m": s.radius_max_m})
+        entry = {"shape": "elongated" if s.shape == "double_clump" else s.shape, "volume_fraction": s.volume_fraction,
+                 "size": size}
+        if s.shape == "double_clump":
+            entry["aspect_ratio"] = 1.0 + s.overlap_factor
+        if s.template is not None:
+            entry.update(shape="custom", sphere_centres_m=[list(map(float, c)) for c in s.template.sphere_offsets_m],
+                         sphere_radii_m=[float(r) for r in s.template.sphere_radii_m])
+        out.append(entry)
+    return Particles.model_validate({"shapes": out})
+
+
 def lab_setup(name: str, rig: Rig, shapes: tuple[ShapeFraction, ...], *, default_speed_factor: float,
               aor_shapes: tuple[ShapeFraction, ...] | None = None) -> Fidelity:
     """The set-up the procedures read: the rig record's apparatus, the particles, and the simulation's own
@@ -151,6 +175,7 @@ def lab_setup(name: str, rig: Rig, shapes: tuple[ShapeFraction, ...], *, default
     return Fidelity(
         name=name,
         rig_name=rig.name,
+        rig=rig,
         container_radius_m=box.container_radius_m,
         container_height_m=box.container_height_m,
         packing_height_m=fill.level_height_m,

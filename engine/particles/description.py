@@ -195,11 +195,23 @@ class Shape(BaseModel):
 
     def sieve_size_per_radius(self) -> float:
         """Smallest round hole the body passes, per its largest sphere radius (see _SIEVE_SIZE_PER_RADIUS);
-        a custom clump: its bounding diameter, an upper bound."""
+        a custom clump: ``template_sieve_size_m``."""
         if self.shape == "custom":
-            t = self.template
-            return 2.0 * t.bounding_radius_m / float(np.max(t.sphere_radii_m))
+            return template_sieve_size_m(self.template) / float(np.max(self.template.sphere_radii_m))
         return _SIEVE_SIZE_PER_RADIUS[self.shape]
+
+
+def template_sieve_size_m(template: tpl.ClumpTemplate) -> float:
+    """An upper bound of the smallest round hole a clump passes: pushed through along each principal axis,
+    the circle about its centre of mass that holds every sphere's projection; the narrowest of the three.
+    Exact for a sphere and for spheres on one line (end on: the largest sphere's diameter)."""
+    offsets = np.asarray(template.sphere_offsets_m, float)
+    radii = np.asarray(template.sphere_radii_m, float)
+    widths = []
+    for axis in range(3):
+        across = np.delete(offsets, axis, axis=1)
+        widths.append(2.0 * float(np.max(np.linalg.norm(across, axis=1) + radii)))
+    return min(widths)
 
 
 class Particles(BaseModel):

@@ -169,3 +169,25 @@ def test_too_small_box_is_accepted_with_a_warning():
                                     shear_box__top_half_height_m=0.100, fill__level_height_m=0.200))
     assert [w.split(":")[0] for w in check_for_particles(small, aggregate)] == [
         "shear_box.container_diameter_m", "fill.level_height_m"]
+
+
+def test_job_checks_its_rig_against_its_particles():
+    from engine.lab.context import RunContext
+    from engine.lab.spec import JobSpec
+
+    def ctx(**parameters):
+        return RunContext.from_spec(JobSpec.model_validate({"test": "fill", "fidelity": "screening",
+                                                            "parameters": parameters}))
+
+    # 0.8 mm spheres fall through the 1 mm gap: refused naming the spec field that sets them
+    with pytest.raises(SpecFieldError) as err:
+        ctx(particle_radius_m=0.0004).validate()
+    assert err.value.field == "parameters.particle_radius_m" and "shear_box.gap_m" in err.value.message
+    # 60 mm spheres: the 400 mm box is 6.7 across (< 10), run with a warning the result carries
+    big = ctx(particle_radius_m=0.030)
+    big.validate()
+    assert len(big.warnings) == 1 and "shear_box.container_diameter_m" in big.warnings[0]
+    # the presets as they are: no warning (400 mm / 40 mm spheres = 10; 590 mm / 42 mm = 14)
+    plain = ctx()
+    plain.validate()
+    assert plain.warnings == []
