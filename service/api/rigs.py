@@ -64,7 +64,8 @@ def list_all(session: DbSession) -> list[dict[str, Any]]:
 
 
 @router.post("", response_model=RigOut, status_code=201, summary="Create a rig",
-             responses=errors(409, c409="a rig with this name exists"))
+             responses=errors(404, 409, c404="the material named by ?material_id does not exist",
+                              c409="a rig with this name exists"))
 def create(body: Rig, session: DbSession, material_id: ForMaterial = None):
     warnings = _warnings(session, body, material_id)
     row = create_rig(session, body)

@@ -16,7 +16,7 @@ from service.materials.schemas import FieldError, MaterialIn, MeasurementIn
 from service.models.material import Material, Measurement
 from service.models.rig import Rig
 from service.rigs.store import find_by_name as find_rig
-from service.rigs.store import particles_warnings, record_of
+from service.rigs.store import particles_warnings, record_of, seed_bundled_rigs
 
 BUNDLED_DIR = Path(__file__).parent
 BUNDLED_FILES = ("thesis_coarse_aggregate.json",)
@@ -164,8 +164,6 @@ def seed_bundled_materials(session: Session) -> list[int]:
 
     Called at service start: the reference data is there, complete, after every start.
     """
-    from service.rigs.store import seed_bundled_rigs
-
     seed_bundled_rigs(session)  # the bundled material names the thesis rig
     ids = []
     for filename in BUNDLED_FILES:
