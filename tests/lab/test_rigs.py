@@ -191,3 +191,28 @@ def test_job_checks_its_rig_against_its_particles():
     plain = ctx()
     plain.validate()
     assert plain.warnings == []
+
+
+def test_a_materials_particles_reach_the_fill():
+    """A sieve curve and a custom clump go through the lab's shape list into the fill's mix unchanged."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from engine.lab.procedures.fill import shape_mix
+
+    gravel = Particles.model_validate({
+        "size": {"form": "sieve", "sieve_sizes_m": [0.008, 0.016], "passing_fractions": [0.0, 1.0]},
+        "shapes": [{"shape": "sphere", "volume_fraction": 0.5},
+                   {"shape": "custom", "volume_fraction": 0.5, "sphere_centres_m": [[0, 0, 0], [0.01, 0, 0]],
+                    "sphere_radii_m": [0.01, 0.005]}]})
+    preset = replace(presets.SCREENING, shapes=presets.shape_fractions(gravel))
+    templates, component = shape_mix(preset).sample(np.random.default_rng(3), count=400)
+    largest = np.array([float(max(t.sphere_radii_m)) for t in templates])
+    # every body's largest sphere is drawn from the 8-16 mm curve (radii 4-8 mm), the custom clump scaled to it
+    assert np.all((largest >= 0.004) & (largest <= 0.008))
+    custom = [t for t, k in zip(templates, component) if k == 1]
+    assert custom and all(t.n_spheres == 2 and np.isclose(min(t.sphere_radii_m) / max(t.sphere_radii_m), 0.5)
+                          for t in custom)
+    # the check sees the same particles: a 8 mm sphere is the smallest, the custom clump end on 16 mm the largest
+    assert presets.particles_of(preset.shapes).largest_particle_size_m == pytest.approx(0.016)
