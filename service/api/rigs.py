@@ -78,8 +78,9 @@ def show(rig_id: RigId, session: DbSession, material_id: ForMaterial = None):
     return rig_dict(row, _warnings(session, record_of(row), material_id))
 
 
-@router.put("/{rig_id}", response_model=RigOut, summary="Replace a rig's record (not a bundled one)",
-            responses=errors(409, c409="the rig is bundled (read-only), or another rig has the name"))
+@router.put("/{rig_id}", response_model=RigOut,
+            summary="Replace a rig's record (not a bundled one, nor one a material names)",
+            responses=errors(409, c409="the rig is bundled (read-only) or a material's, or another rig has the name"))
 def replace(rig_id: RigId, body: Rig, session: DbSession, material_id: ForMaterial = None):
     row = _rig_or_404(session, rig_id)
     warnings = _warnings(session, body, material_id)

@@ -11,6 +11,7 @@ from engine.lab.errors import SpecFieldError
 from engine.lab.rigs import Rig, bundled_rigs, check_for_particles, rig_json
 from engine.particles.description import Particles
 from service.errors import Conflict, Invalid
+from service.models.material import Material
 from service.models.rig import Rig as RigRow
 
 
@@ -62,7 +63,13 @@ def create_rig(session: Session, rig: Rig, *, bundled: bool = False) -> RigRow:
 
 
 def replace_rig(session: Session, row: RigRow, rig: Rig) -> RigRow:
+    """A user's rig no material names yet: once one does, its measurements were made in this apparatus, and
+    changing the record would change what they mean."""
     require_editable(row)
+    users = list(session.scalars(select(Material.name).where(Material.rig_id == row.id).limit(3)))
+    if users:
+        raise Conflict(f"rig {row.id} ({row.name!r}) is the rig of material(s) {', '.join(map(repr, users))}: their "
+                       "measurements were made in it; create a rig under a new name instead", ["path", "rig_id"])
     other = find_by_name(session, rig.name)
     if other is not None and other.id != row.id:
         raise Conflict(f"a rig named {rig.name!r} exists", "name")

@@ -113,8 +113,13 @@ def test_too_small_box_is_accepted_with_a_warning_and_a_gap_particles_fall_throu
     body["shear_box"]["gap_m"] = 0.010
     refused = client.post(f"{API}/rigs", params={"material_id": material["id"]}, json=body)
     assert refused.status_code == 422 and refused.json()["detail"][0]["loc"] == ["body", "shear_box", "gap_m"]
-    check = client.get(f"{API}/rigs/{_rig_id(client, 'small box')}/check", params={"material_id": material["id"]})
+    small_box = _rig_id(client, "small box")
+    check = client.get(f"{API}/rigs/{small_box}/check", params={"material_id": material["id"]})
     assert check.status_code == 200 and check.json()["warnings"] == warnings
+    # a rig a material names is no longer edited in place: its measurements were made in it
+    body = _thesis_record("small box")
+    response = client.put(f"{API}/rigs/{small_box}", json=body)
+    assert response.status_code == 409 and "gravel in the small box" in response.json()["detail"][0]["msg"]
 
 
 def test_material_names_an_unknown_rig_refused(s2):
