@@ -124,6 +124,16 @@ class RunContext:
             raise SpecFieldError(field, f"rig {self.preset.rig_name!r}, {exc.field}: {exc.message}") from None
         for warning in warnings:
             self.warn(f"rig {self.preset.rig_name!r}, {warning}")
+        limit = self.preset.rig.shear_box.max_normal_force_n if self.preset.rig is not None else None
+        if limit is None:
+            return
+        area = self.preset.container_area_m2
+        for field, stresses in (("options.dst_normal_stresses_pa", self.dst_normal_stresses_pa),
+                                ("options.cct_max_stress_pa", [self.cct_max_stress_pa])):
+            beyond = [s for s in stresses if s * area > limit * (1 + 1e-12)]
+            if beyond:
+                raise SpecFieldError(field, f"{beyond[0]:.6g} Pa is a lid force of {beyond[0] * area:.6g} N, beyond "
+                                            f"rig {self.preset.rig_name!r}'s range (max_normal_force_n = {limit:g} N)")
 
     # ----------------------------------------------------------------- callbacks
     def phase(self, lo: float, hi: float) -> None:

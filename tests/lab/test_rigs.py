@@ -216,3 +216,26 @@ def test_a_materials_particles_reach_the_fill():
                           for t in custom)
     # the check sees the same particles: a 8 mm sphere is the smallest, the custom clump end on 16 mm the largest
     assert presets.particles_of(preset.shapes).largest_particle_size_m == pytest.approx(0.016)
+
+
+def test_job_loads_beyond_the_rigs_range_are_refused():
+    """A rig with a 20 kN loading system: the 590 mm box's 65.6 kPa CCT (17.9 kN) runs, 80 kPa (21.9 kN) not."""
+    from dataclasses import replace
+
+    from engine.lab.context import RunContext
+    from engine.lab.spec import JobSpec
+
+    body = _record(THESIS_RIG)
+    body["shear_box"]["max_normal_force_n"] = 20_000.0
+    preset = replace(presets.THESIS, rig=Rig.model_validate(body))
+
+    def ctx(**options):
+        return RunContext(JobSpec.model_validate({"test": "cct", "fidelity": "thesis", "options": options}), preset)
+
+    ctx().validate()
+    with pytest.raises(SpecFieldError) as err:
+        ctx(cct_max_stress_pa=80e3).validate()
+    assert err.value.field == "options.cct_max_stress_pa" and "20000 N" in err.value.message
+    with pytest.raises(SpecFieldError) as err:
+        ctx(dst_normal_stresses_pa=[10e3, 80e3]).validate()
+    assert err.value.field == "options.dst_normal_stresses_pa"
