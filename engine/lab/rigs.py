@@ -109,6 +109,15 @@ class ShearBox(BaseModel):
             _within_range([load], info.field_name, info.data)
         return load
 
+    @field_validator("shear_distance_m")
+    @classmethod
+    def _shear_within_box(cls, distance: float, info: ValidationInfo) -> float:
+        diameter = info.data.get("container_diameter_m")
+        if diameter is not None and distance >= diameter:
+            raise ValueError(f"{distance * 1000:g} mm of travel would part the halves of a "
+                             f"{diameter * 1000:g} mm box: the travel must be smaller than the diameter")
+        return distance
+
     @model_validator(mode="after")
     def _one_of_stress_or_force(self):
         for stresses, forces in (("dst_normal_stresses_pa", "dst_normal_forces_n"),

@@ -13,7 +13,7 @@ from service.api.openapi import errors
 from service.db import DbSession, built_then_committed
 from service.errors import NotFound
 from service.materials.store import get_material
-from service.rigs.store import create_rig, find_by_name, list_rigs, particles_warnings, record_of, replace_rig, rig_dict
+from service.rigs.store import create_rig, list_rigs, particles_warnings, record_of, replace_rig, rig_dict
 from service.models.rig import Rig as RigRow
 
 router = APIRouter(prefix="/rigs", tags=["rigs"])
@@ -58,7 +58,7 @@ def _warnings(session: Session, rig: Rig, material_id: int | None) -> list[str]:
     return particles_warnings(rig, material.particles)
 
 
-@router.get("", response_model=list[RigOut], summary="List rigs (the bundled ones first)")
+@router.get("", response_model=list[RigOut], summary="List rigs, in id order (the bundled ones are seeded at first start)")
 def list_all(session: DbSession) -> list[dict[str, Any]]:
     return [rig_dict(row) for row in list_rigs(session)]
 
@@ -94,5 +94,3 @@ def check(rig_id: RigId, session: DbSession, material_id: Annotated[int, Query(g
     row = _rig_or_404(session, rig_id)
     return {"rig_id": rig_id, "material_id": material_id, "warnings": _warnings(session, record_of(row), material_id)}
 
-
-__all__ = ["router", "find_by_name"]

@@ -112,6 +112,7 @@ def _rig(**changes) -> dict:
     ("shear_box__container_diameter_m", -0.3, ("shear_box", "container_diameter_m")),
     ("shear_box__bottom_half_height_m", 0.0, ("shear_box", "bottom_half_height_m")),
     ("shear_box__gap_m", 0.2, ("shear_box", "gap_m")),  # wider than a 165 mm half
+    ("shear_box__shear_distance_m", 0.6, ("shear_box", "shear_distance_m")),  # past the 590 mm box
     ("angle_of_repose__fill_height_m", 0.5, ("angle_of_repose", "fill_height_m")),  # above the 370 mm rim
     ("anchor__bin_width_m", 0.1, ("anchor", "bin_width_m")),  # narrower than the 110 mm plate
     ("fill__level_height_m", 0.4, ("fill",)),  # above the 330 mm brim
