@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from conftest_s2 import API, THESIS_MATERIAL, s2, thesis_material_id  # noqa: F401
+from conftest_s2 import API, s2, thesis_material_id  # noqa: F401
 from engine.lab.rigs import RECORDS_DIR
 from test_campaign_cli import run, server  # noqa: F401  (the loopback uvicorn fixture)
 
