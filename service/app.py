@@ -22,14 +22,16 @@ from service.errors import install_error_handlers
 from service.security import check_bind, install_token_guard
 
 API_PREFIX = "/api/v1"
-ROUTERS = ("jobs", "health", "materials", "designs", "campaigns", "schedules", "effects", "evaluators", "tests",
+ROUTERS = ("jobs", "health", "rigs", "materials", "designs", "campaigns", "schedules", "effects", "evaluators", "tests",
            "export")
 
 
 def _seed(session_factory) -> None:
     from service.materials import seed_bundled_materials
+    from service.rigs import seed_bundled_rigs
 
     with session_factory() as session:
+        seed_bundled_rigs(session)  # first: the bundled material names the thesis rig
         seed_bundled_materials(session)
 
 

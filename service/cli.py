@@ -13,7 +13,7 @@ from pydantic import ValidationError
 from service.config import settings_from_env
 
 # Each provides register(subparsers): demcal doe ..., demcal run SPEC, demcal material/campaign/schedule ...
-PLUGINS = ("doe.cli", "engine.lab.cli", "service.cli_jobs", "service.cli_campaigns")
+PLUGINS = ("doe.cli", "engine.lab.cli", "service.cli_jobs", "service.cli_campaigns", "service.cli_rigs")
 
 
 def database_url(value: str | None) -> str | None:

@@ -108,9 +108,32 @@ class RunContext:
                 "options.cct_window_stresses_pa",
                 f"every stress must be below the CCT maximum stress "
                 f"({self.cct_max_stress_pa:.6g} Pa; options.cct_max_stress_pa), got {max(windows):.6g} Pa")
+        self.check_rig()
         for test, _ in plan(self.spec):
             if test.check is not None:
                 test.check(self)
+
+    def check_rig(self) -> None:
+        """The rig against the particles it is filled with (``engine.lab.rigs.check_for_particles``): a gap
+        they fall through is refused naming the spec field that sets them; a box too small for them runs
+        with a warning, which the result's provenance (and so every report that uses it) repeats."""
+        try:
+            warnings = self.preset.rig_warnings()
+        except SpecFieldError as exc:
+            field = "parameters.particle_radius_m" if self.spec.parameters.particle_radius_m is not None else "fidelity"
+            raise SpecFieldError(field, f"rig {self.preset.rig_name!r}, {exc.field}: {exc.message}") from None
+        for warning in warnings:
+            self.warn(f"rig {self.preset.rig_name!r}, {warning}")
+        limit = self.preset.rig.shear_box.max_normal_force_n if self.preset.rig is not None else None
+        if limit is None:
+            return
+        area = self.preset.container_area_m2
+        for field, stresses in (("options.dst_normal_stresses_pa", self.dst_normal_stresses_pa),
+                                ("options.cct_max_stress_pa", [self.cct_max_stress_pa])):
+            beyond = [s for s in stresses if s * area > limit * (1 + 1e-12)]
+            if beyond:
+                raise SpecFieldError(field, f"{beyond[0]:.6g} Pa is a lid force of {beyond[0] * area:.6g} N, beyond "
+                                            f"rig {self.preset.rig_name!r}'s range (max_normal_force_n = {limit:g} N)")
 
     # ----------------------------------------------------------------- callbacks
     def phase(self, lo: float, hi: float) -> None:

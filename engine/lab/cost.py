@@ -18,6 +18,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from engine.lab.context import RunContext
 from engine.lab.presets import ShapeFraction
 from engine.lab.registry import StageCost, joined_by, plan
@@ -68,8 +70,14 @@ def packing_spheres(solid_m3: float, margin: float, shapes: tuple[ShapeFraction,
     spheres; the others count as one sphere of their mean radius."""
     spheres_per_m3 = 0.0
     for s in shapes:
-        if s.template is not None:
+        if s.template is not None and s.size is not None:  # a custom clump scaled to a mean-sized largest sphere
+            scale = 0.5 * (s.radius_min_m + s.radius_max_m) / float(max(s.template.sphere_radii_m))
+            volume, spheres = s.template.volume_m3 * scale**3, s.template.n_spheres
+        elif s.template is not None:
             volume, spheres = s.template.volume_m3, s.template.n_spheres
+        elif s.size is not None:  # a sieve curve's number mean lies far below its mid-size: sample it
+            radii = s.size.sample(np.random.default_rng(0), 4096)
+            volume, spheres = float(np.mean(4.0 / 3.0 * math.pi * radii**3)), 1
         else:
             volume, spheres = 4.0 / 3.0 * math.pi * (0.5 * (s.radius_min_m + s.radius_max_m)) ** 3, 1
         spheres_per_m3 += s.volume_fraction / volume * spheres

@@ -11,6 +11,7 @@ from engine.lab.spec import STRICT_INPUT
 from engine.lab.registry import known_quantity, known_test, quantity
 from service.errors import Invalid
 from engine.lab.units import UnitError, condition_si_unit, to_si
+from engine.particles.description import Particles
 
 # Replicates of one measurement: a laboratory series, not a data dump (each value is stored and returned
 # with every listing of the material).
@@ -116,6 +117,11 @@ class MaterialIn(BaseModel):
         description="parameters measured directly (JSON; numbers finite), e.g. "
                     "{'particle_density_kg_m3': {'value': 2586.5, 'source': '...'}}",
     )
+    rig: str | None = Field(None, min_length=1, max_length=200,
+                            description="name of the rig (GET /api/v1/rigs) every measurement of the material was made "
+                                        "in; unset: not stated")
+    particles: Particles | None = Field(None, description="what the material is made of: size distribution, solid "
+                                                          "density, shapes (engine.particles.description)")
     measurements: list[MeasurementIn] = Field(default_factory=list, max_length=1000)
 
     @field_validator("direct_estimates")
@@ -156,6 +162,11 @@ class MaterialOut(BaseModel):
     source: str
     bundled: bool
     direct_estimates: dict[str, Any]
+    rig_id: int | None = Field(None, description="the rig the measurements were made in")
+    rig: str | None = Field(None, description="that rig's name")
+    particles: dict[str, Any] | None = Field(None, description="the particles (engine.particles.description)")
+    warnings: list[str] = Field(default_factory=list,
+                                description="the rig too small for the particles (direct-shear standards' sizes)")
     measurements: list[MeasurementOut]
     created_at: str
 

@@ -11,9 +11,12 @@ from sqlalchemy.orm import Session, selectinload
 from calibration.keys import ResponseKey
 from engine.lab.plausibility import record_warnings
 from service.api.jsonsafe import json_safe
-from service.errors import Conflict
+from service.errors import Conflict, Invalid
 from service.materials.schemas import FieldError, MaterialIn, MeasurementIn
 from service.models.material import Material, Measurement
+from service.models.rig import Rig
+from service.rigs.store import find_by_name as find_rig
+from service.rigs.store import particles_warnings, record_of, seed_bundled_rigs
 
 BUNDLED_DIR = Path(__file__).parent
 BUNDLED_FILES = ("thesis_coarse_aggregate.json",)
@@ -26,6 +29,8 @@ def material_dict(material: Material) -> dict[str, Any]:
         "id": material.id, "name": material.name, "description": material.description,
         "source": material.source, "bundled": material.bundled,
         "direct_estimates": dict(material.direct_estimates or {}),
+        "rig_id": material.rig_id, "rig": material.rig.name if material.rig is not None else None,
+        "particles": material.particles, "warnings": rig_warnings(material),
         "measurements": [measurement_dict(m) for m in material.measurements],
         "created_at": material.created_at.isoformat() + "Z",
     })
@@ -43,6 +48,30 @@ def measurement_dict(row: Measurement) -> dict[str, Any]:
                           "standard_uncertainty": None, "created_at": None, "warnings": []})
 
 
+def rig_warnings(material: Material) -> list[str]:
+    """The rig too small for the material's particles (engine.lab.rigs.check_for_particles); none when either
+    is unset. A record stored before a check existed that now fails it shows its refusal as a warning."""
+    if material.rig is None or material.particles is None:
+        return []
+    try:
+        return particles_warnings(record_of(material.rig), material.particles, "rig.")
+    except Invalid as exc:
+        return [f"{'.'.join(str(p) for p in exc.loc()[1:])}: {exc.message}"]
+
+
+def resolve_rig(session: Session, data: MaterialIn) -> Rig | None:
+    """The rig row the material names (422 naming ``rig`` if none has that name), checked against the
+    material's particles: a gap they fall through is refused naming the rig's field."""
+    if data.rig is None:
+        return None
+    row = find_rig(session, data.rig)
+    if row is None:
+        raise FieldError("rig", f"no rig named {data.rig!r} (GET /api/v1/rigs lists them)")
+    if data.particles is not None:
+        particles_warnings(record_of(row), data.particles.model_dump(mode="json"), "rig.")
+    return row
+
+
 def require_editable(material: Material) -> None:
     """The bundled reference material is read-only: it is the test data of the founding case, and a
     calibration against it must mean the same thing on every installation. Copy it to edit."""
@@ -54,7 +83,8 @@ def require_editable(material: Material) -> None:
 def copy_material(session: Session, material: Material, name: str) -> Material:
     """An editable copy (not bundled) with the same measurements, under a new name."""
     copy = Material(name=name, description=material.description, source=material.source, bundled=False,
-                    direct_estimates=dict(material.direct_estimates or {}))
+                    direct_estimates=dict(material.direct_estimates or {}), rig_id=material.rig_id,
+                    particles=material.particles)
     session.add(copy)
     for row in material.measurements:
         copy.measurements.append(Measurement(
@@ -104,8 +134,11 @@ def add_measurement(session: Session, material: Material, data: MeasurementIn) -
 
 
 def create_material(session: Session, data: MaterialIn, *, bundled: bool = False) -> Material:
+    rig = resolve_rig(session, data)
     material = Material(name=data.name, description=data.description, source=data.source,
-                        bundled=bundled, direct_estimates=data.direct_estimates)
+                        bundled=bundled, direct_estimates=data.direct_estimates, rig=rig,
+                        particles=None if data.particles is None else data.particles.model_dump(mode="json",
+                                                                                               exclude_none=True))
     session.add(material)
     for index, meas in enumerate(data.measurements):
         try:
@@ -131,6 +164,7 @@ def seed_bundled_materials(session: Session) -> list[int]:
 
     Called at service start: the reference data is there, complete, after every start.
     """
+    seed_bundled_rigs(session)  # the bundled material names the thesis rig
     ids = []
     for filename in BUNDLED_FILES:
         data = load_bundled(filename)
@@ -139,6 +173,11 @@ def seed_bundled_materials(session: Session) -> list[int]:
             existing = create_material(session, data, bundled=True)
         else:
             existing.bundled = True
+            # a database from before rigs and particles existed: the bundled material gains them
+            if existing.rig is None:
+                existing.rig = resolve_rig(session, data)
+            if existing.particles is None and data.particles is not None:
+                existing.particles = data.particles.model_dump(mode="json", exclude_none=True)
             for meas in data.measurements:
                 fields = meas.to_si()
                 if same_key(existing.measurements, fields) is None:

@@ -13,6 +13,7 @@ from sqlalchemy import JSON, Boolean, DateTime, Float, ForeignKey, Integer, Stri
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from service.models.base import Base, utcnow
+from service.models.rig import Rig
 
 
 class Material(Base):
@@ -25,9 +26,15 @@ class Material(Base):
     bundled: Mapped[bool] = mapped_column(Boolean, default=False, nullable=False)
     # Parameters measured directly (particle density, wall friction ...), usable as priors.
     direct_estimates: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict, nullable=False)
+    # The rig its measurements were made in (one laboratory's apparatus, every test kind: engine.lab.rigs);
+    # unset for materials stored before rigs existed.
+    rig_id: Mapped[int | None] = mapped_column(ForeignKey("rigs.id", ondelete="RESTRICT"), index=True, nullable=True)
+    # What it is made of (engine.particles.description.Particles, validated on entry); unset: not given.
+    particles: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
     created_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, nullable=False)
     updated_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, onupdate=utcnow, nullable=False)
 
+    rig: Mapped[Rig | None] = relationship(lazy="joined")
     measurements: Mapped[list["Measurement"]] = relationship(
         back_populates="material", cascade="all, delete-orphan", order_by="Measurement.id"
     )

@@ -29,13 +29,19 @@ COLUMN_SOLID_FRACTION = 0.22
 def shape_mix(preset: Fidelity, shapes=None) -> ShapeMix:
     comps = []
     for s in shapes or preset.shapes:
+        if s.template is not None and s.size is not None:  # a material's custom clump, scaled to each drawn size
+            comps.append(ShapeComponent("custom", s.size, s.volume_fraction, custom=s.template))
+            continue
         if s.template is not None:  # one given body (e.g. engine/lab/shape.py's elongated grain), not scaled
             comps.append(ShapeComponent("custom", ConstantSize(float(max(s.template.sphere_radii_m))),
                                         s.volume_fraction, custom=s.template))
             continue
-        size = ConstantSize(s.radius_min_m) if s.radius_min_m == s.radius_max_m else \
-            TruncatedGaussian(s.radius_min_m, s.radius_max_m)
-        comps.append(ShapeComponent(s.shape, size, s.volume_fraction))
+        if s.size is not None:  # a material's own distribution (a sieve curve, uniform sizes)
+            size = s.size
+        else:
+            size = ConstantSize(s.radius_min_m) if s.radius_min_m == s.radius_max_m else \
+                TruncatedGaussian(s.radius_min_m, s.radius_max_m)
+        comps.append(ShapeComponent(s.shape, size, s.volume_fraction, overlap_factor=s.overlap_factor))
     return ShapeMix(tuple(comps))
 
 

@@ -1,8 +1,9 @@
 // Hash router: #/jobs, #/jobs/7, #/submit, #/materials, #/materials/1, #/campaigns, #/campaigns/3[?iteration=2],
-// #/schedules. Unknown pages and missing rows get a not-found page (never the previous page's content).
+// #/schedules, #/rigs, #/rigs/2. Unknown pages and missing rows get a not-found page (never the previous page's content).
 import { flash, h } from "./core.js";
 import { jobPage, jobsPage, submitPage } from "./jobs.js";
 import { materialPage, materialsPage } from "./materials.js";
+import { rigPage, rigsPage } from "./rigs.js";
 import { campaignsPage } from "./campaigns.js";
 import { campaignPage } from "./campaign.js";
 import { schedulesPage } from "./schedules.js";
@@ -15,6 +16,8 @@ const ROUTES = [
   [/^\/jobs\/(\d+)$/, (v, m) => jobPage(v, m[1])],
   [/^\/materials$/, (v) => materialsPage(v)],
   [/^\/materials\/(\d+)$/, (v, m) => materialPage(v, m[1])],
+  [/^\/rigs$/, (v) => rigsPage(v)],
+  [/^\/rigs\/(\d+)$/, (v, m) => rigPage(v, m[1])],
   [/^\/campaigns$/, (v, _, q) => campaignsPage(v, q)],
   [/^\/campaigns\/(\d+)$/, (v, m, q) => campaignPage(v, m[1], q)],
   [/^\/schedules$/, (v) => schedulesPage(v)],

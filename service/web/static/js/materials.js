@@ -71,6 +71,8 @@ export async function materialPage(view, id) {
   });
   view.replaceChildren(h("h2", {}, material.name), h("p", { className: "muted" }, material.description),
     h("p", { className: "muted" }, material.source),
+    material.rig ? h("p", { className: "rig" }, "Measured in rig ", h("a", { href: `#/rigs/${material.rig_id}` }, material.rig)) : "",
+    ...(material.warnings || []).map((w) => h("p", { className: "warning" }, `warning: ${w}`)),
     h("h3", {}, "Measurements (SI)"),
     table(["Test", "Quantity", "Condition", "n", "Mean", "Std. uncertainty", "Unit", "Replicates", "Source", ""],
       material.measurements.map((m) => [m.test, m.quantity, condition(m.condition),
