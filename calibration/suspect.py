@@ -145,8 +145,8 @@ def suspects(rows: list[dict], reach_by_response: Mapping[str, tuple[float, floa
     factor = _slip(values, lo, hi, too_small)
     meant, units = _units_of_slip(factor, too_small, unit, members[0][0].get("input_unit") or "") \
         if factor is not None else (None, "")
-    where = ", ".join(_condition_text(m[0].get("condition") or {}) or "as measured" for m in members)
-    text = (f"{test} {quantity} ({where}): measured {', '.join(_number(v, 4) for v in values)} {unit}, "
+    where = _conditions_text([m[0].get("condition") or {} for m in members])
+    text = (f"{test} {quantity}{where}: measured {', '.join(_number(v, 4) for v in values)} {unit}, "
             f"{_number(ratio, 3)} times {'below' if too_small else 'above'} anything the model reaches "
             f"({_number(lo, 4)} to {_number(hi, 4)} {unit})")
     if factor is not None:
@@ -160,5 +160,9 @@ def suspects(rows: list[dict], reach_by_response: Mapping[str, tuple[float, floa
              "message": text}]
 
 
-def _condition_text(condition: Mapping[str, float]) -> str:
-    return ", ".join(f"{k} {_number(float(v), 4)}" for k, v in condition.items())
+def _conditions_text(conditions: list[Mapping[str, float]]) -> str:
+    """" at normal_stress_pa 15,000, 30,000" for conditions of one key; "" for none."""
+    keys = list(dict.fromkeys(k for c in conditions for k in c))
+    if not keys:
+        return ""
+    return " at " + "; ".join(f"{k} " + ", ".join(_number(float(c[k]), 4) for c in conditions if k in c) for k in keys)
