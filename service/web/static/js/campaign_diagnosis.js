@@ -111,8 +111,9 @@ export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded })
       d.ranking.map((r) => [
         h("span", {}, h("span", { className: "swatch", style: `background:${colourOf(r)}` }), ` ${r.title} `, h("code", {}, r.effect)),
         r.lm, r.p_holm, `${fmt(100 * r.explained, 3)} %`, strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
-        against ? h("span", { className: "muted" }, "not offered (see the diagnosis)")
-          : r.significant ? addEffectForm(campaignId, r, nextNumber, canAdd, onAdded) : h("span", { className: "muted" }, "not significant")]))),
+        !r.significant ? h("span", { className: "muted" }, "not significant")
+          : against ? h("span", { className: "muted" }, "not offered: against the diagnosis")
+            : addEffectForm(campaignId, r, nextNumber, canAdd, onAdded)]))),
     groups.length ? h("div", {}, h("h4", {}, "Alias groups: effects the data cannot tell apart"),
       h("ul", {}, groups.map((g) => h("li", {}, h("b", {}, `group ${g.group}: ${g.effects.join(", ")}. `), humanText(g.message || ""),
         h("ul", {}, (g.separators || []).map((s) => h("li", {}, `${s.effects.join(" vs ")}: measure ${humanText(s.separating_measurement)} (cos ${fmt(s.cos, 3)})`))))))) : "",
