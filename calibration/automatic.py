@@ -100,6 +100,11 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     decision, base_number = judge_iteration(iterations, it, report)
     record: dict[str, Any] = {"decision": decision, "base_iteration": base_number, "next_effect": None,
                               "next_base": None, "stop_reason": None}
+    if report.get("verdict") == Verdict.SUSPECT_MEASUREMENT:
+        # a measurement far outside anything the model reaches, which no candidate moves it to: adding
+        # physics (or widening an added one) would only bend the parameters towards a wrong number
+        return {**record, "stop_reason": StopReason.SUSPECT_MEASUREMENT.value + "; ".join(
+            s["message"] for s in report.get("suspect_measurements") or [])}
     wide = widening(config, iterations, it, report)
     if wide is not None:
         params = it.parameters
@@ -109,11 +114,6 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     rejected = decision is not None and not decision["accepted"]
     base = next(p for p in iterations if p.number == base_number) if rejected else it
     base_report = report if base is it else (base.report or {})
-    if report.get("verdict") == Verdict.SUSPECT_MEASUREMENT:
-        # a measurement far outside anything the model reaches, which no candidate moves it to: adding
-        # physics would only bend the parameters towards a wrong number
-        return {**record, "stop_reason": StopReason.SUSPECT_MEASUREMENT.value + "; ".join(
-            s["message"] for s in report.get("suspect_measurements") or [])}
     passes = not model_fails(report)
     if not rejected and passes and report.get("verdict") != Verdict.OUT_OF_REACH:
         reason = StopReason.PASSES.value

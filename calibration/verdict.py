@@ -79,8 +79,8 @@ def checks(*, unreachable, lack_of_fit_fails, surrogate_ok, failing_tests, suspe
     """What holds and what does not, one row per check: ``{"check", "holds" (True, False or None: not
     made), "detail"}``; the verdict is the first failing row's, in this order."""
     rows = [{"check": "measurements plausible against the model's reach", "holds": not suspects,
-             "detail": "; ".join(s["message"] for s in suspects) or "every measurement lies where the model's batteries "
-                                                                   "or a candidate effect can bring it"},
+             "detail": "; ".join(s["message"] for s in suspects) or "no measured quantity lies an order of magnitude "
+                                                                   "beyond what the model reaches"},
             {"check": "targets within reach", "holds": not unreachable,
              "detail": ("out of reach: " + ", ".join(unreachable)) if unreachable else
              "every target is reachable by some parameter set in the box"}]

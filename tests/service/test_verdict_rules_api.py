@@ -74,3 +74,15 @@ def test_no_physical_match_adds_an_effect_only_on_an_explicit_override(s2):
     assert alone.status_code == 422 and "override needs add_effect" in alone.text
     forced = client.post(f"{API}/campaigns/{cid}/iterations", json={"add_effect": significant, "override": True})
     assert forced.status_code == 201, forced.text
+
+
+def test_the_page_withholds_effects_under_the_same_verdicts_as_the_loop():
+    """The page spells calibration.vocabulary.AGAINST_ADDING once, in campaign_diagnosis.js; they must agree."""
+    import re
+    from pathlib import Path
+
+    from calibration.vocabulary import AGAINST_ADDING
+
+    js = (Path(__file__).resolve().parents[2] / "service" / "web" / "static" / "js" / "campaign_diagnosis.js").read_text()
+    spelt = re.search(r"const AGAINST_ADDING = new Set\(\[(.*?)\]\)", js).group(1)
+    assert set(re.findall(r'"([^"]+)"', spelt)) == {v.value for v in AGAINST_ADDING}
