@@ -29,8 +29,14 @@ COLUMN_SOLID_FRACTION = 0.22
 def shape_mix(preset: Fidelity, shapes=None) -> ShapeMix:
     comps = []
     for s in shapes or preset.shapes:
-        if s.template is not None:  # one given body (e.g. engine/lab/shape.py's elongated grain), not scaled
+        if s.template is not None and s.radius_min_m == s.radius_max_m:
+            # one given body (e.g. engine/lab/shape.py's elongated grain), not scaled
             comps.append(ShapeComponent("custom", ConstantSize(float(max(s.template.sphere_radii_m))),
+                                        s.volume_fraction, custom=s.template))
+            continue
+        if s.template is not None:
+            # a given body scaled to sphere radii spread over the fraction's range (elongated thesis spheres)
+            comps.append(ShapeComponent("custom", TruncatedGaussian(s.radius_min_m, s.radius_max_m),
                                         s.volume_fraction, custom=s.template))
             continue
         size = ConstantSize(s.radius_min_m) if s.radius_min_m == s.radius_max_m else \
