@@ -19,7 +19,8 @@ from calibration.fitting import TargetModel
 from calibration.localise import ALPHA, localise
 from calibration.intervals import parameter_intervals
 from calibration.records import Measured
-from calibration.verdict import verdict
+from calibration.verdict import failing_tests, verdict
+from calibration.vocabulary import DiagnosisVerdict
 from doe.confirm import confirm
 from doe.designs import Design
 from doe.factors import DoeError
@@ -256,27 +257,40 @@ def model_fails(report: dict) -> bool:
     return p is not None and p < ALPHA
 
 
-def diagnosed_report(report: dict, diagnosis: dict) -> dict[str, Any]:
+def diagnosed_report(report: dict, diagnosis: dict, suspects: list[dict] | None = None) -> dict[str, Any]:
     """The report with its diagnosis, and its verdict judged again on the diagnosis's adequacy test,
     which has seen the candidates' batteries: a misfit only the directed test finds makes "calibrated"
-    "model misses the measurements"."""
-    out = {**report, "diagnosis": diagnosis, "adequacy": {**diagnosis["adequacy"],
-                                                          "omnibus_p": diagnosis["lack_of_fit"]["p_value"],
-                                                          "directed": diagnosis.get("directed")}}
+    "model misses the measurements". ``suspects``: the suspect measurements judged again with the
+    candidates' batteries (``calibration.suspect``; None keeps the report's); where one remains, the
+    diagnosis says so instead of naming an effect, and indicates none."""
+    suspects = report.get("suspect_measurements") or [] if suspects is None else suspects
+    if suspects:
+        diagnosis = {**diagnosis, "attribution_verdict": diagnosis["verdict"],
+                     "verdict": DiagnosisVerdict.SUSPECT_MEASUREMENT.value,
+                     "message": "; ".join(s["message"] for s in suspects) + ": no candidate effect at a plausible "
+                                "strength moves the model there, so check the measurement before adding physics",
+                     "indicated": [], "measure_next": [f"{s['test']} {s['quantity']}" for s in suspects]}
+    out = {**report, "diagnosis": diagnosis, "suspect_measurements": suspects,
+           "adequacy": {**diagnosis["adequacy"], "omnibus_p": diagnosis["lack_of_fit"]["p_value"],
+                        "directed": diagnosis.get("directed")}}
     surrogate = report.get("surrogate_check") or {}
     polished = bool((report.get("polish") or {}).get("steps"))
     out.update(verdict(unreachable=report.get("unreachable") or [], lack_of_fit_fails=out["adequacy"]["fails"],
-                       surrogate_ok=None if polished else surrogate.get("confirmed")))
+                       surrogate_ok=None if polished else surrogate.get("confirmed"),
+                       failing_tests=failing_tests(report.get("tests")), suspects=suspects,
+                       lack_of_fit=report.get("lack_of_fit"), adequacy_p=out["adequacy"].get("p_value")))
     return out
 
 
-def report_verdict(unreachable: list, assessment: dict) -> dict[str, Any]:
+def report_verdict(unreachable: list, assessment: dict, suspects: list[dict] = ()) -> dict[str, Any]:
     """One verdict. Once polishing has moved the optimum on the batteries themselves, the surfaces no
     longer decide where the optimum is, so their check is reported but does not veto "calibrated"."""
     loc = assessment.get("localisation")
     surrogate = assessment.get("surrogate_check") or {}
     return verdict(unreachable=unreachable, lack_of_fit_fails=None if loc is None else loc["fails"],
-                   surrogate_ok=None if assessment.get("polished") else surrogate.get("confirmed"))
+                   surrogate_ok=None if assessment.get("polished") else surrogate.get("confirmed"),
+                   failing_tests=failing_tests(loc["tests"] if loc else []), suspects=list(suspects),
+                   lack_of_fit=loc["lack_of_fit"] if loc else None)
 
 
 def _json_safe(value):

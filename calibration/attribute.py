@@ -26,6 +26,7 @@ from engine.effects.base import FINGERPRINT_COLUMNS, Candidate
 from . import stats
 from .keys import find
 from .localise import ALPHA, Localisation
+from .vocabulary import DiagnosisVerdict
 
 ALIAS_COS = 0.9
 # One-sided 5 % point of the normal: the leading candidate is told apart from a rival only when its
@@ -106,7 +107,7 @@ class Attribution:
     ranking: list[Ranked]
     alias_groups: list[dict]
     fingerprints: dict[str, Any]
-    verdict: str                  # "effect indicated" | "inconclusive" | "no physical match" | "no misfit"
+    verdict: DiagnosisVerdict
     message: str
     measure_next: list[str]
     candidates: dict[str, Candidate]
@@ -298,11 +299,11 @@ def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels
     rt = M @ r
     worst = [labels[i] for i in np.argsort(-np.abs(rt[:len(labels)]))[:3]]
     if loc.lack_of_fit.dof <= 0:
-        return ("inconclusive", "as many free parameters as measured values: every misfit can be absorbed, so "
+        return (DiagnosisVerdict.INCONCLUSIVE, "as many free parameters as measured values: every misfit can be absorbed, so "
                 "none can be attributed; measure more (each shear load, E' at several stresses, dilatancy, "
                 "the angle of repose) or fix parameters measured directly", [])
     if not loc.fails:
-        return ("no misfit", "the model agrees with the measurements within their noise; no effect is needed",
+        return (DiagnosisVerdict.NO_MISFIT, "the model agrees with the measurements within their noise; no effect is needed",
                 [])
     good = [x for x in ranked if x.p_holm < ALPHA and x.plausible and x.score.explained >= MIN_EXPLAINED]
     if good:
@@ -314,21 +315,21 @@ def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels
             others = [e for e in group["effects"] if e != best.name]
             text += f"; it is aliased with {', '.join(others)}"
         nxt = sorted({s["separating_measurement"] for s in group["separators"]}) if group else []
-        return "effect indicated", text, nxt
+        return DiagnosisVerdict.INDICATED, text, nxt
     strong = [x for x in ranked if x.p_holm < ALPHA and x.score.explained >= MIN_EXPLAINED]
     best_share = max((x.score.explained for x in ranked), default=0.0)
     if loc.lack_of_fit.p_value < 1e-3 and best_share < MIN_EXPLAINED:
-        return ("no physical match",
+        return (DiagnosisVerdict.NO_MATCH,
                 "the misfit matches no candidate effect's signature (best explains "
                 f"{100 * best_share:.0f} %); it sits in {', '.join(worst)}: check those measurements "
                 "(units, condition, a physically impossible value) or the test set-up before adding physics",
                 worst)
     if strong and not any(x.plausible for x in strong):
-        return ("no physical match",
+        return (DiagnosisVerdict.NO_MATCH,
                 f"only implausible strengths would explain the misfit ({strong[0].name} at "
                 f"{strong[0].strength if strong[0].strength is not None else strong[0].fraction:.3g}); "
                 f"it sits in {', '.join(worst)}: check those measurements first", worst)
-    return ("inconclusive",
+    return (DiagnosisVerdict.INCONCLUSIVE,
             "the model misses the measurements, but no candidate effect explains enough of it to be named; "
             f"the misfit sits in {', '.join(worst)}: more replicates there, or a measurement at another "
             "stress, would sharpen the diagnosis", worst)

@@ -20,10 +20,10 @@ from typing import Callable
 
 from calibration.adding import effect_hints, with_effect_factor
 from calibration.analysis import active_effects, model_fails
-from calibration.decisions import judge, widened_top
+from calibration.decisions import explanation, judge, widened_top
 from calibration.errors import SettingsError
 from calibration.settings import validated
-from calibration.vocabulary import StopReason, Verdict
+from calibration.vocabulary import AGAINST_ADDING, DiagnosisVerdict, StopReason, Verdict
 from engine.candidates import get as get_candidate
 
 # validates the next iteration's settings (a JSON dict) and returns them as stored; raises with the reason
@@ -55,7 +55,9 @@ def judge_iteration(iterations: list, it, report: dict) -> tuple[dict | None, in
                      free_before=n - int(before["dof"]), free_after=n - int(after["dof"]),
                      lof_p_before=before["p_value"], lof_p_after=after["p_value"],
                      strength=((report.get("optimum") or {}).get(c.factor)))
-    return decision.to_dict(), base_number
+    # kept or not, say how much of the misfit it explains: an effect kept with the fit still outside the
+    # noise "partly explains" it, with what remains, and is not presented as the answer
+    return {**decision.to_dict(), **explanation([name], decision.accepted, base.report or {}, report)}, base_number
 
 
 def widening(config, iterations: list, it, report: dict) -> dict | None:
@@ -98,6 +100,11 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     decision, base_number = judge_iteration(iterations, it, report)
     record: dict[str, Any] = {"decision": decision, "base_iteration": base_number, "next_effect": None,
                               "next_base": None, "stop_reason": None}
+    if report.get("verdict") == Verdict.SUSPECT_MEASUREMENT:
+        # a measurement far outside anything the model reaches, which no candidate moves it to: adding
+        # physics (or widening an added one) would only bend the parameters towards a wrong number
+        return {**record, "stop_reason": StopReason.SUSPECT_MEASUREMENT.value + "; ".join(
+            s["message"] for s in report.get("suspect_measurements") or [])}
     wide = widening(config, iterations, it, report)
     if wide is not None:
         params = it.parameters
@@ -109,20 +116,26 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     base_report = report if base is it else (base.report or {})
     passes = not model_fails(report)
     if not rejected and passes and report.get("verdict") != Verdict.OUT_OF_REACH:
-        return {**record, "stop_reason": StopReason.PASSES.value}
+        reason = StopReason.PASSES.value
+        if report.get("verdict") == Verdict.PARTLY_CALIBRATED:
+            # the whole passes but a test fails its own check: say so where the loop says why it stopped
+            reason += f" ({report['verdict']}: {report.get('meaning')})"
+        return {**record, "stop_reason": reason}
     if it.number >= config.max_iterations:
         return {**record, "stop_reason": StopReason.MAX_ITERATIONS.value}
     diagnosis = base_report.get("diagnosis") or {}
     skip = active_effects(base.parameters) | _tried_from(iterations, base.number) | (
         {decision["effect"]} if rejected else set())
-    options = [name for name in diagnosis.get("indicated", []) if name not in skip]
+    # "no physical match" and "suspect measurement" offer nothing to add, whatever the ranking holds
+    offered = [] if diagnosis.get("verdict") in AGAINST_ADDING else diagnosis.get("indicated", [])
+    options = [name for name in offered if name not in skip]
     if not options:
         # a rejected effect with no other candidate left: nothing improves; otherwise the diagnosis
         # of the model as it stands says why no effect is indicated
         reason = StopReason.NOTHING_IMPROVES.value if rejected else \
             f"{StopReason.DIAGNOSIS.value}{diagnosis.get('verdict', 'not run')}"
         pooled = (diagnosis.get("lack_of_fit") or {}).get("p_value")
-        if not rejected and diagnosis.get("verdict") == "no misfit" and pooled is not None:
+        if not rejected and diagnosis.get("verdict") == DiagnosisVerdict.NO_MISFIT and pooled is not None:
             # the iteration's report saw a misfit (on one confirmation battery, or a target out of reach);
             # say why the loop still stops
             reason += f" (every battery at the optimum together: lack of fit p {pooled:.2g})"

@@ -20,6 +20,8 @@ from . import parameters as params_mod
 from . import stats
 from .attribute import PLAUSIBLE_SLACK
 from .localise import ALPHA
+from .verdict import failing_tests
+from .vocabulary import Explains, Verdict
 
 
 def effect_range(candidate: Candidate, strength: float | None = None,
@@ -95,3 +97,35 @@ def judge(candidate: Candidate, *, chi2_before: float, chi2_after: float, n_resi
     significant = (p is not None and p < ALPHA) or delta_bic < -2.0
     return Decision(candidate.name, bool(improves and significant), float(chi2_before), float(chi2_after),
                     float(lr), p, float(delta_bic), float(lof_p_before), float(lof_p_after), strength)
+
+
+def explanation(effects: list[str], kept: bool, before: dict, after: dict) -> dict[str, Any]:
+    """How much of the misfit the added ``effects`` explain, judged on the report of the iteration with
+    them (``after``) against the one it was built on (``before``): "explains" only when its verdict is
+    "calibrated" (every check holds); "partly explains" when the effect was kept but the fit is still
+    outside the noise or a test still fails, with the misfit that remains; else "does not explain".
+    ``kept``: the automatic mode's decision; added by hand, whether chi2 fell."""
+    lof_before, lof = before.get("lack_of_fit") or {}, after.get("lack_of_fit") or {}
+    verdict = after.get("verdict")
+    if kept and verdict == Verdict.CALIBRATED:
+        word = Explains.EXPLAINS
+    elif kept:
+        word = Explains.PARTLY
+    else:
+        word = Explains.DOES_NOT
+    failing = failing_tests(after.get("tests"))
+    band = lof.get("noise_band") or [None, None]
+    remaining = {"verdict": verdict, "chi2_per_dof": lof.get("chi2_per_dof"), "noise_band": lof.get("noise_band"),
+                 "p_value": (after.get("adequacy") or {}).get("p_value", lof.get("p_value")),
+                 "failing_tests": failing}
+    text = f"{' + '.join(effects)} {word.value} the misfit: chi2/dof {_g(lof_before.get('chi2_per_dof'))} -> " \
+           f"{_g(lof.get('chi2_per_dof'))} (noise band {_g(band[0])}-{_g(band[1])}), verdict {verdict}"
+    if failing:
+        text += f", failing tests: {', '.join(failing)}"
+    if word == Explains.PARTLY:
+        text += "; the misfit left is not explained by it"
+    return {"explains": word.value, "remaining": remaining, "explains_message": text}
+
+
+def _g(value) -> str:
+    return "-" if value is None else f"{value:.3g}"

@@ -10,13 +10,14 @@ from __future__ import annotations
 from typing import Any, Sequence
 
 from calibration.analysis import active_effects
+from calibration.decisions import explanation
 from calibration.stats import weighted_rms
 
 
 def history(iterations: Sequence[Any]) -> dict[str, Any]:
     """``{"iterations": [...], "targets": {...}}`` of the iterations that have a report."""
     done = [it for it in sorted(iterations, key=lambda i: i.number) if it.report]
-    entries, previous, targets, plan = [], set(), {}, {}
+    entries, previous, targets, plan, last = [], set(), {}, {}, None
     for it in done:
         report = it.report
         effects = sorted(active_effects(it.parameters))
@@ -25,10 +26,13 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
         base = next((b for b in done if b.number == plan.get("next_base")), None)
         if base is not None:
             previous = set(active_effects(base.parameters))
+        else:
+            base = last
+        added = sorted(set(effects) - previous) or None
         lof = report.get("lack_of_fit") or {}
         diag = report.get("diagnosis")
         entries.append({
-            "number": it.number, "effects": effects, "added_effect": sorted(set(effects) - previous) or None,
+            "number": it.number, "effects": effects, "added_effect": added,
             "optimum": report.get("optimum"), "parameter_std": (it.optimum or {}).get("parameter_std"),
             "chi2": lof.get("statistic"), "chi2_per_dof": lof.get("chi2_per_dof"), "dof": lof.get("dof"),
             "noise_band": lof.get("noise_band"), "lack_of_fit_p": lof.get("p_value"),
@@ -45,8 +49,11 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
             "decision": (report.get("automatic") or {}).get("decision"),
             "stop_reason": (report.get("automatic") or {}).get("stop_reason"),
             "range_widened": bool(plan.get("widened")),
+            # an added effect explains the misfit only when every check holds; else what it leaves
+            "explains": _explains(added, base, report),
         })
         plan = report.get("automatic") or {}
+        last = it
         previous = set(effects)
         for row in report.get("targets", []):
             if row.get("status") != "modelled":
@@ -60,6 +67,20 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
     if entries:
         entries[-1]["effect_added_next"] = None
     return {"iterations": entries, "targets": targets}
+
+
+def _explains(added: list[str] | None, base, report: dict) -> dict | None:
+    """The automatic mode's word on the effect this iteration added, or for one added by hand the same
+    rule with "kept" meaning that chi2 fell (``calibration.decisions.explanation``)."""
+    if not added or base is None:
+        return None
+    decision = (report.get("automatic") or {}).get("decision")
+    if decision and "explains" in decision:
+        return {k: decision[k] for k in ("explains", "remaining", "explains_message")}
+    before, after = (base.report or {}).get("lack_of_fit") or {}, report.get("lack_of_fit") or {}
+    fell = before.get("statistic") is not None and after.get("statistic") is not None and \
+        after["statistic"] < before["statistic"]
+    return explanation(added, fell, base.report or {}, report)
 
 
 def _finite(value: float) -> float | None:

@@ -25,7 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
-from . import analysis, automatic, polish
+from . import analysis, automatic, polish, suspect
 from .awaiting import awaited, round_runs, runs_of  # noqa: F401  (awaited: the runner's, through machine)
 from .design import build_design, design_view
 from .errors import LoopFailed, SettingsError
@@ -191,7 +191,8 @@ def _report(ctx: Context, it) -> Transition:
                                  records(confirmations), seeds)
     polished = polish.summary((it.optimum or {}).get("polish"))
     assessment["polished"] = bool(polished and polished["steps"] > 0)
-    report = build_report(s, it.models, it.optimum, confirmations, ctx.targets, assessment)
+    report = build_report(s, it.models, it.optimum, confirmations, ctx.targets, assessment,
+                          suspect.reach(r.responses for r in it.runs if r.kind != RunKind.DIAGNOSIS))
     report["polish"] = polished
     first = confirmations[0]
     stored = {"job_id": first.job_id, "seed": first.seed, "parameters": first.natural,
@@ -228,7 +229,13 @@ def _diagnosed(ctx: Context, it) -> Transition:
                                   records(confirmations), seeds,
                                   [(name, seed, list((r.responses or {}).values()))
                                    for (name, seed), r in zip(plan, runs)])
-    return _finish(ctx, it, Phase.DIAGNOSED, analysis.diagnosed_report(it.report or {}, diagnosis))
+    # the suspects judged again: the model's reach now includes each candidate at a plausible strength
+    planned = [(name, r.responses) for (name, _), r in zip(plan, runs)]
+    reach = suspect.reach([*(r.responses for r in it.runs if r.kind != RunKind.DIAGNOSIS),
+                           *(responses for name, responses in planned if name == analysis.BASELINE),
+                           *suspect.extrapolated_candidates(planned, analysis.BASELINE)])
+    suspects = suspect.suspects((it.report or {}).get("targets") or [], reach)
+    return _finish(ctx, it, Phase.DIAGNOSED, analysis.diagnosed_report(it.report or {}, diagnosis, suspects))
 
 
 def _finish(ctx: Context, it, source: Phase, report: dict, **values: Any) -> Transition:

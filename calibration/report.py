@@ -22,13 +22,17 @@ import numpy as np
 from calibration.keys import ResponseKey, find_response
 from calibration.analysis import report_verdict
 from calibration.records import Measured
+from calibration.suspect import suspects as suspect_measurements
 from engine.lab.plausibility import record_warnings
 
 REACHABLE_LIMIT = 3.0
 
 
-def build_report(config, models: dict, optimum: dict, confirmations: list, targets, assessment: dict) -> dict[str, Any]:
-    """``confirmations``: the runs at the final optimum, one per seed; ``targets``: the measurements."""
+def build_report(config, models: dict, optimum: dict, confirmations: list, targets, assessment: dict,
+                 model_reach: dict | None = None) -> dict[str, Any]:
+    """``confirmations``: the runs at the final optimum, one per seed; ``targets``: the measurements;
+    ``model_reach``: per response, the range of every battery the iteration ran (``calibration.suspect``:
+    a measurement far outside it is named as suspect)."""
     confirmed_responses = confirmations[0].responses or {}
     m = len(confirmations)
     # the optimum's row of each target, found by the one measurement key (a notebook's targets have no ids)
@@ -44,6 +48,7 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
         row: dict[str, Any] = {
             "measurement_id": meas.id, "test": key.test, "quantity": key.quantity,
             "condition": key.condition_dict, "unit": meas.unit, "measured": meas.mean, "n": meas.n,
+            "input_unit": meas.input_unit or None,
         }
         opt_target = next((t for k, t in optimum_rows if k.matches(key)), None)
         name = find_response(confirmed_responses, key)
@@ -82,6 +87,7 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
     unreachable = [r["response"] for r in modelled if r.get("reachable") is False]
     outside = [r["response"] for r in modelled if not r["confirmation_in_interval"]]
     loc = assessment.get("localisation")
+    suspects = suspect_measurements(rows, model_reach or {})
     return {
         "optimum": optimum.get("parameters"),
         "fixed_parameters": dict(config.fixed_parameters),
@@ -90,7 +96,8 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
         "confirmation_seeds": [r.seed for r in confirmations],
         "confirmation_job_ids": [r.job_id for r in confirmations],
         "targets": rows,
-        **report_verdict(unreachable, assessment),
+        **report_verdict(unreachable, assessment, suspects),
+        "suspect_measurements": suspects,
         "unreachable": unreachable,
         "confirmation_outside_interval": outside,
         "max_abs_standardised_residual": max((abs(r["standardised_residual"]) for r in modelled

@@ -29,6 +29,7 @@ from .loop import CalibrationLoop, LoopResult
 from .records import Measured
 from .settings import LoopSettings
 from .stats import residual_maker
+from .vocabulary import DiagnosisVerdict
 
 # Laboratory scatter of one test (design note 3.1): relative sd, or absolute in degrees.
 MEASUREMENT_SD = {
@@ -381,7 +382,7 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
         return all(v is True for v in o["strength_within_30"].values())
 
     def no_wrong_claim(o):
-        claimed = o["diagnosis_verdict"] == "effect indicated" and (o["top_p_holm"] or 1.0) < 0.01
+        claimed = o["diagnosis_verdict"] == DiagnosisVerdict.INDICATED and (o["top_p_holm"] or 1.0) < 0.01
         return not claimed or rank1(o)
 
     def no_wrong_added(o):

@@ -50,15 +50,46 @@ class RunKind(Word):
 
 
 class Verdict(Word):
-    """One verdict per iteration (``calibration.verdict`` decides it, in the order the checks matter)."""
+    """One verdict per iteration (``calibration.verdict`` decides it, in the order the checks matter).
+    "calibrated" only when every check holds; "partly calibrated" when the model as a whole passes
+    but a test fails its own check (the report's ``checks`` say which hold and which do not)."""
 
+    SUSPECT_MEASUREMENT = "suspect measurement"
     OUT_OF_REACH = "targets out of reach"
     MISSES = "model misses the measurements"
     SURROGATE_INADEQUATE = "surrogate inadequate"
+    PARTLY_CALIBRATED = "partly calibrated"
     CALIBRATED = "calibrated"
 
 
-MISFIT_VERDICTS = frozenset({Verdict.OUT_OF_REACH, Verdict.MISSES})
+# verdicts that find a misfit to diagnose
+MISFIT_VERDICTS = frozenset({Verdict.SUSPECT_MEASUREMENT, Verdict.OUT_OF_REACH, Verdict.MISSES,
+                             Verdict.PARTLY_CALIBRATED})
+
+
+class DiagnosisVerdict(Word):
+    """The diagnosis's verdict (``calibration.attribute``). Under NO_MATCH and SUSPECT_MEASUREMENT no
+    effect is offered for adding (``AGAINST_ADDING``): the page shows only an override marked as
+    against the diagnosis, the API asks for ``override: true``, and the automatic mode stops."""
+
+    INDICATED = "effect indicated"
+    INCONCLUSIVE = "inconclusive"
+    NO_MATCH = "no physical match"
+    SUSPECT_MEASUREMENT = "suspect measurement"
+    NO_MISFIT = "no misfit"
+
+
+AGAINST_ADDING = frozenset({DiagnosisVerdict.NO_MATCH, DiagnosisVerdict.SUSPECT_MEASUREMENT})
+
+
+class Explains(Word):
+    """What an added effect did to the misfit (``calibration.decisions.explanation``): it explains it
+    only when the iteration with it is "calibrated"; an effect that lowers the misfit without bringing
+    it into the noise is reported with the misfit it leaves, never as the answer."""
+
+    EXPLAINS = "explains"
+    PARTLY = "partly explains"
+    DOES_NOT = "does not explain"
 
 
 class StopReason(Word):
@@ -66,6 +97,7 @@ class StopReason(Word):
     verdict or the reason the next iteration cannot run, after these prefixes."""
 
     PASSES = "lack of fit passes"
+    SUSPECT_MEASUREMENT = "suspect measurement: "  # + the measurement and its likely unit slip
     MAX_ITERATIONS = "maximum number of iterations reached"
     NOTHING_IMPROVES = "nothing improves"
     DIAGNOSIS = "diagnosis: "            # + the diagnosis's verdict

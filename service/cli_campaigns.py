@@ -242,6 +242,8 @@ def campaign_next(args) -> int:
             raise CliError(f"--strength-range {args.strength_range!r}: expected LOW:HIGH ({exc})") from exc
     if args.proposed_design:
         body["proposed_design"] = True
+    if args.override:
+        body["override"] = True
     before = _call(args, "GET", f"/campaigns/{args.id}/iterations")
     c = _call(args, "POST", f"/campaigns/{args.id}/iterations", body=body)
     return _emit(args, c, _next_text(c, before[-1] if before else None, args.add_effect))
@@ -419,6 +421,8 @@ def register(subparsers) -> None:
     nxt.add_argument("id", type=int)
     nxt.add_argument("--add-effect", help="a candidate from GET /api/v1/effects, e.g. rolling_epsd2")
     nxt.add_argument("--strength-range", help="LOW:HIGH of the added effect's strength (SI)")
+    nxt.add_argument("--override", action="store_true",
+                     help="add the effect although the last diagnosis found no physical match or a suspect measurement")
     nxt.add_argument("--proposed-design", action="store_true",
                      help="run the design the surface check proposed (narrowed factorial or axial runs)")
     cli_export.register_campaign(csub)

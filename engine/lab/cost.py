@@ -66,15 +66,18 @@ class Cost:
 
 def packing_spheres(solid_m3: float, margin: float, shapes: tuple[ShapeFraction, ...]) -> int:
     """Spheres of a packing (what a step costs): bodies from the solids volume, times the spheres of each
-    body. A shape with its own template (the elongated screening clumps) counts its template's volume and
-    spheres; the others count as one sphere of their mean radius."""
+    body. A shape with its own template (the elongated clumps) counts its template's volume at the mean
+    sphere radius and its spheres; the others count as one sphere of their mean radius."""
     spheres_per_m3 = 0.0
     for s in shapes:
         if s.template is not None and s.size is not None:  # a custom clump scaled to a mean-sized largest sphere
             scale = 0.5 * (s.radius_min_m + s.radius_max_m) / float(max(s.template.sphere_radii_m))
             volume, spheres = s.template.volume_m3 * scale**3, s.template.n_spheres
         elif s.template is not None:
-            volume, spheres = s.template.volume_m3, s.template.n_spheres
+            # the template scaled to the fraction's mean sphere radius (a given body when the range is one radius)
+            scale = 1.0 if s.radius_min_m == s.radius_max_m else \
+                0.5 * (s.radius_min_m + s.radius_max_m) / float(max(s.template.sphere_radii_m))
+            volume, spheres = s.template.volume_m3 * scale**3, s.template.n_spheres
         elif s.size is not None:  # a sieve curve's number mean lies far below its mid-size: sample it
             radii = s.size.sample(np.random.default_rng(0), 4096)
             volume, spheres = float(np.mean(4.0 / 3.0 * math.pi * radii**3)), 1

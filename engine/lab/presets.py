@@ -229,12 +229,12 @@ FIDELITIES = {"thesis": THESIS, "screening": SCREENING}
 
 
 def fidelity(name: str, particle_radius_m: float | None = None, clump_aspect_ratio: float = 1.0) -> Fidelity:
-    """The preset by name; at screening, ``particle_radius_m`` replaces the 20 mm spheres and
-    ``clump_aspect_ratio`` > 1 makes the shear-box (and anchor-bin) grains two-sphere clumps of that
-    length/width with the solid volume of the sphere they replace (``engine/lab/shape.py``).
-
-    The thesis fidelity has its own clump mix (Table 4.2): neither applies there. The screening angle of
-    repose keeps its pyramids (spheres would roll away, see the preset), so the shape does not reach it.
+    """The preset by name; at screening, ``particle_radius_m`` replaces the 20 mm spheres (the thesis
+    fidelity has its own clump mix, Table 4.2). ``clump_aspect_ratio`` > 1 makes the mix's spheres
+    two-sphere clumps of that length/width with the solid volume of the sphere they replace
+    (``engine/lab/shape.py``): every shear-box (and anchor-bin) grain at screening, the round 20.8 % at
+    the thesis fidelity. The screening angle of repose keeps its pyramids (spheres would roll away, see
+    the preset), so the shape does not reach it there.
     """
     try:
         preset = FIDELITIES[name]
@@ -247,14 +247,7 @@ def fidelity(name: str, particle_radius_m: float | None = None, clump_aspect_rat
         preset = replace(preset, shapes=(ShapeFraction("sphere", particle_radius_m, particle_radius_m, 1.0),),
                          aor_shapes=(ShapeFraction("pyramid", half, half, 1.0),))
     if clump_aspect_ratio != 1.0:
-        if name != "screening":
-            raise SpecFieldError(
-                "parameters.clump_aspect_ratio",
-                f"{clump_aspect_ratio:g}: the thesis fidelity has its own clump mix "
-                "(Table 4.2: pyramids, elongated clumps and spheres); clump_aspect_ratio applies to the screening "
-                "fidelity only (leave it at 1)")
-        from engine.lab.shape import screening_shapes
+        from engine.lab.shape import elongated_shapes
 
-        radius = preset.shapes[0].radius_min_m
-        preset = replace(preset, shapes=screening_shapes(clump_aspect_ratio, radius))
+        preset = replace(preset, shapes=elongated_shapes(clump_aspect_ratio, preset.shapes))
     return preset

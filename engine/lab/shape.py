@@ -1,11 +1,14 @@
-"""Particle shape as a calibration parameter: screening spheres elongated into two-sphere clumps.
+"""Particle shape as a calibration parameter: a mix's spheres elongated into two-sphere clumps.
 
 Why: shape is the first physical effect a sphere model misses for a crushed aggregate (Azema & Radjai
 2010: strength and dilatancy rise with elongation; the packing fraction is non-monotonic), and
 the missing-physics diagnosis needs a continuous strength for it. ``clump_aspect_ratio`` (length
-over width of a two-sphere clump, 1 = sphere) is that strength; the screening fidelity builds its
-grains from it, keeping each grain's solid volume equal to the sphere it replaces so that a change
-of shape is not also a change of size.
+over width of a two-sphere clump, 1 = sphere) is that strength at every fidelity: the spheres of the
+fidelity's mix become two-sphere clumps of that aspect ratio (``elongated_shapes``), each keeping the
+solid volume of the sphere it replaces so that a change of shape is not also a change of size. At
+screening that is every grain; at the thesis fidelity its round grains (Table 4.2: 20.8 % of the
+solids), whose pyramids and elongated clumps stay as they are (the latter, two spheres at C = 1, are
+already as long as two touching spheres can be). So the founding case can name shape (issue 33).
 
 Geometry. Two equal spheres of radius r whose centres are d apart span d + 2 r along their axis and
 2 r across it, so the aspect ratio is a = (d + 2 r) / (2 r), i.e. d = 2 r (a - 1). The solid volume is
@@ -27,7 +30,7 @@ from engine.particles import templates as tpl
 # EDEM's angle-of-repose kit uses two-sphere clumps at aspect ratio 1.5; ballast models 1.2-2.0
 CANDIDATE = Candidate(
     name="particle_shape", title="particle shape (elongation)", factor="clump_aspect_ratio",
-    unit="1", plausible_range=(1.2, 2.0), step=0.3, off_value=1.0, fidelities=("screening",),
+    unit="1", plausible_range=(1.2, 2.0), step=0.3, off_value=1.0,
     standin_term="elongation",
     fingerprint={"bulk_density": "-", "modulus_level": "+-", "friction_angle": "+", "dilatancy": "++",
                  "angle_of_repose": "+", "pull_force": "+"},
@@ -87,17 +90,33 @@ def aspect_ratio_of(template: tpl.ClumpTemplate) -> float:
     return (span + 2.0 * radius) / (2.0 * radius)
 
 
-def screening_shapes(aspect_ratio: float, sphere_radius_m: float):
-    """The screening fill's shape list (``presets.ShapeFraction``) for grains of this aspect ratio.
+def elongated_shapes(aspect_ratio: float, shapes):
+    """A mix's shape list (``presets.ShapeFraction``) with every sphere fraction made two-sphere clumps
+    of this aspect ratio, each with the solid volume of the sphere it replaces: the clumps' sphere radii
+    span the spheres' radius range times the same factor (so a Gaussian spread keeps its shape), and
+    the volume fractions stay. Other fractions are kept as they are.
 
-    Aspect ratio 1 gives exactly today's mono-sized spheres (``ShapeFraction("sphere", R, R, 1)``), so
-    a run with spheres is bit for bit the run it was before this parameter existed.
-    """
-    from engine.lab.presets import ShapeFraction
+    Aspect ratio 1 gives the list itself, so a run with spheres is bit for bit the run it was before
+    this parameter existed."""
+    from dataclasses import replace
 
     a = _check_aspect_ratio(aspect_ratio)
     if a == 1.0:
-        return (ShapeFraction("sphere", sphere_radius_m, sphere_radius_m, 1.0),)
-    template = elongated_clump(a, sphere_radius_m)
-    r = float(template.sphere_radii_m[0])
-    return (ShapeFraction("custom", r, r, 1.0, template=template),)
+        return tuple(shapes)
+    out = []
+    for s in shapes:
+        if s.shape != "sphere" or s.template is not None:
+            out.append(s)
+            continue
+        template = elongated_clump(a, s.radius_min_m)
+        r = float(template.sphere_radii_m[0])
+        high = r if s.radius_max_m == s.radius_min_m else s.radius_max_m * (r / s.radius_min_m)
+        out.append(replace(s, shape="custom", radius_min_m=r, radius_max_m=high, template=template))
+    return tuple(out)
+
+
+def screening_shapes(aspect_ratio: float, sphere_radius_m: float):
+    """The screening fill's shape list for grains of this aspect ratio (its mono-sized spheres elongated)."""
+    from engine.lab.presets import ShapeFraction
+
+    return elongated_shapes(aspect_ratio, (ShapeFraction("sphere", sphere_radius_m, sphere_radius_m, 1.0),))

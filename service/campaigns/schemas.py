@@ -101,6 +101,10 @@ class IterationIn(BaseModel):
         "value matched at the last optimum), or strength_range",
     )
     strength_range: STRICT_PAIR | None = Field(None, strict=False, description="low, high of the added effect's strength")
+    override: bool = Field(
+        False, description="add_effect against the last diagnosis: when it found no physical match or a suspect "
+        "measurement, an effect is added only with override true (the diagnosis says no effect explains the misfit)",
+    )
     proposed_design: bool = Field(
         False, description="run the design the last iteration's surface check proposed (report.surrogate_check: "
         "a narrowed factorial about the optimum, or face-centred axial runs for a central composite design)",
@@ -122,6 +126,8 @@ class IterationIn(BaseModel):
                 raise ValueError("strength_range needs add_effect")
             if not self.strength_range[0] < self.strength_range[1]:
                 raise ValueError("strength_range: low must be below high")
+        if self.override and self.add_effect is None:
+            raise ValueError("override needs add_effect")
         if self.add_effect is not None and self.factors is not None:
             raise ValueError("give either factors or add_effect, not both")
         if self.proposed_design and (self.factors is not None or self.design is not None):

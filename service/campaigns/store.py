@@ -17,6 +17,7 @@ from calibration.errors import SettingsError
 from calibration.keys import ResponseKey
 from calibration.keys import select as select_targets
 from calibration.records import Measured
+from calibration.vocabulary import AGAINST_ADDING
 from engine.lab.plausibility import settings_warnings
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.config import Settings, get_settings
@@ -139,6 +140,7 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     config = dict(campaign.config)
     changed = changes.model_dump(mode="json", exclude_none=True)
     add_effect, strength_range = changed.pop("add_effect", None), changed.pop("strength_range", None)
+    override = changed.pop("override", False)
     if changed.pop("proposed_design", False):
         try:
             config = with_proposed_design(config, max(campaign.iterations, key=lambda it: it.number, default=None))
@@ -149,6 +151,7 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     if add_effect is not None:
         # the range the automatic mode would give, from the last iteration's report
         last = max(campaign.iterations, key=lambda it: it.number, default=None)
+        _refuse_against_diagnosis(last, add_effect, override)
         try:
             config = with_effect_factor(config, add_effect, strength_range,
                                         **effect_hints((last.report or {}) if last is not None else {}, add_effect))
@@ -165,6 +168,16 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     if not won:
         raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])
     return get_campaign(session, campaign_id)
+
+
+def _refuse_against_diagnosis(last, add_effect: str, override: bool) -> None:
+    """409 for an effect added against the last diagnosis (no physical match, a suspect measurement)
+    unless the request says ``override: true``: the page offers that only as a marked override."""
+    diagnosis = ((last.report or {}).get("diagnosis") or {}) if last is not None else {}
+    if diagnosis.get("verdict") in AGAINST_ADDING and not override:
+        raise Conflict(f"iteration {last.number}'s diagnosis is {diagnosis['verdict']!r}: "
+                       f"{diagnosis.get('message', '')}. Adding {add_effect} goes against it; send override: true "
+                       "to add it anyway", ["body", "override"])
 
 
 def iteration(session: Session, campaign: Campaign, number: int | None = None) -> CampaignIteration:

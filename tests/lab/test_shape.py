@@ -1,4 +1,5 @@
-"""Particle shape at the screening fidelity: two-sphere clumps of a given elongation (engine/lab/shape.py).
+"""Particle shape: a mix's spheres made two-sphere clumps of a given elongation (engine/lab/shape.py), at the
+screening fidelity (every grain) and the thesis fidelity (its round grains, Table 4.2's 20.8 %).
 
 Analytic: two equal spheres of radius r at centre distance d are (d + 2 r) / (2 r) long per width, and
 their union has the volume 2 (4/3) pi r^3 - pi (4 r + d) (2 r - d)^2 / 12 (the shared lens once).
@@ -10,7 +11,7 @@ import pytest
 
 from engine.candidates import get as candidate
 from engine.lab.context import RunContext
-from engine.lab.presets import SCREENING, fidelity
+from engine.lab.presets import SCREENING, THESIS, fidelity
 from engine.lab.procedures.fill import rain_packing, shape_mix
 from engine.lab.shape import CANDIDATE, aspect_ratio_of, elongated_clump, screening_shapes
 from engine.lab.spec import JobSpec
@@ -101,10 +102,28 @@ def test_particle_radius_and_aspect_ratio_combine():
     assert preset.aor_shapes == fidelity("screening", 0.025).aor_shapes
 
 
-def test_thesis_fidelity_refuses_an_aspect_ratio():
-    with pytest.raises(ValueError, match="clump_aspect_ratio.*thesis|thesis.*clump_aspect_ratio"):
-        RunContext.from_spec(JobSpec(fidelity="thesis", parameters={"clump_aspect_ratio": 1.5}))
-    assert RunContext.from_spec(JobSpec(fidelity="thesis", parameters={"clump_aspect_ratio": 1.0})).preset.name == "thesis"
+def test_the_thesis_mix_elongates_its_round_grains_only():
+    preset = fidelity("thesis", None, 1.5)
+    pyramids, clumps, round_grains = preset.shapes
+    assert (pyramids, clumps) == THESIS.shapes[:2]  # the thesis's elongated clumps are already at C = 1
+    spheres = THESIS.shapes[2]
+    assert round_grains.shape == "custom" and round_grains.volume_fraction == spheres.volume_fraction
+    t = round_grains.template
+    assert aspect_ratio_of(t) == pytest.approx(1.5)
+    # the smallest grain has the volume of the smallest sphere it replaces; the spread keeps its shape
+    assert t.volume_m3 == pytest.approx(4 / 3 * math.pi * spheres.radius_min_m**3, rel=1e-12)
+    assert round_grains.radius_max_m / round_grains.radius_min_m == pytest.approx(spheres.radius_max_m / spheres.radius_min_m)
+    # as packed: every round grain a 1.5 clump with the volume of a sphere inside the thesis's radius range
+    component = shape_mix(preset).components[2]
+    grains = component.make(np.random.default_rng(3), 200)
+    equivalent = np.array([(3 * g.volume_m3 / (4 * math.pi)) ** (1 / 3) for g in grains])
+    assert all(aspect_ratio_of(g) == pytest.approx(1.5) for g in grains)
+    assert equivalent.min() >= spheres.radius_min_m * (1 - 1e-9) and equivalent.max() <= spheres.radius_max_m * (1 + 1e-9)
+    built = RunContext.from_spec(JobSpec(fidelity="thesis", parameters={"clump_aspect_ratio": 1.5})).preset.shapes
+    assert [(s.shape, s.radius_min_m, s.radius_max_m, s.volume_fraction) for s in built] == \
+        [(s.shape, s.radius_min_m, s.radius_max_m, s.volume_fraction) for s in preset.shapes]
+    assert fidelity("thesis", None, 1.0) is THESIS
+    assert CANDIDATE.applies_to("thesis") and CANDIDATE.applies_to("screening")
 
 
 def test_beyond_two_spheres_that_touch_is_refused():

@@ -480,3 +480,43 @@ def test_missing_pages_say_so_and_clear_the_previous_one(page, service):
     page.evaluate("location.hash = '#/campaigns/987654'")
     expect_text(page, "main", "987654")
     expect_text(page, "h2", "Not found")
+
+
+def test_no_physical_match_page_offers_no_add_button(page, service, shots):
+    """Issue 33: under "Diagnosis: no physical match" the page offered an enabled "Add Hertz ..." button
+    for a significant effect. Now the table offers none; only an override, styled apart, that asks for
+    confirmation first (dismissed here: nothing is added). The campaign is the API test's (the thesis
+    aggregate with an impossible bulk density, tests/service/test_verdict_rules_api.py), made through the API."""
+    import time
+
+    from conftest_s2 import campaign_body
+    from test_verdict_rules_api import IMPOSSIBLE_BULK_DENSITY
+
+    material = service.api("GET", "/materials").json()
+    thesis = next(m for m in material if m["name"] == "thesis-coarse-aggregate")
+    copy = service.api("POST", f"/materials/{thesis['id']}/copy", json={"name": "impossible density"}).json()
+    old = next(m for m in copy["measurements"] if m["test"] == "fill" and m["quantity"] == "bulk_density_kg_m3")
+    assert service.api("DELETE", f"/materials/{copy['id']}/measurements/{old['id']}").status_code == 204
+    assert service.api("POST", f"/materials/{copy['id']}/measurements", json={
+        "test": "fill", "quantity": "bulk_density_kg_m3", "values": IMPOSSIBLE_BULK_DENSITY, "unit": "kg/m3"}).status_code == 201
+    cid = service.api("POST", "/campaigns", json=campaign_body(copy["id"], name="no match")).json()["id"]
+    assert service.api("POST", f"/campaigns/{cid}/start").status_code < 300
+    deadline = time.monotonic() + TIMEOUT_MS / 1000
+    while service.api("GET", f"/campaigns/{cid}").json()["status"] != "completed":
+        assert time.monotonic() < deadline, "the campaign did not complete"
+        time.sleep(0.5)
+    open_view(page, service, f"#/campaigns/{cid}")
+    expect_text(page, "section.diagnosis h3", "Diagnosis: no physical match")
+    assert page.locator("section.diagnosis form.add-effect").count() == 0
+    assert page.locator("section.diagnosis button", has_text=re.compile(r"^Add ")).count() == 0
+    override = page.locator("section.diagnosis details.override")
+    assert override.count() == 1 and override.locator("button.override").count() == 1
+    override.locator("summary").click()
+    dialogs = []
+    page.once("dialog", lambda d: (dialogs.append(d.message), d.dismiss()))
+    override.locator("button.override").click()
+    assert dialogs and "no physical match" in dialogs[0] and "goes against it" in dialogs[0]
+    assert len(service.api("GET", f"/campaigns/{cid}/iterations").json()) == 1  # dismissed: nothing added
+    # what holds and what does not, beside the verdict
+    expect_text(page, "section.verdict ul.checks", "targets within reach")
+    section_shot(page, shots, "Diagnosis", "campaign-diagnosis-no-match")

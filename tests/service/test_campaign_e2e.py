@@ -44,7 +44,7 @@ def test_analytic_campaign_from_creation_to_report(s2):
     diagnosis_runs = [r for r in runs if r["kind"] == "diagnosis"]
     diagnosis_seeds = {r["seed"] for r in diagnosis_runs}
     assert len(diagnosis_seeds) == 2 and not diagnosis_seeds & confirmation_seeds
-    # (particle shape is built at the screening fidelity only; this campaign is at the thesis's)
+    # (every candidate the thesis fidelity builds: particle shape too, its round grains elongated)
     assert len(diagnosis_runs) == 2 * (1 + sum(c.applies_to("thesis") for c in candidates().values()))
     with app.state.session_factory() as session:
         jobs = session.query(Job).filter(Job.campaign_id == cid).all()

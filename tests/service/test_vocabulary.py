@@ -13,12 +13,12 @@ from service import queue
 from service.cli import build_parser
 from service.models.campaign import CAMPAIGN_STATUSES
 from service.models.job import FINISHED_STATUSES, JOB_STATUSES
-from calibration.vocabulary import Phase, RunKind, StopReason, Verdict
+from calibration.vocabulary import DiagnosisVerdict, Phase, RunKind, StopReason, Verdict
 from service.vocabulary import CampaignStatus, JobStatus
 
 REPO = Path(__file__).resolve().parents[2]
 SERVICE = REPO / "service"
-PHRASES = {v.value for v in Verdict} | {v.value.strip() for v in StopReason}
+PHRASES = {v.value for v in Verdict} | {v.value for v in DiagnosisVerdict} | {v.value.strip() for v in StopReason}
 LOOP_WORDS = {v.value for v in Phase} | {v.value for v in RunKind}
 ROLE_KEYWORDS = {"phase", "kind", "source", "to"}
 WORDS = set(JobStatus.values()) | set(CampaignStatus.values())

@@ -32,8 +32,14 @@ def shape_mix(preset: Fidelity, shapes=None) -> ShapeMix:
         if s.template is not None and s.size is not None:  # a material's custom clump, scaled to each drawn size
             comps.append(ShapeComponent("custom", s.size, s.volume_fraction, custom=s.template))
             continue
-        if s.template is not None:  # one given body (e.g. engine/lab/shape.py's elongated grain), not scaled
+        if s.template is not None and s.radius_min_m == s.radius_max_m:
+            # one given body (e.g. engine/lab/shape.py's elongated grain), not scaled
             comps.append(ShapeComponent("custom", ConstantSize(float(max(s.template.sphere_radii_m))),
+                                        s.volume_fraction, custom=s.template))
+            continue
+        if s.template is not None:
+            # a given body scaled to sphere radii spread over the fraction's range (elongated thesis spheres)
+            comps.append(ShapeComponent("custom", TruncatedGaussian(s.radius_min_m, s.radius_max_m),
                                         s.volume_fraction, custom=s.template))
             continue
         if s.size is not None:  # a material's own distribution (a sieve curve, uniform sizes)

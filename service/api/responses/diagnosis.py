@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pydantic import Field
 
+from calibration.vocabulary import DiagnosisVerdict
 from service.api.responses.common import LackOfFit, Out
 
 
@@ -69,7 +70,10 @@ class DiagnosisAdequacy(Out):
 class Diagnosis(Out):
     """As stored in the report's ``diagnosis``."""
 
-    verdict: str = Field(description="effect indicated, inconclusive, no physical match or no misfit")
+    verdict: DiagnosisVerdict = Field(description="effect indicated, inconclusive, no physical match, suspect "
+                                                  "measurement or no misfit")
+    attribution_verdict: DiagnosisVerdict | None = Field(
+        None, description="the ranking's own verdict, where a suspect measurement overrides it")
     message: str
     ranking: list[RankedEffect] = Field(description="plausible effects first, then by LM")
     indicated: list[str] = Field(description="the effects to try, in ranking order")

@@ -12,7 +12,7 @@ from service.api.responses.common import (
     Out,
     ParameterValues,
 )
-from service.api.responses.report import Decision
+from service.api.responses.report import Decision, Explanation
 
 
 class HistoryEntry(Out):
@@ -36,6 +36,7 @@ class HistoryEntry(Out):
     stop_reason: str | None = Field(description="automatic mode: why the loop stopped here")
     range_widened: bool = Field(description="the iteration redid its base on a wider strength range")
     effect_added_next: list[str] | None = Field(description="what the next iteration added")
+    explains: Explanation | None = Field(None, description="how much of the misfit the added effect explains")
 
 
 class HistoryTarget(Out):

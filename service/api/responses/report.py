@@ -6,7 +6,7 @@ from typing import Any
 
 from pydantic import Field
 
-from calibration.vocabulary import Verdict
+from calibration.vocabulary import Explains, Verdict
 from service.api.responses.common import (
     CONDITION,
     PARAMETERS,
@@ -28,6 +28,7 @@ class TargetRow(Out):
     quantity: str
     condition: Condition = Field(description=CONDITION)
     unit: str
+    input_unit: str | None = Field(None, description="the unit the values were typed in")
     measured: float = Field(description="mean of the replicates, in the unit (SI)")
     n: int = Field(description="replicates")
     status: str = Field(description="modelled, not_modelled or not_simulated")
@@ -128,8 +129,25 @@ class Adequacy(Out):
     directed: DirectedTest | None = None
 
 
+class Remaining(Out):
+    """The misfit an added effect leaves (calibration.decisions.explanation)."""
+
+    verdict: Verdict | None = None
+    chi2_per_dof: float | None = None
+    noise_band: list[float | None] | None = None
+    p_value: float | None = Field(None, description="the adequacy test's p (the lack of fit's before a diagnosis)")
+    failing_tests: list[str] = Field(default_factory=list)
+
+
+class Explanation(Out):
+    explains: Explains = Field(description="'explains' only when the iteration with the effect is calibrated")
+    remaining: Remaining
+    explains_message: str
+
+
 class Decision(Out):
-    """Whether an effect the automatic mode added earned its place (calibration.decisions.Decision)."""
+    """Whether an effect the automatic mode added earned its place (calibration.decisions.Decision), and
+    how much of the misfit it explains."""
 
     effect: str
     accepted: bool
@@ -141,6 +159,34 @@ class Decision(Out):
     lof_p_before: float | None
     lof_p_after: float | None
     strength: float | None
+    explains: Explains | None = Field(None, description="explains, partly explains or does not explain")
+    remaining: Remaining | None = None
+    explains_message: str | None = None
+
+
+class Check(Out):
+    """One check of the verdict (calibration.verdict.checks): what holds and what does not."""
+
+    check: str
+    holds: bool | None = Field(description="null: not made")
+    detail: str
+
+
+class SuspectMeasurement(Out):
+    """A measured quantity far outside anything the model reaches (calibration.suspect)."""
+
+    test: str
+    quantity: str
+    unit: str
+    conditions: list[Condition]
+    measured: list[float]
+    responses: list[str]
+    reach: list[float] = Field(description="[low, high] of every battery of the iteration (and the candidates')")
+    ratio: float = Field(description="how many times beyond the reach")
+    direction: str = Field(description="too small or too large")
+    factor: float | None = Field(None, description="the unit slip that brings it back, e.g. 1000")
+    meant_unit: str | None = Field(None, description="the unit it was probably meant in (known when the typed unit is)")
+    message: str
 
 
 class Automatic(Out):
@@ -228,6 +274,8 @@ class Report(Out):
     targets: list[TargetRow] = Field(default_factory=list)
     verdict: Verdict | None = Field(None, description="the one verdict (calibration.verdict)")
     meaning: str | None = None
+    checks: list[Check] | None = Field(None, description="what holds and what does not; 'calibrated' needs them all")
+    suspect_measurements: list[SuspectMeasurement] | None = None
     unreachable: list[str] | None = Field(None, description="responses no parameter set in the box reaches")
     confirmation_outside_interval: list[str] | None = None
     max_abs_standardised_residual: float | None = None

@@ -1,7 +1,9 @@
 // The diagnosis of one iteration: which candidate effect explains the misfit the fitted parameters
 // cannot absorb. Ranking bars (score LM with its critical line, coloured by alias group), each
 // effect's strength against its plausible range, the fingerprint table, alias groups with the
-// measurement that separates them, and "add this effect and run the next iteration".
+// measurement that separates them, and "add this effect and run the next iteration". Under "no
+// physical match" and "suspect measurement" no effect is offered: only an override, styled apart,
+// that asks for confirmation and tells the API so (override: true).
 import { api, fmt, h, submitForm, table } from "./core.js";
 import { humanText, quantityLabel } from "./labels.js";
 import { numberInput, readNumber } from "./numbers.js";
@@ -61,6 +63,30 @@ function addEffectForm(campaignId, r, nextNumber, enabled, onAdded) {
   return form;
 }
 
+// verdicts under which the diagnosis offers no effect (calibration.vocabulary.AGAINST_ADDING)
+const AGAINST_ADDING = new Set(["no physical match", "suspect measurement"]);
+
+// The override: one effect chosen from the ranking, added only after the user confirms that it goes
+// against the diagnosis; never the primary button of the card.
+function overrideForm(campaignId, d, nextNumber, enabled, onAdded) {
+  const select = h("select", { name: "effect", "aria-label": "effect to add against the diagnosis" },
+    d.ranking.map((r) => h("option", { value: r.effect }, `${r.title} (${r.effect}, explains ${fmt(100 * r.explained, 2)} %)`)));
+  const form = h("form", { className: "override-effect", novalidate: true },
+    h("div", { className: "form-errors" }), select,
+    h("button", { type: "submit", className: "override", disabled: !enabled,
+      title: enabled ? "against the diagnosis" : "the campaign must be completed and this its latest iteration" },
+    `Override: add it anyway and run iteration ${nextNumber}`));
+  form.addEventListener("submit", async (event) => {
+    event.preventDefault();
+    const effect = select.value;
+    if (!window.confirm(`The diagnosis is "${d.verdict}": no candidate effect explains this misfit. Adding ${effect} goes against it and may only bend the parameters. Add it anyway?`)) return;
+    const done = await submitForm(form, () => api(`/campaigns/${campaignId}/iterations`, { method: "POST", body: { add_effect: effect, override: true } }));
+    if (done) onAdded(done);
+  });
+  return h("details", { className: "override" }, h("summary", {}, "Add an effect against the diagnosis…"),
+    h("p", { className: "warning" }, `Against the diagnosis (${d.verdict}): ${humanText(d.message)}`), form);
+}
+
 // rows named by the effects' titles where the ranking has them (the table is read beside the chart)
 function fingerprints(f, titles) {
   const cols = f.columns;
@@ -73,7 +99,8 @@ function fingerprints(f, titles) {
 // canAdd: the campaign is completed and this is its latest iteration.
 export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded }) {
   const groups = d.alias_groups || [];
-  const suggested = d.ranking.filter((r) => r.significant);
+  const against = AGAINST_ADDING.has(d.verdict);
+  const suggested = against ? [] : d.ranking.filter((r) => r.significant);
   // chart and fingerprints one under the other: side by side at 1280 px the chart truncated the
   // effects' names and the table hid its last columns (issue 31)
   return h("section", { className: "card diagnosis" }, h("h3", {}, `Diagnosis: ${d.verdict}`),
@@ -84,10 +111,13 @@ export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded })
       d.ranking.map((r) => [
         h("span", {}, h("span", { className: "swatch", style: `background:${colourOf(r)}` }), ` ${r.title} `, h("code", {}, r.effect)),
         r.lm, r.p_holm, `${fmt(100 * r.explained, 3)} %`, strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
-        r.significant ? addEffectForm(campaignId, r, nextNumber, canAdd, onAdded) : h("span", { className: "muted" }, "not significant")]))),
+        !r.significant ? h("span", { className: "muted" }, "not significant")
+          : against ? h("span", { className: "muted" }, "not offered: against the diagnosis")
+            : addEffectForm(campaignId, r, nextNumber, canAdd, onAdded)]))),
     groups.length ? h("div", {}, h("h4", {}, "Alias groups: effects the data cannot tell apart"),
       h("ul", {}, groups.map((g) => h("li", {}, h("b", {}, `group ${g.group}: ${g.effects.join(", ")}. `), humanText(g.message || ""),
         h("ul", {}, (g.separators || []).map((s) => h("li", {}, `${s.effects.join(" vs ")}: measure ${humanText(s.separating_measurement)} (cos ${fmt(s.cos, 3)})`))))))) : "",
     (d.measure_next || []).length ? h("p", {}, h("b", {}, "Measure next: "), d.measure_next.map(humanText).join("; ")) : "",
-    suggested.length ? "" : h("p", { className: "muted" }, "No effect is significant: nothing to add."));
+    against ? overrideForm(campaignId, d, nextNumber, canAdd, onAdded)
+      : suggested.length ? "" : h("p", { className: "muted" }, "No effect is significant: nothing to add."));
 }

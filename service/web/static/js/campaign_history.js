@@ -71,14 +71,16 @@ export function historySection(history, iterations, priors) {
   if (!its.length) return "";
   // the table takes the card's width (eight columns do not fit beside the chart); the chart sits under it
   return h("section", { className: "card history" }, h("h3", {}, "Across iterations"),
-    h("div", {}, h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (omnibus · directed → Holm)", "Verdict", "Next", "Automatic"],
+    h("div", {}, h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (omnibus · directed → Holm)", "Verdict", "Next", "Automatic", "Added effect"],
         its.map((it) => [String(it.number), (it.effects.length ? it.effects.join(", ") : "none") + (it.range_widened ? " (range widened)" : ""),
           h("span", { className: "chi2dof", "data-iteration": String(it.number) }, fmt(it.chi2_per_dof, 4)),
           it.noise_band ? `${fmt(Math.max(0, it.noise_band[0]), 2)} – ${fmt(it.noise_band[1], 2)}` : "–",
           adequacyCell(it), it.verdict || "–",
           it.effect_added_next ? `+ ${it.effect_added_next.join(", ")}` : "–",
           // automatic mode: whether the effect this iteration added was kept (calibration.decisions)
-          it.decision ? h("span", { className: it.decision.accepted ? "good" : "bad" }, `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`) : "–"]))),
+          it.decision ? h("span", { className: it.decision.accepted ? "good" : "bad" }, `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`) : "–",
+          // an added effect explains the misfit only when every check holds; otherwise what it leaves
+          it.explains ? h("span", { className: `explains ${it.explains.explains === "explains" ? "good" : "bad"}`, title: it.explains.explains_message }, it.explains.explains) : "–"]))),
       h("div", { className: "panels" }, errorChart(its))),
     h("h4", {}, "Parameters: optimum ±2 sd against the design box (dashed) and priors"),
     h("div", { className: "panels small" }, parameterTraces(history, iterations, priors)));

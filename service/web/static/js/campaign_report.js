@@ -15,6 +15,11 @@ export function verdictSection(report) {
   return h("section", { className: "card verdict" },
     h("h3", {}, "Verdict: ", h("span", { className: `status verdict-${(report.verdict || "").replaceAll(" ", "_")}` }, report.verdict)),
     report.meaning ? h("p", {}, humanText(report.meaning)) : "",
+    // what holds and what does not: "calibrated" only when every check holds (calibration.verdict.checks)
+    (report.checks || []).length ? h("ul", { className: "checks" }, report.checks.map((c) => h("li", {
+      className: c.holds === false ? "bad" : c.holds === true ? "good" : "muted", "data-mark": c.holds === false ? "✗" : c.holds === true ? "✓" : "–",
+      "data-check": c.check }, h("b", {}, `${c.check}: `), humanText(c.detail)))) : "",
+    ...((report.suspect_measurements) || []).map((s) => h("p", { className: "bad suspect-measurement" }, h("b", {}, "Suspect measurement: "), humanText(s.message))),
     lof ? h("p", {}, h("b", {}, "Model against measurements: "),
       `χ²/dof ${fmt(lof.chi2_per_dof, 3)} on ${lof.dof} dof (noise band ${fmt(lof.noise_band[0], 2)} – ${fmt(lof.noise_band[1], 2)}), p = ${fmt(lof.p_value, 3)}`,
       failing.length ? h("span", { className: "bad" }, ` · failing tests: ${failing.join(", ")}`) : "") : "",
