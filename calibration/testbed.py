@@ -424,8 +424,10 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
             0.85, False),
         Row("two, both lambda >= 30", "both recovered within 3 iterations", None, *frac(two, both), 0.60, False),
         Row("two, both lambda >= 30", "median weighted RMS after / before", None, *ratio(two), 0.3, True),
-        Row("every case", "95 % intervals holding the truth (case-parameter pairs)", "interval_coverage",
-            *_coverage_rate(outcomes), 0.90, False),
+        # printed, not judged: the design note sets no coverage target for tier A, whose worlds stray 2 % from
+        # the model with no discrepancy term given (issue 33 asks >= 90 % of tier B's scenario-parameter pairs)
+        Row("every case", "95 % intervals holding the truth", "interval_coverage",
+            *_coverage_rate(outcomes), math.nan, False),
         Row("null, other form, discrepancy", "effect indicated or added", "form_null_false_alarm",
             *frac(form_null, claims_effect), 0.10, True),
         Row("null, other form, discrepancy", "lack-of-fit fires", None, *frac(form_null, lambda o: o["lof_fired"]),

@@ -11,7 +11,8 @@ from calibration.testbed import acceptance, case_kinds, machine_line, table_text
 
 N_BENCH = 300
 PER_WEAK_BIN = 50
-SUBSET = {"null": 8, "single": 24, "two": 12, "weak": 6, "mid": 6}
+PER_FORM_KIND = 40
+SUBSET = {"null": 8, "single": 24, "two": 12, "weak": 6, "mid": 6, "form_null": 6}
 
 
 def _one(args):
@@ -24,8 +25,8 @@ def _one(args):
 @pytest.fixture(scope="module")
 def outcomes():
     work, taken = [], {k: 0 for k in SUBSET}
-    for seed, kind in enumerate(case_kinds(N_BENCH, PER_WEAK_BIN)):
-        if taken[kind] < SUBSET[kind]:
+    for seed, kind in enumerate(case_kinds(N_BENCH, PER_WEAK_BIN, PER_FORM_KIND)):
+        if taken.get(kind, 0) < SUBSET.get(kind, 0):
             work.append((seed, kind))
             taken[kind] += 1
     with mp.get_context("spawn").Pool(2) as pool:
@@ -39,6 +40,7 @@ def test_acceptance_on_the_fixed_seed_subset(outcomes):
     print(machine_line(rows))
     # every row the subset has cases for meets the design note's target (the bins below lambda 30 are
     # filled by the bench's cases drawn into them, calibration.testbed.LAMBDA_BINS)
-    failing = [f"{r.case}: {r.criterion} = {r.value:.3f}" for r in rows if r.n > 0 and not r.passes]
+    failing = [f"{r.case}: {r.criterion} = {r.value:.3f}" for r in rows
+               if r.n > 0 and not r.informational and not r.passes]
     assert not failing, f"rows below target on the subset: {failing}"
-    assert sum(r.n > 0 for r in rows) >= 15
+    assert sum(r.n > 0 and not r.informational for r in rows) >= 16
