@@ -6,6 +6,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
+from service.api.responses.common import Page
+
 from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree
 from engine.lab.spec import STRICT_INPUT
 from engine.lab.registry import known_quantity, known_test, quantity
@@ -155,6 +157,7 @@ class MaterialOut(BaseModel):
     description: str
     source: str
     bundled: bool
+    owner: str | None = Field(None, description="the user (bearer token name) who made it; null when made without a token")
     direct_estimates: dict[str, Any]
     measurements: list[MeasurementOut]
     created_at: str
@@ -164,3 +167,9 @@ class MaterialCopy(BaseModel):
     model_config = STRICT_INPUT
 
     name: str = Field(..., min_length=1, max_length=200, description="name of the editable copy")
+
+
+class MaterialList(Page):
+    """A page of materials, by id (the bundled one first)."""
+
+    items: list[MaterialOut]

@@ -14,6 +14,7 @@ from service.api.jsonsafe import json_safe
 from service.errors import Conflict
 from service.materials.schemas import FieldError, MaterialIn, MeasurementIn
 from service.models.material import Material, Measurement
+from service.pagination import paged
 
 BUNDLED_DIR = Path(__file__).parent
 BUNDLED_FILES = ("thesis_coarse_aggregate.json",)
@@ -24,7 +25,7 @@ def material_dict(material: Material) -> dict[str, Any]:
     (``json_safe``) so one bad row never breaks a listing."""
     return json_safe({
         "id": material.id, "name": material.name, "description": material.description,
-        "source": material.source, "bundled": material.bundled,
+        "source": material.source, "bundled": material.bundled, "owner": material.owner,
         "direct_estimates": dict(material.direct_estimates or {}),
         "measurements": [measurement_dict(m) for m in material.measurements],
         "created_at": material.created_at.isoformat() + "Z",
@@ -51,10 +52,11 @@ def require_editable(material: Material) -> None:
                        f"copy it (POST /api/v1/materials/{material.id}/copy) to edit", ["path", "material_id"])
 
 
-def copy_material(session: Session, material: Material, name: str) -> Material:
-    """An editable copy (not bundled) with the same measurements, under a new name."""
+def copy_material(session: Session, material: Material, name: str, owner: str | None = None) -> Material:
+    """An editable copy (not bundled) with the same measurements, under a new name, owned by ``owner``
+    (copying reads the original, whoever owns it)."""
     copy = Material(name=name, description=material.description, source=material.source, bundled=False,
-                    direct_estimates=dict(material.direct_estimates or {}))
+                    direct_estimates=dict(material.direct_estimates or {}), owner=owner)
     session.add(copy)
     for row in material.measurements:
         copy.measurements.append(Measurement(
@@ -68,8 +70,10 @@ def get_material(session: Session, material_id: int) -> Material | None:
     return session.get(Material, material_id, options=[selectinload(Material.measurements)])
 
 
-def list_materials(session: Session) -> list[Material]:
-    return list(session.scalars(select(Material).options(selectinload(Material.measurements)).order_by(Material.id)))
+def list_materials(session: Session, limit: int, offset: int) -> tuple[list[Material], int]:
+    """A page of materials by id, with their measurements, and the total."""
+    return paged(session, Material, order=(Material.id,), options=(selectinload(Material.measurements),),
+                 limit=limit, offset=offset)
 
 
 def find_by_name(session: Session, name: str) -> Material | None:
@@ -103,9 +107,9 @@ def add_measurement(session: Session, material: Material, data: MeasurementIn) -
     return row
 
 
-def create_material(session: Session, data: MaterialIn, *, bundled: bool = False) -> Material:
+def create_material(session: Session, data: MaterialIn, *, bundled: bool = False, owner: str | None = None) -> Material:
     material = Material(name=data.name, description=data.description, source=data.source,
-                        bundled=bundled, direct_estimates=data.direct_estimates)
+                        bundled=bundled, direct_estimates=data.direct_estimates, owner=owner)
     session.add(material)
     for index, meas in enumerate(data.measurements):
         try:

@@ -74,7 +74,7 @@ def test_campaign_checks_every_design_run_at_creation(s2):
     schedule = {"name": "nightly", "cron": "0 2 * * *", "template": too_long}
     r = client.post(f"{API}/schedules", json=schedule)
     assert r.status_code == 422 and locs(r) == [["body", "template", "options", "cct_cycles"]], r.text
-    assert client.get(f"{API}/campaigns").json() == [] and client.get(f"{API}/schedules").json() == []
+    assert client.get(f"{API}/campaigns").json()["items"] == [] and client.get(f"{API}/schedules").json()["items"] == []
 
 
 def test_design_size_is_refused_before_it_is_built(s2):
@@ -187,6 +187,6 @@ def test_schedule_firing_over_todays_limits_is_skipped_with_the_reason(s2):
         session.commit()
     lowered = settings.model_copy(update={"max_particles": 1})
     assert Scheduler(app.state.session_factory, lowered).tick(due) == []
-    (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()
+    (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()["items"]
     assert firing["campaign_id"] is None and "particles" in firing["skipped_reason"]
-    assert client.get(f"{API}/campaigns").json() == []
+    assert client.get(f"{API}/campaigns").json()["items"] == []

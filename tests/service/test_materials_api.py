@@ -48,7 +48,7 @@ def test_seeding_is_idempotent(s2):
         first = seed_bundled_materials(session)
         again = seed_bundled_materials(session)
     assert first == again
-    names = [m["name"] for m in s2[0].get(f"{API}/materials").json()]
+    names = [m["name"] for m in s2[0].get(f"{API}/materials").json()["items"]]
     assert names.count(THESIS_MATERIAL) == 1
 
 
