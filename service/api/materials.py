@@ -6,11 +6,12 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from service.api.openapi import errors
-from service.api.params import MaterialId, MaterialLimit, MeasurementId, Offset
+from service.api.params import MaterialId, MaterialLimit, MeasurementId, MeasurementLimit, Offset
 from service.api.responses.quantities import Quantities
 from service.db import DbSession, built_then_committed
 from service.errors import Conflict, NotFound
-from service.materials.schemas import MaterialCopy, MaterialIn, MaterialList, MaterialOut, MeasurementIn, MeasurementOut
+from service.materials.schemas import (MaterialCopy, MaterialIn, MaterialList, MaterialOut, MeasurementIn, MeasurementList,
+                                       MeasurementOut)
 from service.materials.store import (add_measurement, copy_material, create_material, find_by_name, get_material,
                                      list_materials, material_dict, measurement_dict, require_editable)
 from engine.lab.registry import tests
@@ -18,6 +19,7 @@ from service.api.tests import quantity_out
 from service.models.campaign import Campaign
 from service.models.material import Measurement
 from service.ownership import Caller, caller, owner_of
+from service.pagination import paged
 
 router = APIRouter(prefix="/materials", tags=["materials"])
 
@@ -91,9 +93,13 @@ def delete(material_id: MaterialId, session: DbSession, who: Caller = Depends(ca
     return Response(status_code=204)
 
 
-@router.get("/{material_id}/measurements", response_model=list[MeasurementOut])
-def list_measurements(material_id: MaterialId, session: DbSession):
-    return [measurement_dict(m) for m in _material_or_404(session, material_id).measurements]
+@router.get("/{material_id}/measurements", response_model=MeasurementList,
+            summary="A material's measurements, by id; a page and the total")
+def list_measurements(material_id: MaterialId, session: DbSession, limit: MeasurementLimit = 100, offset: Offset = 0):
+    _material_or_404(session, material_id)
+    rows, total = paged(session, Measurement, where=[Measurement.material_id == material_id], order=(Measurement.id,),
+                        limit=limit, offset=offset)
+    return {"items": [measurement_dict(m) for m in rows], "total": total, "limit": limit, "offset": offset}
 
 
 @router.post("/{material_id}/measurements", response_model=MeasurementOut, status_code=201,

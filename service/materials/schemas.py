@@ -173,3 +173,9 @@ class MaterialList(Page):
     """A page of materials, by id (the bundled one first)."""
 
     items: list[MaterialOut]
+
+
+class MeasurementList(Page):
+    """A page of a material's measurements, by id."""
+
+    items: list[MeasurementOut]

@@ -55,6 +55,18 @@ def test_materials_page_by_id_with_the_total(client):
     assert past["items"] == [] and past["total"] == 7
 
 
+def test_a_material_s_measurements_page_by_id(client):
+    from service.materials.store import BUNDLED_FILES, load_bundled
+
+    fills = [m for m in load_bundled(BUNDLED_FILES[0]).measurements if m.test == "fill"]  # five quantities
+    body = {"name": "fills", "measurements": [m.model_dump(exclude_none=True) for m in fills]}
+    material = client.post(f"{API}/materials", json=body).json()
+    rows = walk(client, f"/materials/{material['id']}/measurements", 2)
+    assert [r["quantity"] for r in rows] == [m.quantity for m in fills] and len(rows) == 5
+    assert [r["id"] for r in rows] == sorted(r["id"] for r in material["measurements"])
+    assert client.get(f"{API}/materials/999/measurements").status_code == 404
+
+
 def test_campaigns_page_newest_first_and_the_total_counts_the_filter(s2):  # noqa: F811
     client, _, _ = s2
     material_id = thesis_material_id(client)
