@@ -210,7 +210,8 @@ def leaf(sub, name: str, func, help_text: str, aliases: tuple[str, ...] = (),
     parser = sub.add_parser(name, help=help_text, description=help_text, aliases=list(aliases))
     parser.add_argument("--url", default=None, help="service base URL (default $DEMCAL_URL, else "
                         "http://$DEMCAL_HOST:$DEMCAL_PORT, else http://127.0.0.1:8000)")
-    parser.add_argument("--token", default=None, help="bearer token (or $DEMCAL_TOKEN): writes need one, and reads too when the server has tokens")
+    parser.add_argument("--token", default=None, help="bearer token (or $DEMCAL_TOKEN): writes need one, and reads too when the server "
+                        "has tokens")
     output = parser.add_mutually_exclusive_group()
     output.add_argument("--json", action="store_true", help="print the API's JSON")
     if creates:

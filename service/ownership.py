@@ -34,7 +34,8 @@ class Caller:
         """403 unless this caller may change an object of ``owner``; ``what`` is e.g. ``"job 7"``."""
         if self.may_change(owner):
             return
-        whose = f"belongs to {owner!r}" if owner is not None else "has no owner (made before ownership or without a token)"
+        whose = (f"belongs to {owner!r}" if owner is not None
+                 else "has no owner (made before ownership or without a token)")
         raise Forbidden(f"{what} {whose}; only its owner or an administrator may change it (you are "
                         f"{self.user!r})", field)
 

@@ -3,9 +3,11 @@
 Why: clients (and schemathesis in CI) read the document to know what can come back. FastAPI lists
 only the success code and its own 422. The rules here add what our error handling emits, from
 facts about each operation: a path parameter means a 404 when the row is missing and a 422 when it
-is not an integer in range; any parameter or body means a 422, a body that is not text a 400; every write may answer 401 (when a
-token is configured, always off loopback), and so may every read but health's and this document's. Codes that depend on state (409 conflicts, 429 limits,
-404 of a referenced row in a body) are declared on the routes themselves with ``errors(...)``.
+is not an integer in range; any parameter or body means a 422, a body that is not text a 400; every write
+may answer 401 (when a token is configured, always off loopback), and so may every read but health's and
+this document's (``service.security.OPEN_API_PATHS``). Codes that depend on state (403 another user's object,
+409 conflicts, 429 limits, 404 of a referenced row in a body) are declared on the routes themselves with
+``errors(...)``.
 """
 from __future__ import annotations
 

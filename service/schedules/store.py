@@ -78,7 +78,8 @@ def list_schedules(session: Session, limit: int = 100, offset: int = 0) -> tuple
     return paged(session, Schedule, order=(Schedule.id,), limit=limit, offset=offset)
 
 
-def list_firings(session: Session, schedule_id: int, limit: int = 100, offset: int = 0) -> tuple[list[ScheduleFiring], int]:
+def list_firings(session: Session, schedule_id: int, limit: int = 100,
+                 offset: int = 0) -> tuple[list[ScheduleFiring], int]:
     """A page of a schedule's firings, oldest first, and the total (404 for a schedule that does not exist)."""
     get_schedule(session, schedule_id)
     return paged(session, ScheduleFiring, where=[ScheduleFiring.schedule_id == schedule_id],
