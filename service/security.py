@@ -9,7 +9,7 @@ anyone's objects. The single ``DEMCAL_TOKEN`` (user ``token``) is an administrat
 
 Whenever a token is configured, reads need one too (job specs, token names, idempotency keys and worker
 host:pid are a team's business, not the network's), except the page's own files, ``/api/v1/health`` and the
-OpenAPI document; ``DEMCAL_OPEN_READS=1`` opens every read.
+OpenAPI document and its docs pages; ``DEMCAL_OPEN_READS=1`` opens every read.
 
 ``X-Forwarded-For`` and ``X-Client-Id`` are honoured only from a peer in ``DEMCAL_TRUSTED_PROXIES``
 (addresses or networks): from anyone else they are forgeries, which let one client queue past its limit
@@ -37,8 +37,9 @@ ROLES = frozenset({ADMIN_ROLE})
 # generator (e.g. ``python3 -c "import secrets; print(secrets.token_urlsafe(24))"``) are beyond guessing.
 MIN_TOKEN_LENGTH = 16
 # Paths under the API any reader may fetch although tokens are configured: health (counts only, for load
-# balancers and ``wait_healthy``) and the OpenAPI document (the page's forms read their bounds there).
-OPEN_API_PATHS = ("/api/v1/health", "/api/v1/openapi.json")
+# balancers and ``wait_healthy``), the OpenAPI document (the page's forms read their bounds there) and the
+# API docs that show it (service.web.docs). None of them holds anyone's data.
+OPEN_API_PATHS = ("/api/v1/health", "/api/v1/openapi.json", "/api/v1/docs", "/api/v1/redoc")
 API_PREFIX = "/api/v1"
 
 

@@ -196,7 +196,7 @@ def test_reads_need_a_token_when_tokens_are_configured(settings):
         assert client.get(f"{API}/jobs", headers=auth("not-a-token-0123456789")).status_code == 401
         assert client.get(f"{API}/jobs", headers=auth(BOB)).status_code == 200
         # open: the page and its files (the token is typed into it), health and the OpenAPI document
-        for path in ("/", "/static/js/core.js", f"{API}/health", f"{API}/openapi.json"):
+        for path in ("/", "/static/js/core.js", f"{API}/health", f"{API}/openapi.json", f"{API}/docs", f"{API}/redoc"):
             assert client.get(path).status_code == 200, path
     opened = settings.model_copy(update={"tokens": TOKENS, "open_reads": True})
     with TestClient(create_app(opened), base_url=LOCAL_BASE_URL) as client:
