@@ -30,8 +30,9 @@ class Settings(BaseModel):
     threads_per_job: int | None = Field(
         None, ge=1, description="numba threads of each local worker's jobs; None = cores // workers (at least 1): "
         "jobs side by side on one thread each give the most batteries per hour (bench/battery_threads.py)")
-    token: str | None = Field(None, description="bearer token for write endpoints (required off loopback); at least "
-                                                "16 characters (service.security.MIN_TOKEN_LENGTH)")
+    token: str | None = Field(None, description="the operator's bearer token (user 'token', an administrator): writes "
+                                                "need it (a token is required off loopback), reads too unless "
+                                                "open_reads; at least 16 characters (service.security.MIN_TOKEN_LENGTH)")
     tokens: str | None = Field(
         None, description="named bearer tokens 'alice:s3cret-0123456789ab:admin,bob:0ther-0123456789ab' (DEMCAL_TOKENS): "
                           "the name is the user who owns what the request makes and the client identity per-client "
