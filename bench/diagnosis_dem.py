@@ -167,6 +167,15 @@ class Service:
             raise SystemExit(f"{method} {path}: HTTP {response.status_code}: {response.text[:500]}")
         return response.json() if response.content else None
 
+    def every(self, path: str) -> list[dict]:
+        """Every item of a paged listing ({items, total, limit, offset}), page after page."""
+        items: list[dict] = []
+        while True:
+            page = self.call("GET", path, params={"limit": 100, "offset": len(items)})
+            items += page["items"]
+            if not page["items"] or len(items) >= page["total"]:
+                return items
+
     def close(self):
         self.client.close()
         if self.process is not None:
@@ -250,7 +259,7 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         body["diagnose_always"] = True
     digest = hashlib.sha256(json.dumps([body, measurements], sort_keys=True).encode()).hexdigest()[:12]
     name = f"tier B {sc.name} {digest}"
-    existing = [c for c in svc.call("GET", "/campaigns") if c["name"] == name and c["status"] != "failed"]
+    existing = [c for c in svc.every("/campaigns") if c["name"] == name and c["status"] != "failed"]
     if existing:
         c = existing[0]
         print(f"{sc.name}: resuming campaign {c['id']} ({c['status']})", flush=True)
@@ -259,7 +268,7 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         return c["id"], body
     # a campaign abandoned as failed leaves its material; the name carries the measurements' digest,
     # so that material is this campaign's and is reused (a second POST would be a 409)
-    same = [m for m in svc.call("GET", "/materials") if m["name"] == f"{name} {evaluator}"]
+    same = [m for m in svc.every("/materials") if m["name"] == f"{name} {evaluator}"]
     material = same[0] if same else svc.call("POST", "/materials", json={
         "name": f"{name} {evaluator}", "measurements": measurements,
         "description": f"hidden effect: {sc.effect or 'none'}"})

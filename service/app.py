@@ -19,7 +19,7 @@ from service.db import make_engine, make_session_factory
 from service.api.openapi import document_errors
 from service.browser_guard import BrowserGuard
 from service.errors import install_error_handlers
-from service.security import check_bind, install_token_guard
+from service.security import check_bind, install_token_guard, token_users
 
 API_PREFIX = "/api/v1"
 ROUTERS = ("jobs", "health", "rigs", "materials", "designs", "campaigns", "schedules", "effects", "evaluators", "tests",
@@ -107,6 +107,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     install_error_handlers(app)
     document_errors(app)
     install_token_guard(app, settings)
+    app.state.tokens_configured = bool(token_users(settings))  # service.ownership: owners are checked
     from service.bounds import RequestBounds
 
     app.add_middleware(RequestBounds, settings=settings)  # outermost: a body is bounded before anything reads it

@@ -55,7 +55,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
     _logging()
     app = create_app(settings)
-    uvicorn.run(app, host=settings.host, port=settings.port, log_level=os.environ.get("DEMCAL_LOG_LEVEL", "info").lower())
+    uvicorn.run(app, host=settings.host, port=settings.port, proxy_headers=False,  # forwarding headers: service.security.peer_address
+                log_level=os.environ.get("DEMCAL_LOG_LEVEL", "info").lower())
     return 0
 
 

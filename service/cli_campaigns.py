@@ -20,6 +20,7 @@ from service.cli_http import fmt as _fmt
 from service.cli_http import leaf as _leaf
 from service.cli_http import pairs as _pairs
 from service.cli_http import read_json as _read_json
+from service.cli_http import page_footer, page_options, page_params
 from service.cli_http import table as _table
 from service.vocabulary import CampaignStatus, RunStatus
 
@@ -28,9 +29,10 @@ from service.vocabulary import CampaignStatus, RunStatus
 # -- materials -------------------------------------------------------------------------------------
 
 def material_list(args) -> int:
-    data = _call(args, "GET", "/materials")
-    return _emit(args, data, _table(["id", "name", "measurements", "bundled"],
-                                    [[m["id"], m["name"], len(m["measurements"]), m["bundled"]] for m in data]))
+    data = _call(args, "GET", "/materials", params=page_params(args))
+    return _emit(args, data, _table(["id", "name", "measurements", "bundled", "owner"],
+                                    [[m["id"], m["name"], len(m["measurements"]), m["bundled"], m.get("owner")]
+                                     for m in data["items"]]) + page_footer(data))
 
 
 def material_show(args) -> int:
@@ -162,10 +164,10 @@ def _status_text(c: dict, progress: str | None = None) -> str:
 
 
 def campaign_list(args) -> int:
-    data = _call(args, "GET", "/campaigns", params={"status": args.status} if args.status else None)
-    return _emit(args, data, _table(["id", "name", "material", "status", "iteration", "phase"],
+    data = _call(args, "GET", "/campaigns", params=page_params(args, status=args.status))
+    return _emit(args, data, _table(["id", "name", "material", "status", "iteration", "phase", "owner"],
                                     [[c["id"], c["name"], c["material_id"], c["status"], c["current_iteration"],
-                                      c["phase"]] for c in data]))
+                                      c["phase"], c.get("owner")] for c in data["items"]]) + page_footer(data))
 
 
 def campaign_action(args) -> int:
@@ -326,10 +328,12 @@ def schedule_create(args) -> int:
 
 
 def schedule_list(args) -> int:
-    data = _call(args, "GET", "/schedules")
-    return _emit(args, data, _table(["id", "name", "cron", "enabled", "only new data", "next run", "last campaign"],
+    data = _call(args, "GET", "/schedules", params=page_params(args))
+    return _emit(args, data, _table(["id", "name", "cron", "enabled", "only new data", "next run", "last campaign",
+                                     "owner"],
                                     [[s["id"], s["name"], s["cron"], s["enabled"], s["only_if_new_measurements"],
-                                      s["next_run_at"], s["last_campaign_id"]] for s in data]))
+                                      s["next_run_at"], s["last_campaign_id"], s.get("owner")] for s in data["items"]])
+                 + page_footer(data))
 
 
 def schedule_delete(args) -> int:
@@ -342,7 +346,7 @@ def schedule_delete(args) -> int:
 def register(subparsers) -> None:
     material = subparsers.add_parser("material", help="materials and their measurements")
     msub = material.add_subparsers(dest="material_command", required=True)
-    _leaf(msub, "list", material_list, "list materials")
+    page_options(_leaf(msub, "list", material_list, "list materials (a page; the total below)"))
     _leaf(msub, "show", material_show, "show a material's measurements (SI)").add_argument("id", type=int)
     mcreate = _leaf(msub, "create", material_create, "create a material from a JSON body (as POST /materials) "
                     "and/or flags", creates=True)
@@ -398,7 +402,8 @@ def register(subparsers) -> None:
                         help="polish every iteration (default), or only one whose confirmation the response "
                              "surfaces did not predict")
     create.add_argument("--start", action="store_true", help="start it right away")
-    list_parser = _leaf(csub, "list", campaign_list, "list campaigns")
+    list_parser = _leaf(csub, "list", campaign_list, "list campaigns, newest first (a page; the total below)")
+    page_options(list_parser)
     list_parser.add_argument("--status", choices=CampaignStatus.values())
     for action, text in (("start", "start a draft campaign"), ("pause", "pause a running campaign"),
                          ("resume", "resume a paused campaign")):
@@ -436,5 +441,5 @@ def register(subparsers) -> None:
     screate.add_argument("--from-campaign", type=int, help="reuse an existing campaign's configuration")
     screate.add_argument("--only-new", action="store_true", help="only when new measurements arrived")
     screate.add_argument("--policy", choices=["coalesce", "skip"], default="coalesce", help="missed-run policy")
-    _leaf(ssub, "list", schedule_list, "list schedules")
+    page_options(_leaf(ssub, "list", schedule_list, "list schedules (a page; the total below)"))
     _leaf(ssub, "delete", schedule_delete, "delete a schedule").add_argument("id", type=int)

@@ -117,6 +117,27 @@ def table(headers: list[str], rows: list[list[Any]]) -> str:
     return "\n".join(lines)
 
 
+def page_options(parser) -> None:
+    """``--limit`` and ``--offset`` of a list command (the listing's own page; the service bounds the limit)."""
+    parser.add_argument("--limit", type=int, help="rows per page (the service's default if not given)")
+    parser.add_argument("--offset", type=int, help="rows to skip: the next page starts at offset + limit")
+
+
+def page_params(args, **filters) -> dict:
+    """Query parameters of a list command: its filters and page, the unset ones left out."""
+    values = {**filters, "limit": getattr(args, "limit", None), "offset": getattr(args, "offset", None)}
+    return {k: v for k, v in values.items() if v is not None}
+
+
+def page_footer(page: dict) -> str:
+    """Under a listing's table: how many of the total it shows, and how to see the next page."""
+    shown, offset, total = len(page["items"]), page["offset"], page["total"]
+    if offset == 0 and shown == total:
+        return f"\n{total} in all"
+    text = f"\n{offset + 1 if shown else offset}-{offset + shown} of {total}"
+    return text + (f" (next page: --offset {offset + shown})" if offset + shown < total else "")
+
+
 def emit(args, data: Any, text: str | None = None) -> int:
     if getattr(args, "quiet", False):  # scripts capture the new id: id=$(demcal job submit ... -q)
         print(data["id"])
@@ -189,7 +210,8 @@ def leaf(sub, name: str, func, help_text: str, aliases: tuple[str, ...] = (),
     parser = sub.add_parser(name, help=help_text, description=help_text, aliases=list(aliases))
     parser.add_argument("--url", default=None, help="service base URL (default $DEMCAL_URL, else "
                         "http://$DEMCAL_HOST:$DEMCAL_PORT, else http://127.0.0.1:8000)")
-    parser.add_argument("--token", default=None, help="bearer token for writes (or $DEMCAL_TOKEN)")
+    parser.add_argument("--token", default=None, help="bearer token (or $DEMCAL_TOKEN): writes need one, and reads too when the server "
+                        "has tokens")
     output = parser.add_mutually_exclusive_group()
     output.add_argument("--json", action="store_true", help="print the API's JSON")
     if creates:

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from calibration.evaluator_registry import names as evaluator_names
 from engine.lab.registry import job_test_names
-from service.cli_http import CliError, call, emit, fmt, leaf, pairs, read_json, table, watch, watch_options
+from service.cli_http import (CliError, call, emit, fmt, leaf, page_footer, page_options, page_params, pairs, read_json,
+                              table, watch, watch_options)
 from service.vocabulary import JobStatus
 
 
@@ -33,15 +34,14 @@ def job_submit(args) -> int:
 
 
 def job_list(args) -> int:
-    params = {k: v for k, v in (("status", args.status), ("test", args.test), ("campaign_id", args.campaign),
-                                ("limit", args.limit)) if v is not None}
+    params = page_params(args, status=args.status, test=args.test, campaign_id=args.campaign)
     data = call(args, "GET", "/jobs", params=params)
     jobs = data["items"]
     rows = [[j["id"], j["status"], j["test"], j["fidelity"], j["seed"], j["evaluator"],
              f"{100.0 * float((j.get('progress') or {}).get('fraction') or 0.0):.0f} %", j.get("campaign_id")]
             for j in jobs]
     return emit(args, data, table(["id", "status", "test", "fidelity", "seed", "evaluator", "progress", "campaign"],
-                                  rows))
+                                  rows) + page_footer(data))
 
 
 def job_status(args) -> int:
@@ -89,7 +89,7 @@ def register(subparsers) -> None:
     lst.add_argument("--status", choices=JobStatus.values())
     lst.add_argument("--test", choices=job_test_names())
     lst.add_argument("--campaign", type=int, help="only this campaign's jobs")
-    lst.add_argument("--limit", type=int)
+    page_options(lst)
     status = leaf(jsub, "status", job_status, "a job's state and progress")
     status.add_argument("id", type=int)
     watch_options(status, "it finishes (exit status 0 when it succeeded, else 1)")

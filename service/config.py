@@ -30,11 +30,25 @@ class Settings(BaseModel):
     threads_per_job: int | None = Field(
         None, ge=1, description="numba threads of each local worker's jobs; None = cores // workers (at least 1): "
         "jobs side by side on one thread each give the most batteries per hour (bench/battery_threads.py)")
-    token: str | None = Field(None, description="bearer token for write endpoints (required off loopback); at least "
-                                                "16 characters (service.security.MIN_TOKEN_LENGTH)")
+    token: str | None = Field(None, description="the operator's bearer token (user 'token', an administrator): writes "
+                                                "need it (a token is required off loopback), reads too unless "
+                                                "open_reads; at least 16 characters (service.security.MIN_TOKEN_LENGTH)")
     tokens: str | None = Field(
-        None, description="named bearer tokens 'alice:s3cret-0123456789ab,bob:0ther-0123456789ab'; the name is the client's identity "
-                          "for per-client limits (DEMCAL_TOKENS); each at least 16 characters, no two users sharing one")
+        None, description="named bearer tokens 'alice:s3cret-0123456789ab:admin,bob:0ther-0123456789ab' (DEMCAL_TOKENS): "
+                          "the name is the user who owns what the request makes and the client identity per-client "
+                          "limits count against; ':admin' makes the user an administrator, who may change anyone's "
+                          "jobs, materials, campaigns and schedules (others get 403). Each token at least 16 "
+                          "characters, without ':', no two users sharing one. DEMCAL_TOKEN's user 'token' is an "
+                          "administrator")
+    open_reads: bool = Field(
+        False, description="with tokens configured, let GET requests of the API through without a token "
+                           "(DEMCAL_OPEN_READS=1); by default they need one, except /api/v1/health, the OpenAPI "
+                           "document and the page's own files")
+    trusted_proxies: str | None = Field(
+        None, description="reverse proxies whose X-Forwarded-For and X-Client-Id are believed, comma-separated "
+                          "addresses or networks (DEMCAL_TRUSTED_PROXIES=127.0.0.1,10.0.0.0/8); from any other "
+                          "peer, loopback included, both headers are ignored (a forged one chose the identity "
+                          "per-client limits count against)")
     allowed_hosts: str | None = Field(
         None, description="extra Host names the service answers to, comma-separated (DEMCAL_ALLOWED_HOSTS); "
                           "loopback names and DEMCAL_HOST are always allowed, any other Host gets 400 (a web "

@@ -84,6 +84,16 @@ class Unauthorized(ApiError):
     error_type = "unauthorized"
 
 
+class Forbidden(ApiError):
+    """The request is authenticated but may not change this object (another user's; ``service.ownership``)."""
+
+    status_code = 403
+
+    def __init__(self, message: str, field: str | list | None = None):
+        super().__init__(403, message, field)
+    error_type = "forbidden"
+
+
 def from_settings_error(exc: SettingsError) -> ApiError:
     """The loop's complaint about a setting (``calibration.errors.SettingsError``) as the API's error:
     a 409 when it clashes with the campaign's state, else a 422, naming the field either way."""

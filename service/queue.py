@@ -60,6 +60,7 @@ def submit_job_ex(
     client_id: str = "anonymous",
     campaign_id: int | None = None,
     max_attempts: int | None = None,
+    owner: str | None = None,
     settings: Settings | None = None,
 ) -> tuple[Job, bool]:
     """Queue a job; returns ``(job, created)``. Commits. Same idempotency key -> same job."""
@@ -75,7 +76,7 @@ def submit_job_ex(
         status=JobStatus.QUEUED, evaluator=evaluator, test=spec.test, fidelity=spec.fidelity, spec=spec_json,
         seed=spec.seed, priority=priority, attempts=0, max_attempts=max_attempts or cfg.max_attempts,
         cancel_requested=False, progress_fraction=0.0, idempotency_key=idempotency_key,
-        client_id=client_id, campaign_id=campaign_id, created_at=utcnow(),
+        client_id=client_id, owner=owner, campaign_id=campaign_id, created_at=utcnow(),
     )
     try:
         job_id = _insert_within_limit(session, values, cfg.max_queued_jobs_per_client)

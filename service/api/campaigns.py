@@ -8,8 +8,8 @@ from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.campaigns.store import (campaign_summary, create_campaign, get_campaign, iteration, iteration_view,
                                      list_campaigns, next_iteration, transition)
 from service.api.openapi import errors
-from service.api.params import CampaignId, IterationNumber
-from service.api.responses.campaigns import (CampaignDesign, CampaignModels, CampaignOptimum, CampaignSummary,
+from service.api.params import CampaignId, CampaignLimit, IterationNumber, Offset
+from service.api.responses.campaigns import (CampaignDesign, CampaignList, CampaignModels, CampaignOptimum, CampaignSummary,
                                              Confirmation, Iteration)
 from service.api.responses.common import typed
 from service.api.responses.diagnosis import DiagnosisOut
@@ -17,27 +17,36 @@ from service.api.responses.history import History
 from service.api.responses.report import ReportOut
 from service.db import DbSession, built_then_committed
 from service.errors import Conflict, NotFound
+from service.ownership import Caller, caller, owner_of
 from service.security import client_id
 from calibration.vocabulary import Phase, Verdict
 from service.vocabulary import CampaignStatus
 
 router = APIRouter(prefix="/campaigns", tags=["campaigns"])
 
-_STATE = errors(409, c409="the campaign's status does not allow this")
+_STATE = errors(403, 409, c403="another user's campaign", c409="the campaign's status does not allow this")
 _NOT_YET = errors(409, c409="the iteration has not produced this yet")
 
 
 @router.post("", status_code=201, summary="Create a campaign (draft) for a material", **typed(CampaignSummary),
              responses=errors(404, c404="the material does not exist"))
 def create(body: CampaignCreate, session: DbSession,
-           client: str = Depends(client_id)) -> dict:
-    campaign = create_campaign(session, body, client_id=client, commit=False)
+           client: str = Depends(client_id), owner: str | None = Depends(owner_of)) -> dict:
+    campaign = create_campaign(session, body, client_id=client, commit=False, owner=owner)
     return built_then_committed(session, lambda: campaign_summary(campaign), CampaignSummary)
 
 
-@router.get("", summary="List campaigns, newest first", **typed(list[CampaignSummary]))
-def list_all(session: DbSession, status: CampaignStatus | None = Query(None)) -> list[dict]:
-    return [campaign_summary(c) for c in list_campaigns(session, status)]
+@router.get("", summary="List campaigns, newest (highest id) first; a page and the total", **typed(CampaignList))
+def list_all(session: DbSession, status: CampaignStatus | None = Query(None), limit: CampaignLimit = 100,
+             offset: Offset = 0) -> dict:
+    rows, total = list_campaigns(session, status, limit=limit, offset=offset)
+    return {"items": [campaign_summary(c) for c in rows], "total": total, "limit": limit, "offset": offset}
+
+
+def _change(session: Session, campaign_id: int, who: Caller, action: str):
+    """A campaign action by its owner or an administrator (403 otherwise), then the action."""
+    who.require(get_campaign(session, campaign_id).owner, f"campaign {campaign_id}", ["path", "campaign_id"])
+    return transition(session, campaign_id, action)
 
 
 @router.get("/{campaign_id}", summary="Status: state, iteration, phase, run counts", **typed(CampaignSummary))
@@ -47,20 +56,20 @@ def status(campaign_id: CampaignId, session: DbSession) -> dict:
 
 @router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)", responses=_STATE,
              **typed(CampaignSummary))
-def start(campaign_id: CampaignId, session: DbSession) -> dict:
-    return campaign_summary(transition(session, campaign_id, "start"))
+def start(campaign_id: CampaignId, session: DbSession, who: Caller = Depends(caller)) -> dict:
+    return campaign_summary(_change(session, campaign_id, who, "start"))
 
 
 @router.post("/{campaign_id}/pause", summary="running -> paused (409 otherwise); queued batteries keep running", responses=_STATE,
              **typed(CampaignSummary))
-def pause(campaign_id: CampaignId, session: DbSession) -> dict:
-    return campaign_summary(transition(session, campaign_id, "pause"))
+def pause(campaign_id: CampaignId, session: DbSession, who: Caller = Depends(caller)) -> dict:
+    return campaign_summary(_change(session, campaign_id, who, "pause"))
 
 
 @router.post("/{campaign_id}/resume", summary="paused -> running (409 otherwise)", responses=_STATE,
              **typed(CampaignSummary))
-def resume(campaign_id: CampaignId, session: DbSession) -> dict:
-    return campaign_summary(transition(session, campaign_id, "resume"))
+def resume(campaign_id: CampaignId, session: DbSession, who: Caller = Depends(caller)) -> dict:
+    return campaign_summary(_change(session, campaign_id, who, "resume"))
 
 
 @router.get("/{campaign_id}/iterations", summary="All iterations with their parameters, design, runs and report",
@@ -72,7 +81,8 @@ def iterations(campaign_id: CampaignId, session: DbSession) -> list[dict]:
 @router.post("/{campaign_id}/iterations", status_code=201,
              summary="Start the next iteration of a completed campaign (e.g. with a contact effect added)",
              responses=_STATE, **typed(CampaignSummary))
-def add_iteration(campaign_id: CampaignId, body: IterationIn, session: DbSession) -> dict:
+def add_iteration(campaign_id: CampaignId, body: IterationIn, session: DbSession, who: Caller = Depends(caller)) -> dict:
+    who.require(get_campaign(session, campaign_id).owner, f"campaign {campaign_id}", ["path", "campaign_id"])
     return campaign_summary(next_iteration(session, campaign_id, body))
 
 

@@ -15,12 +15,13 @@ from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, Te
 from service import queue
 from service.api.jsonsafe import json_safe
 from service.api.openapi import errors
-from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, Offset
+from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, JobLimit, Offset
 from service.api.responses.common import typed
 from service.api.responses.jobs import Curve, CurveIndex, JobList, JobOut, JobResult, Progress
 from service.db import DbSession
 from service.errors import Conflict, NotFound
 from service.models.job import Job
+from service.ownership import Caller, caller, owner_of
 from service.security import client_id
 from service.vocabulary import JobOrigin, JobStatus
 from service.workers.errors import scrub
@@ -60,6 +61,7 @@ def job_out(job: Job) -> JobOut:
         wall_time_s=job.wall_time_s, created_at=job.created_at, started_at=job.started_at,
         finished_at=job.finished_at, heartbeat_at=job.heartbeat_at, lease_owner=job.lease_owner,
         lease_expires_at=job.lease_expires_at, idempotency_key=job.idempotency_key, client_id=job.client_id,
+        owner=job.owner,
         campaign_id=job.campaign_id, result_available=job.status == JobStatus.SUCCEEDED and job.result is not None,
         spec=json_safe(job.spec),
         warnings=parameter_warnings((job.spec or {}).get("parameters") or {})
@@ -77,15 +79,22 @@ def _result(job: Job) -> dict[str, Any]:
              summary="Queue a single test or a battery",
              responses={200: {"description": "idempotent replay: the job already queued with this key",
                               "model": JobOut},
-                        **errors(409, 422, 429, c409="idempotency key reused with a different body",
+                        **errors(403, 409, 422, 429, c403="campaign_id names another user's campaign",
+                                 c409="idempotency key reused with a different body",
                                  c422="invalid spec or over a limit (field named, with the limit and estimate)")})
 def submit(body: JobSubmit, request: Request, response: Response, session: DbSession,
-           client: str = Depends(client_id),
+           client: str = Depends(client_id), who: Caller = Depends(caller), owner: str | None = Depends(owner_of),
            idempotency_key: str | None = Header(None, alias="Idempotency-Key", max_length=200)) -> JobOut:
+    if body.campaign_id is not None:  # a job filed under a campaign is a change to that campaign
+        from service.models.campaign import Campaign
+
+        campaign = session.get(Campaign, body.campaign_id)
+        if campaign is not None:
+            who.require(campaign.owner, f"campaign {campaign.id}", "campaign_id")
     job, created = queue.submit_job_ex(
         session, body.spec(), evaluator=body.evaluator, priority=body.priority,
         idempotency_key=body.idempotency_key or idempotency_key, client_id=client,
-        campaign_id=body.campaign_id, max_attempts=body.max_attempts,
+        campaign_id=body.campaign_id, max_attempts=body.max_attempts, owner=owner,
     )
     if not created:
         response.status_code = status.HTTP_200_OK
@@ -93,13 +102,13 @@ def submit(body: JobSubmit, request: Request, response: Response, session: DbSes
     return job_out(job)
 
 
-@router.get("", response_model=JobList, summary="List jobs, newest first, filtered")
+@router.get("", response_model=JobList, summary="List jobs, newest first (by id), filtered; a page and the total")
 def list_jobs(session: DbSession, status_: JobStatus | None = Query(None, alias="status"),
               test: JobTestName | None = None, campaign_id: int | None = Query(None, ge=1, le=SQLITE_INT_MAX),
               evaluator: EvaluatorName | None = None,
               origin: JobOrigin = Query(JobOrigin.ALL, description="direct: jobs submitted without a campaign; "
                                         "campaign: the batteries campaigns queued; all: both"),
-              limit: int = Query(100, ge=1, le=1000), offset: Offset = 0) -> JobList:
+              limit: JobLimit = 100, offset: Offset = 0) -> JobList:
     rows, total = queue.list_jobs(session, status=status_, test=test, campaign_id=campaign_id,
                                   evaluator=evaluator, origin=origin, limit=limit, offset=offset)
     return JobList(items=[job_out(j) for j in rows], total=total, limit=limit, offset=offset)
@@ -141,8 +150,9 @@ def get_curve(session: DbSession, job_id: JobId, name: str = PathParam(..., max_
 
 @router.post("/{job_id}/cancel", response_model=JobOut, summary="Cancel a queued job, or ask a running one to stop",
              responses={202: {"description": "running: cancellation requested, the worker stops at its next check"},
-                        **errors(409, c409="already finished")})
-def cancel(job_id: JobId, response: Response, session: DbSession) -> JobOut:
+                        **errors(403, 409, c403="another user's job", c409="already finished")})
+def cancel(job_id: JobId, response: Response, session: DbSession, who: Caller = Depends(caller)) -> JobOut:
+    who.require(queue.get_job(session, job_id).owner, f"job {job_id}", ["path", "job_id"])
     job = queue.cancel_job(session, job_id)
     if job.status == JobStatus.RUNNING:
         response.status_code = status.HTTP_202_ACCEPTED
@@ -150,6 +160,7 @@ def cancel(job_id: JobId, response: Response, session: DbSession) -> JobOut:
 
 
 @router.post("/{job_id}/retry", response_model=JobOut, summary="Queue a failed or cancelled job again",
-             responses=errors(409, c409="the job is not failed or cancelled"))
-def retry(job_id: JobId, session: DbSession) -> JobOut:
+             responses=errors(403, 409, c403="another user's job", c409="the job is not failed or cancelled"))
+def retry(job_id: JobId, session: DbSession, who: Caller = Depends(caller)) -> JobOut:
+    who.require(queue.get_job(session, job_id).owner, f"job {job_id}", ["path", "job_id"])
     return job_out(queue.retry_job(session, job_id))

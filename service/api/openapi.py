@@ -3,9 +3,11 @@
 Why: clients (and schemathesis in CI) read the document to know what can come back. FastAPI lists
 only the success code and its own 422. The rules here add what our error handling emits, from
 facts about each operation: a path parameter means a 404 when the row is missing and a 422 when it
-is not an integer in range; any parameter or body means a 422, a body that is not text a 400; every write may answer 401 (when a
-token is configured, always off loopback). Codes that depend on state (409 conflicts, 429 limits,
-404 of a referenced row in a body) are declared on the routes themselves with ``errors(...)``.
+is not an integer in range; any parameter or body means a 422, a body that is not text a 400; every write
+may answer 401 (when a token is configured, always off loopback), and so may every read but health's and
+this document's (``service.security.OPEN_API_PATHS``). Codes that depend on state (403 another user's object,
+409 conflicts, 429 limits, 404 of a referenced row in a body) are declared on the routes themselves with
+``errors(...)``.
 """
 from __future__ import annotations
 
@@ -15,7 +17,7 @@ from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 from pydantic import BaseModel
 
-from service.security import WRITE_METHODS
+from service.security import OPEN_API_PATHS, WRITE_METHODS
 
 
 class ErrorItem(BaseModel):
@@ -32,7 +34,8 @@ class ErrorBody(BaseModel):
 
 _DESCRIPTIONS = {
     400: "the request body cannot be read (not UTF-8); malformed JSON is a 422",
-    401: "missing or wrong bearer token (writes, when a token is configured)",
+    401: "missing or wrong bearer token (when tokens are configured: writes, and reads unless DEMCAL_OPEN_READS)",
+    403: "another user's object: only its owner or an administrator may change it (when tokens are configured)",
     404: "a resource named in the path (or body) does not exist",
     409: "the resource's state does not allow this (field named)",
     422: "invalid input; each error names its field",
@@ -77,8 +80,8 @@ def document_errors(app: FastAPI) -> None:
                     codes.append(422)
                 if "requestBody" in operation:
                     codes.append(400)
-                if method.upper() in WRITE_METHODS:
-                    codes.append(401)
+                if method.upper() in WRITE_METHODS or path not in OPEN_API_PATHS:
+                    codes.append(401)  # writes, and reads unless opened, need a token when tokens are configured
                 for code in codes:
                     responses.setdefault(str(code), _error_response(ref, code))
         app.openapi_schema = schema

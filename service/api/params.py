@@ -27,3 +27,18 @@ CampaignId = _id("campaign id")
 ScheduleId = _id("schedule id")
 IterationNumber = Annotated[int, Path(ge=1, le=SQLITE_INT_MAX, description="iteration number, from 1")]
 Offset = Annotated[int, Query(ge=0, le=SQLITE_INT_MAX, description="rows to skip")]
+
+
+def page_limit(maximum: int):
+    """A listing's ``limit``: bounded, so no request can ask for a listing of every row (``GET /materials``
+    answered 7 MB per full-size material, all of them at once)."""
+    return Annotated[int, Query(ge=1, le=maximum, description=f"rows per page, at most {maximum}")]
+
+
+# Page sizes: default and maximum per listing, by the size of one row (a material carries its measurements).
+JobLimit = page_limit(1000)
+MaterialLimit = page_limit(200)
+CampaignLimit = page_limit(500)
+ScheduleLimit = page_limit(500)
+FiringLimit = page_limit(1000)
+MeasurementLimit = page_limit(1000)

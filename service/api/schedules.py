@@ -1,19 +1,22 @@
 """Schedule endpoints: cron (UTC) + campaign template, with a preview of upcoming firings."""
 from __future__ import annotations
 
-from fastapi import APIRouter, Query, Response
+from fastapi import APIRouter, Depends, Query, Response
 
 from service.api.openapi import errors
-from service.api.params import ScheduleId
-from service.api.responses.schedules import CronPreview, Firing, Schedule
+from service.api.params import FiringLimit, Offset, ScheduleId, ScheduleLimit
+from service.api.responses.schedules import CronPreview, FiringList, Schedule, ScheduleList
 from service.db import DbSession, built_then_committed
 from service.errors import Invalid
+from service.ownership import Caller, caller, owner_of
 from service.schedules.cron import CronError, parse_cron
 from service.schedules.scheduler import naive_utc
 from service.schedules.store import (ScheduleIn, ScheduleUpdate, create_schedule, delete_schedule, firing_view,
-                                     get_schedule, list_schedules, schedule_view, update_schedule)
+                                     get_schedule, list_firings, list_schedules, schedule_view, update_schedule)
+from service.security import client_id
 
 router = APIRouter(prefix="/schedules", tags=["schedules"])
+_OWNED = errors(403, c403="another user's schedule")
 
 
 @router.get("/cron-preview", summary="Check a cron expression and list its next firings (UTC)",
@@ -28,14 +31,16 @@ def cron_preview(expr: str = Query(..., max_length=200, description="e.g. '0 2 *
 
 @router.post("", status_code=201, summary="Create a schedule", response_model=Schedule,
              responses=errors(404, c404="the template's material does not exist"))
-def create(body: ScheduleIn, session: DbSession) -> dict:
-    schedule = create_schedule(session, body, commit=False)
+def create(body: ScheduleIn, session: DbSession, owner: str | None = Depends(owner_of),
+           client: str = Depends(client_id)) -> dict:
+    schedule = create_schedule(session, body, commit=False, owner=owner, client_id=client)
     return built_then_committed(session, lambda: schedule_view(schedule), Schedule)
 
 
-@router.get("", summary="List schedules", response_model=list[Schedule])
-def list_all(session: DbSession) -> list[dict]:
-    return [schedule_view(s, firings=3) for s in list_schedules(session)]
+@router.get("", summary="List schedules, by id; a page and the total", response_model=ScheduleList)
+def list_all(session: DbSession, limit: ScheduleLimit = 100, offset: Offset = 0) -> dict:
+    rows, total = list_schedules(session, limit, offset)
+    return {"items": [schedule_view(s, firings=3) for s in rows], "total": total, "limit": limit, "offset": offset}
 
 
 @router.get("/{schedule_id}", response_model=Schedule)
@@ -43,18 +48,26 @@ def show(schedule_id: ScheduleId, session: DbSession) -> dict:
     return schedule_view(get_schedule(session, schedule_id))
 
 
-@router.patch("/{schedule_id}", summary="Change cron, enable/disable, policy", response_model=Schedule)
-def patch(schedule_id: ScheduleId, body: ScheduleUpdate, session: DbSession) -> dict:
+def _owned(session, schedule_id: int, who: Caller) -> None:
+    who.require(get_schedule(session, schedule_id).owner, f"schedule {schedule_id}", ["path", "schedule_id"])
+
+
+@router.patch("/{schedule_id}", summary="Change cron, enable/disable, policy", response_model=Schedule,
+              responses=_OWNED)
+def patch(schedule_id: ScheduleId, body: ScheduleUpdate, session: DbSession, who: Caller = Depends(caller)) -> dict:
+    _owned(session, schedule_id, who)
     return schedule_view(update_schedule(session, schedule_id, body))
 
 
-@router.delete("/{schedule_id}", status_code=204)
-def delete(schedule_id: ScheduleId, session: DbSession):
+@router.delete("/{schedule_id}", status_code=204, responses=_OWNED)
+def delete(schedule_id: ScheduleId, session: DbSession, who: Caller = Depends(caller)):
+    _owned(session, schedule_id, who)
     delete_schedule(session, schedule_id)
     return Response(status_code=204)
 
 
-@router.get("/{schedule_id}/firings", summary="Every due time handled: campaign started or why skipped",
-            response_model=list[Firing])
-def firings(schedule_id: ScheduleId, session: DbSession) -> list[dict]:
-    return [firing_view(f) for f in get_schedule(session, schedule_id).firings]
+@router.get("/{schedule_id}/firings", summary="Every due time handled, oldest first: campaign started or why "
+            "skipped; a page and the total", response_model=FiringList)
+def firings(schedule_id: ScheduleId, session: DbSession, limit: FiringLimit = 100, offset: Offset = 0) -> dict:
+    rows, total = list_firings(session, schedule_id, limit, offset)
+    return {"items": [firing_view(f) for f in rows], "total": total, "limit": limit, "offset": offset}

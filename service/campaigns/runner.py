@@ -148,7 +148,7 @@ class CampaignRunner:
             spec = run_spec(config, run.natural, run.seed, target_keys)
             job = submit_job(session, spec, evaluator=config.evaluator,
                              priority=config.priority, idempotency_key=f"campaign:{campaign.id}:run:{run.id}",
-                             client_id=campaign.client_id, campaign_id=campaign.id)
+                             client_id=campaign.client_id, campaign_id=campaign.id, owner=campaign.owner)
         except TooMany:
             session.rollback()
             return False  # the client's queue is full: try again next tick

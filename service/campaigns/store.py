@@ -26,6 +26,7 @@ from service.limits import check_campaign_limits
 from service.materials.store import get_material
 from service.models.base import utcnow
 from service.models.campaign import Campaign, CampaignIteration
+from service.pagination import paged
 from service.vocabulary import CampaignStatus, RunStatus
 
 TRANSITIONS = {"start": ({CampaignStatus.DRAFT}, CampaignStatus.RUNNING),
@@ -82,7 +83,7 @@ def check_targets_simulated(session: Session, body: CampaignCreate) -> None:
 
 
 def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = "anonymous",
-                    schedule_id: int | None = None, commit: bool = True) -> Campaign:
+                    schedule_id: int | None = None, commit: bool = True, owner: str | None = None) -> Campaign:
     """A draft campaign; ``commit=False`` leaves the commit to the caller (the API builds its response first:
     ``service.db.built_then_committed``)."""
     if get_material(session, body.material_id) is None:
@@ -92,7 +93,7 @@ def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = 
     check_limits_with_targets(session, body)
     campaign = Campaign(name=body.name, material_id=body.material_id, status=CampaignStatus.DRAFT, evaluator=body.evaluator,
                         fidelity=body.fidelity, config=body.model_dump(mode="json"), current_iteration=0,
-                        schedule_id=schedule_id, client_id=client_id)
+                        schedule_id=schedule_id, client_id=client_id, owner=owner)
     session.add(campaign)
     if commit:
         session.commit()
@@ -106,11 +107,11 @@ def get_campaign(session: Session, campaign_id: int) -> Campaign:
     return campaign
 
 
-def list_campaigns(session: Session, status: str | None = None) -> list[Campaign]:
-    stmt = select(Campaign).order_by(Campaign.id.desc())
-    if status:
-        stmt = stmt.where(Campaign.status == status)
-    return list(session.scalars(stmt))
+def list_campaigns(session: Session, status: str | None = None, *, limit: int = 100,
+                   offset: int = 0) -> tuple[list[Campaign], int]:
+    """A page of campaigns, newest (highest id) first, and the total."""
+    return paged(session, Campaign, where=[Campaign.status == status] if status else [],
+                 order=(Campaign.id.desc(),), limit=limit, offset=offset)
 
 
 def transition(session: Session, campaign_id: int, action: str) -> Campaign:
@@ -198,7 +199,7 @@ def campaign_summary(campaign: Campaign) -> dict[str, Any]:
         "current_iteration": campaign.current_iteration, "phase": current.phase if current else None,
         "runs_total": len(runs), "runs_succeeded": done,
         "runs_failed": sum(1 for r in runs if r.status in (RunStatus.FAILED, RunStatus.CANCELLED)),
-        "error": campaign.error, "schedule_id": campaign.schedule_id,
+        "error": campaign.error, "schedule_id": campaign.schedule_id, "owner": campaign.owner,
         "created_at": _iso(campaign.created_at), "started_at": _iso(campaign.started_at),
         "finished_at": _iso(campaign.finished_at), "config": campaign.config,
         "stop_reason": (((current.report or {}).get("automatic") or {}).get("stop_reason") if current else None),

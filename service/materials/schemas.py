@@ -6,6 +6,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
+from service.api.responses.common import Page
+
 from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree
 from engine.lab.spec import STRICT_INPUT
 from engine.lab.registry import known_quantity, known_test, quantity
@@ -161,6 +163,7 @@ class MaterialOut(BaseModel):
     description: str
     source: str
     bundled: bool
+    owner: str | None = Field(None, description="the user (bearer token name) who made it; null when made without a token")
     direct_estimates: dict[str, Any]
     rig_id: int | None = Field(None, description="the rig the measurements were made in")
     rig: str | None = Field(None, description="that rig's name")
@@ -175,3 +178,15 @@ class MaterialCopy(BaseModel):
     model_config = STRICT_INPUT
 
     name: str = Field(..., min_length=1, max_length=200, description="name of the editable copy")
+
+
+class MaterialList(Page):
+    """A page of materials, by id (the bundled one first)."""
+
+    items: list[MaterialOut]
+
+
+class MeasurementList(Page):
+    """A page of a material's measurements, by id."""
+
+    items: list[MeasurementOut]

@@ -17,6 +17,7 @@ from service.models.material import Material, Measurement
 from service.models.rig import Rig
 from service.rigs.store import find_by_name as find_rig
 from service.rigs.store import particles_warnings, record_of, seed_bundled_rigs
+from service.pagination import paged
 
 BUNDLED_DIR = Path(__file__).parent
 BUNDLED_FILES = ("thesis_coarse_aggregate.json",)
@@ -27,7 +28,7 @@ def material_dict(material: Material) -> dict[str, Any]:
     (``json_safe``) so one bad row never breaks a listing."""
     return json_safe({
         "id": material.id, "name": material.name, "description": material.description,
-        "source": material.source, "bundled": material.bundled,
+        "source": material.source, "bundled": material.bundled, "owner": material.owner,
         "direct_estimates": dict(material.direct_estimates or {}),
         "rig_id": material.rig_id, "rig": material.rig.name if material.rig is not None else None,
         "particles": material.particles, "warnings": rig_warnings(material),
@@ -80,11 +81,12 @@ def require_editable(material: Material) -> None:
                        f"copy it (POST /api/v1/materials/{material.id}/copy) to edit", ["path", "material_id"])
 
 
-def copy_material(session: Session, material: Material, name: str) -> Material:
-    """An editable copy (not bundled) with the same measurements, under a new name."""
+def copy_material(session: Session, material: Material, name: str, owner: str | None = None) -> Material:
+    """An editable copy (not bundled) with the same measurements, under a new name, owned by ``owner``
+    (copying reads the original, whoever owns it)."""
     copy = Material(name=name, description=material.description, source=material.source, bundled=False,
                     direct_estimates=dict(material.direct_estimates or {}), rig_id=material.rig_id,
-                    particles=material.particles)
+                    particles=material.particles, owner=owner)
     session.add(copy)
     for row in material.measurements:
         copy.measurements.append(Measurement(
@@ -98,8 +100,10 @@ def get_material(session: Session, material_id: int) -> Material | None:
     return session.get(Material, material_id, options=[selectinload(Material.measurements)])
 
 
-def list_materials(session: Session) -> list[Material]:
-    return list(session.scalars(select(Material).options(selectinload(Material.measurements)).order_by(Material.id)))
+def list_materials(session: Session, limit: int, offset: int) -> tuple[list[Material], int]:
+    """A page of materials by id, with their measurements, and the total."""
+    return paged(session, Material, order=(Material.id,), options=(selectinload(Material.measurements),),
+                 limit=limit, offset=offset)
 
 
 def find_by_name(session: Session, name: str) -> Material | None:
@@ -133,10 +137,10 @@ def add_measurement(session: Session, material: Material, data: MeasurementIn) -
     return row
 
 
-def create_material(session: Session, data: MaterialIn, *, bundled: bool = False) -> Material:
+def create_material(session: Session, data: MaterialIn, *, bundled: bool = False, owner: str | None = None) -> Material:
     rig = resolve_rig(session, data)
     material = Material(name=data.name, description=data.description, source=data.source,
-                        bundled=bundled, direct_estimates=data.direct_estimates, rig=rig,
+                        bundled=bundled, direct_estimates=data.direct_estimates, rig=rig, owner=owner,
                         particles=None if data.particles is None else data.particles.model_dump(mode="json",
                                                                                                exclude_none=True))
     session.add(material)

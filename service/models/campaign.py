@@ -35,6 +35,8 @@ class Campaign(Base):
     error: Mapped[str | None] = mapped_column(Text, nullable=True)
     schedule_id: Mapped[int | None] = mapped_column(Integer, nullable=True, index=True)
     client_id: Mapped[str] = mapped_column(String(100), default="anonymous", nullable=False)
+    # the user (bearer token name) who made it; None without a token (service.ownership)
+    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)
     created_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, nullable=False)
     updated_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, onupdate=utcnow, nullable=False)
     started_at: Mapped[datetime | None] = mapped_column(DateTime, nullable=True)

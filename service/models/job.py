@@ -54,3 +54,5 @@ class Job(Base):
     idempotency_key: Mapped[str | None] = mapped_column(String(200), nullable=True)
     client_id: Mapped[str] = mapped_column(String(100), default="anonymous", nullable=False)
     campaign_id: Mapped[int | None] = mapped_column(Integer, nullable=True, index=True)
+    # the user (bearer token name) who made it; None without a token (service.ownership)
+    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)

@@ -24,6 +24,8 @@ class Material(Base):
     description: Mapped[str] = mapped_column(Text, default="", nullable=False)
     source: Mapped[str] = mapped_column(Text, default="", nullable=False)
     bundled: Mapped[bool] = mapped_column(Boolean, default=False, nullable=False)
+    # the user (bearer token name) who made it; None without a token (service.ownership)
+    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)
     # Parameters measured directly (particle density, wall friction ...), usable as priors.
     direct_estimates: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict, nullable=False)
     # The rig its measurements were made in (one laboratory's apparatus, every test kind: engine.lab.rigs);

@@ -26,6 +26,12 @@ class Schedule(Base):
     # Highest measurement id of the material seen at the last start (new data marker).
     last_measurement_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
     last_campaign_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    # the user (bearer token name) who made it; None without a token (service.ownership)
+    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)
+    # the identity per-client limits count against, as the creator's requests had it: the campaigns it
+    # starts queue under it, so a schedule is no way past its owner's limit (None: rows from before
+    # 0003, whose campaigns count as "schedule:<id>")
+    client_id: Mapped[str | None] = mapped_column(String(100), nullable=True)
     created_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, nullable=False)
 
     firings: Mapped[list["ScheduleFiring"]] = relationship(

@@ -125,7 +125,7 @@ class Scheduler:
         # the limits in force now (they may have been lowered since the schedule was created): a firing
         # over them is skipped with the reason, not a campaign that fails on its first run
         check_campaign_limits(config, self.settings, target_keys=[t.key for t in campaign_targets(session, config)])
-        campaign = create_campaign_nocommit(session, config, schedule.id)
+        campaign = create_campaign_nocommit(session, config, schedule)
         campaign.status = CampaignStatus.RUNNING
         campaign.started_at = now
         schedule.last_measurement_id = latest_measurement_id(session, config.material_id)
@@ -133,10 +133,15 @@ class Scheduler:
         return campaign.id
 
 
-def create_campaign_nocommit(session: Session, config: CampaignCreate, schedule_id: int) -> Campaign:
-    """Same row as the API creates, in the firing's transaction (firing and campaign commit together)."""
+def create_campaign_nocommit(session: Session, config: CampaignCreate, schedule: Schedule) -> Campaign:
+    """Same row as the API creates, in the firing's transaction (firing and campaign commit together).
+
+    The campaign is the schedule owner's, and queues under the owner's client identity: as its own client
+    ("schedule:<id>", still used for schedules made before 0004_ownership) each schedule had a fresh
+    per-client limit, and a client held at 3 queued 15 jobs through 4 schedules."""
     campaign = Campaign(name=config.name, material_id=config.material_id, status=CampaignStatus.DRAFT,
                         evaluator=config.evaluator, fidelity=config.fidelity, config=config.model_dump(mode="json"),
-                        current_iteration=0, schedule_id=schedule_id, client_id=f"schedule:{schedule_id}")
+                        current_iteration=0, schedule_id=schedule.id,
+                        client_id=schedule.client_id or f"schedule:{schedule.id}", owner=schedule.owner)
     session.add(campaign)
     return campaign

@@ -14,6 +14,7 @@ from service.errors import Invalid, NotFound
 from service.campaigns.store import check_limits_with_targets
 from service.materials.store import get_material
 from service.models.schedule import Schedule, ScheduleFiring
+from service.pagination import paged
 from service.schedules.cron import CronError, parse_cron
 from service.schedules.scheduler import naive_utc
 
@@ -45,8 +46,11 @@ def _cron(expression: str):
         raise Invalid(str(exc), "cron") from exc
 
 
-def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = None, commit: bool = True) -> Schedule:
-    """A schedule; ``commit=False`` leaves the commit to the caller (``service.db.built_then_committed``)."""
+def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = None, commit: bool = True, *,
+                    owner: str | None = None, client_id: str | None = None) -> Schedule:
+    """A schedule; ``commit=False`` leaves the commit to the caller (``service.db.built_then_committed``).
+    ``owner`` and ``client_id`` are its creator's: the campaigns it starts are theirs, and their jobs count
+    against the creator's per-client limit."""
     cron = _cron(body.cron)
     if get_material(session, body.template.material_id) is None:
         raise NotFound(f"material {body.template.material_id} not found", "template.material_id")
@@ -54,7 +58,8 @@ def create_schedule(session: Session, body: ScheduleIn, now: datetime | None = N
     check_limits_with_targets(session, body.template, "template.")
     schedule = Schedule(name=body.name, cron=body.cron, template=body.template.model_dump(mode="json"),
                         only_if_new_measurements=body.only_if_new_measurements, enabled=body.enabled,
-                        missed_run_policy=body.missed_run_policy, next_run_at=cron.next_after(naive_utc(now)))
+                        missed_run_policy=body.missed_run_policy, next_run_at=cron.next_after(naive_utc(now)),
+                        owner=owner, client_id=client_id)
     session.add(schedule)
     if commit:
         session.commit()
@@ -68,8 +73,17 @@ def get_schedule(session: Session, schedule_id: int) -> Schedule:
     return schedule
 
 
-def list_schedules(session: Session) -> list[Schedule]:
-    return list(session.scalars(select(Schedule).order_by(Schedule.id)))
+def list_schedules(session: Session, limit: int = 100, offset: int = 0) -> tuple[list[Schedule], int]:
+    """A page of schedules by id, and the total."""
+    return paged(session, Schedule, order=(Schedule.id,), limit=limit, offset=offset)
+
+
+def list_firings(session: Session, schedule_id: int, limit: int = 100,
+                 offset: int = 0) -> tuple[list[ScheduleFiring], int]:
+    """A page of a schedule's firings, oldest first, and the total (404 for a schedule that does not exist)."""
+    get_schedule(session, schedule_id)
+    return paged(session, ScheduleFiring, where=[ScheduleFiring.schedule_id == schedule_id],
+                 order=(ScheduleFiring.id,), limit=limit, offset=offset)
 
 
 def update_schedule(session: Session, schedule_id: int, body: ScheduleUpdate, now: datetime | None = None) -> Schedule:
@@ -104,7 +118,7 @@ def schedule_view(s: Schedule, firings: int = 10) -> dict[str, Any]:
             "only_if_new_measurements": s.only_if_new_measurements, "missed_run_policy": s.missed_run_policy,
             "next_run_at": _iso(s.next_run_at), "last_run_at": _iso(s.last_run_at),
             "last_campaign_id": s.last_campaign_id, "template": s.template,
-            "material_id": (s.template or {}).get("material_id"),
+            "material_id": (s.template or {}).get("material_id"), "owner": s.owner,
             "recent_firings": [firing_view(f) for f in s.firings[-firings:]] if firings else []}
 
 

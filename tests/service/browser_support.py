@@ -63,7 +63,7 @@ class LiveService:
         return httpx.request(method, f"{self.base_url}/api/v1{path}", timeout=30.0, **kwargs)
 
 
-def start_service(data_dir: Path, workers: int = 1) -> LiveService:
+def start_service(data_dir: Path, workers: int = 1, **env_extra: str) -> LiveService:
     port = free_port()
     database_url = f"sqlite:///{(data_dir / 'demcal.db').as_posix()}"
     env = dict(os.environ)
@@ -72,6 +72,7 @@ def start_service(data_dir: Path, workers: int = 1) -> LiveService:
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO_ROOT), env.get("PYTHONPATH", "")) if p)
     env.update({"DEMCAL_DATABASE_URL": database_url, "DEMCAL_SEED_MATERIALS": "true", "DEMCAL_LOG_LEVEL": "WARNING",
                 "DEMCAL_TICK_INTERVAL_S": "0.3", "DEMCAL_POLL_INTERVAL_S": "0.1", "PYTHONUNBUFFERED": "1"})
+    env.update(env_extra)
     proc = subprocess.Popen([sys.executable, "-m", "service.cli", "serve", "--port", str(port), "--workers", str(workers)],
                             env=env, cwd=data_dir)
     base_url = f"http://127.0.0.1:{port}"

@@ -43,7 +43,7 @@ def s2(tmp_path):
 
 
 def thesis_material_id(client) -> int:
-    return next(m["id"] for m in client.get(f"{API}/materials").json() if m["name"] == THESIS_MATERIAL)
+    return next(m["id"] for m in client.get(f"{API}/materials").json()["items"] if m["name"] == THESIS_MATERIAL)
 
 
 def editable_thesis_copy(client, name: str = "thesis copy") -> int:

@@ -166,7 +166,7 @@ def test_legacy_non_finite_row_does_not_break_listings(s2):
         session.commit()
     listing = client.get(f"{API}/materials")
     assert listing.status_code == 200
-    rows = next(m for m in listing.json() if m["id"] == material_id)["measurements"]
+    rows = next(m for m in listing.json()["items"] if m["id"] == material_id)["measurements"]
     mass = next(r for r in rows if r["quantity"] == "bulk_mass_kg")
     assert mass["mean"] is None and mass["values"] == [1e308, 1e308]  # the sum overflows; the values are kept
     stiffness = next(r for r in rows if r["quantity"] == "bulk_stiffness_n_per_m")

@@ -492,7 +492,7 @@ def test_no_physical_match_page_offers_no_add_button(page, service, shots):
     from conftest_s2 import campaign_body
     from test_verdict_rules_api import IMPOSSIBLE_BULK_DENSITY
 
-    material = service.api("GET", "/materials").json()
+    material = service.api("GET", "/materials", params={"limit": 200}).json()["items"]
     thesis = next(m for m in material if m["name"] == "thesis-coarse-aggregate")
     copy = service.api("POST", f"/materials/{thesis['id']}/copy", json={"name": "impossible density"}).json()
     old = next(m for m in copy["measurements"] if m["test"] == "fill" and m["quantity"] == "bulk_density_kg_m3")
@@ -520,3 +520,41 @@ def test_no_physical_match_page_offers_no_add_button(page, service, shots):
     # what holds and what does not, beside the verdict
     expect_text(page, "section.verdict ul.checks", "targets within reach")
     section_shot(page, shots, "Diagnosis", "campaign-diagnosis-no-match")
+
+
+def test_long_listings_page_with_the_total_and_next_previous_links(page, service):
+    """GET /materials answers a page; the list says which rows of how many and links the next page."""
+    total = service.api("GET", "/materials", params={"limit": 1}).json()["total"]  # the bundled one, and earlier tests'
+    for i in range(51 - total):  # one more than the page's 50 (core.js PAGE_SIZE)
+        assert service.api("POST", "/materials", json={"name": f"paged {i:02d}"}).status_code == 201
+    open_view(page, service, "#/materials")
+    expect_text(page, "h2", "Materials \\(51\\)")
+    expect_text(page, "p.pager", "1–50 of 51")
+    page.locator("p.pager a", has_text="next").click()
+    page.wait_for_url(re.compile(r"#/materials\?offset=50"))
+    expect_text(page, "p.pager", "51–51 of 51")
+    assert page.locator("main table tbody tr").count() == 1
+    page.locator("p.pager a", has_text="previous").click()
+    expect_text(page, "p.pager", "1–50 of 51")
+
+
+def test_a_server_with_tokens_asks_for_one_and_the_page_sends_it(browser, tmp_path):
+    """Reads need the token on such a server: the page says where it goes, then lists with it."""
+    token = "page-token-0123456789"
+    svc = start_service(tmp_path, workers=0, DEMCAL_TOKENS=f"alice:{token}")
+    try:
+        context = browser.new_context()
+        context.set_default_timeout(TIMEOUT_MS)
+        pg = context.new_page()
+        pg.watch = watch_page(pg, svc.base_url)
+        pg.watch.allowed.append("status of 401")  # the browser logs the refused read; it is the point here
+        pg.goto(f"{svc.base_url}/#/jobs")
+        expect_text(pg, "main", "This server needs a token")
+        pg.fill("#token", token)
+        pg.locator("#token").dispatch_event("change")
+        expect_text(pg, "h2", "Jobs \\(0\\)")
+        problems = pg.watch.problems()
+        context.close()
+        assert not problems, problems
+    finally:
+        stop_service(svc.proc)

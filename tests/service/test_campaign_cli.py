@@ -129,7 +129,7 @@ def test_campaign_and_schedule_commands(server, capsys, tmp_path):
     code, _, err = run(capsys, "schedule", "create", "--url", url, "--name", "x", "--cron", "@daily")
     assert code == 2 and "exactly one" in err
     code, out, _ = run(capsys, "schedule", "list", "--url", url, "--json")
-    ids = [s["id"] for s in json.loads(out)]
+    ids = [s["id"] for s in json.loads(out)["items"]]
     assert len(ids) == 2
     assert run(capsys, "schedule", "delete", str(ids[0]), "--url", url)[0] == 0
     code, _, err = run(capsys, "schedule", "delete", str(ids[0]), "--url", url)

@@ -140,7 +140,7 @@ def test_a_campaign_whose_targets_are_not_simulated_is_refused_at_creation(s2):
     refused = client.post(f"{API}/campaigns", json=body)
     assert refused.status_code == 422 and refused.json()["detail"][0]["loc"] == ["body", "targets"]
     assert "no target is simulated" in refused.text and "options.include_anchor=true" in refused.text
-    assert client.get(f"{API}/campaigns").json() == []
+    assert client.get(f"{API}/campaigns").json()["items"] == []
 
 
 def test_campaign_fails_with_reason_when_no_target_can_be_modelled(s2):

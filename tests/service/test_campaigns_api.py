@@ -17,8 +17,8 @@ def test_create_and_read(s2):
     campaign = response.json()
     assert campaign["status"] == "draft" and campaign["current_iteration"] == 0 and campaign["phase"] is None
     assert client.get(f"{API}/campaigns/{campaign['id']}").json()["name"] == "thesis calibration"
-    assert [c["id"] for c in client.get(f"{API}/campaigns", params={"status": "draft"}).json()] == [campaign["id"]]
-    assert client.get(f"{API}/campaigns", params={"status": "running"}).json() == []
+    assert [c["id"] for c in client.get(f"{API}/campaigns", params={"status": "draft"}).json()["items"]] == [campaign["id"]]
+    assert client.get(f"{API}/campaigns", params={"status": "running"}).json()["items"] == []
     assert client.get(f"{API}/campaigns", params={"status": "sleeping"}).status_code == 422
     assert client.get(f"{API}/campaigns/{campaign['id']}/iterations").json() == []
 

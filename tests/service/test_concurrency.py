@@ -14,7 +14,7 @@ PER_CLIENT = 10
 
 
 def test_500_submissions_from_50_clients(live_server, db_url):
-    base, _env, _server = live_server(workers=0)
+    base, _env, _server = live_server(workers=0, DEMCAL_TRUSTED_PROXIES="127.0.0.1")  # X-Client-Id names 50 clients
     created: dict[int, int] = {}  # seed -> job id
     replays: dict[int, int] = {}
     errors: list[str] = []

@@ -92,8 +92,9 @@ def test_idempotency_key_body_and_header(client):
 
 
 def test_queued_job_limit_per_client(settings):
-    with TestClient(create_app(settings.model_copy(update={"max_queued_jobs_per_client": 3})), base_url=LOCAL_BASE_URL,
-                    client=("127.0.0.1", 50000)) as client:
+    # the loopback peer stands for a proxy the operator listed: only then may X-Client-Id name the client
+    limited = settings.model_copy(update={"max_queued_jobs_per_client": 3, "trusted_proxies": "127.0.0.1"})
+    with TestClient(create_app(limited), base_url=LOCAL_BASE_URL, client=("127.0.0.1", 50000)) as client:
         for seed in range(3):
             assert submit(client, seed=seed).status_code == 201
         r = submit(client, seed=9)
@@ -207,7 +208,8 @@ def test_token_guards_writes(settings):
         assert client.post(f"{API}/jobs", json={}, headers={"Authorization": "Bearer wrong"}).status_code == 401
         ok = client.post(f"{API}/jobs", json={"evaluator": "analytic"}, headers={"Authorization": "Bearer s3cret-0123456789ab"})
         assert ok.status_code == 201
-        assert client.get(f"{API}/jobs").status_code == 200  # reads stay open
+        assert client.get(f"{API}/jobs").status_code == 401  # reads need the token too (DEMCAL_OPEN_READS opens them)
+        assert client.get(f"{API}/jobs", headers={"Authorization": "Bearer s3cret-0123456789ab"}).status_code == 200
 
 
 def test_refuses_public_bind_without_token(settings):

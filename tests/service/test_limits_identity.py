@@ -74,7 +74,7 @@ def test_campaign_checks_every_design_run_at_creation(s2):
     schedule = {"name": "nightly", "cron": "0 2 * * *", "template": too_long}
     r = client.post(f"{API}/schedules", json=schedule)
     assert r.status_code == 422 and locs(r) == [["body", "template", "options", "cct_cycles"]], r.text
-    assert client.get(f"{API}/campaigns").json() == [] and client.get(f"{API}/schedules").json() == []
+    assert client.get(f"{API}/campaigns").json()["items"] == [] and client.get(f"{API}/schedules").json()["items"] == []
 
 
 def test_design_size_is_refused_before_it_is_built(s2):
@@ -121,21 +121,24 @@ def test_identity_comes_from_the_token_name_not_a_header(settings):
         forged = submit(client, {"Authorization": "Bearer b-secret-0123456789", "X-Client-Id": "token:alice"})
         assert forged.status_code == 201 and forged.json()["client_id"] == "token:bob"
         assert submit(client, {"Authorization": "Bearer wrong"}).status_code == 401
-        assert client.get(f"{API}/jobs").json()["total"] == 3
+        assert client.get(f"{API}/jobs").status_code == 401  # with tokens configured, reads need one too
+        assert client.get(f"{API}/jobs", headers=alice).json()["total"] == 3
 
 
-def test_remote_peer_without_token_cannot_choose_an_identity(settings):
-    with TestClient(create_app(settings), base_url=LOCAL_BASE_URL, client=("203.0.113.9", 4000)) as client:
-        r = submit(client, {"X-Client-Id": "lab-a"})
-        assert r.status_code == 201 and r.json()["client_id"] == "203.0.113.9"
-    with TestClient(create_app(settings), base_url=LOCAL_BASE_URL, client=("127.0.0.1", 4000)) as client:  # loopback may name itself
-        r = submit(client, {"X-Client-Id": "lab-a"})
+def test_peer_without_token_cannot_choose_an_identity_unless_a_listed_proxy(settings):
+    for peer in ("203.0.113.9", "127.0.0.1"):  # remote, and loopback: neither is a proxy the operator listed
+        with TestClient(create_app(settings), base_url=LOCAL_BASE_URL, client=(peer, 4000)) as client:
+            r = submit(client, {"X-Client-Id": "lab-a"})
+            assert r.status_code == 201 and r.json()["client_id"] == peer
+    proxied = settings.model_copy(update={"trusted_proxies": "127.0.0.1"})
+    with TestClient(create_app(proxied), base_url=LOCAL_BASE_URL, client=("127.0.0.1", 4000)) as client:
+        r = submit(client, {"X-Client-Id": "lab-a"})  # the listed proxy names the client
         assert r.status_code == 201 and r.json()["client_id"] == "lab-a"
 
 
 def test_burst_of_50_admits_exactly_the_limit(live_server):
     """The count-then-insert admitted 4 and 7 of a limit of 3; 50 concurrent submissions admit 3."""
-    base, _, _ = live_server(workers=0, DEMCAL_MAX_QUEUED_JOBS_PER_CLIENT="3")
+    base, _, _ = live_server(workers=0, DEMCAL_MAX_QUEUED_JOBS_PER_CLIENT="3", DEMCAL_TRUSTED_PROXIES="127.0.0.1")
 
     def one(index: int) -> int:
         with httpx.Client(base_url=f"{base}/api/v1", timeout=60) as http:
@@ -187,6 +190,6 @@ def test_schedule_firing_over_todays_limits_is_skipped_with_the_reason(s2):
         session.commit()
     lowered = settings.model_copy(update={"max_particles": 1})
     assert Scheduler(app.state.session_factory, lowered).tick(due) == []
-    (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()
+    (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()["items"]
     assert firing["campaign_id"] is None and "particles" in firing["skipped_reason"]
-    assert client.get(f"{API}/campaigns").json() == []
+    assert client.get(f"{API}/campaigns").json()["items"] == []

@@ -48,7 +48,7 @@ def test_seeding_is_idempotent(s2):
         first = seed_bundled_materials(session)
         again = seed_bundled_materials(session)
     assert first == again
-    names = [m["name"] for m in s2[0].get(f"{API}/materials").json()]
+    names = [m["name"] for m in s2[0].get(f"{API}/materials").json()["items"]]
     assert names.count(THESIS_MATERIAL) == 1
 
 
@@ -75,10 +75,10 @@ def test_create_material_converts_units_to_si(s2):
     assert added.status_code == 201
     assert added.json()["values"] == [pytest.approx(1400.0)]
     assert added.json()["standard_uncertainty"] == pytest.approx(10.0)
-    listed = client.get(f"{API}/materials/{material['id']}/measurements").json()
+    listed = client.get(f"{API}/materials/{material['id']}/measurements").json()["items"]
     assert len(listed) == 4
     assert client.delete(f"{API}/materials/{material['id']}/measurements/{added.json()['id']}").status_code == 204
-    assert len(client.get(f"{API}/materials/{material['id']}/measurements").json()) == 3
+    assert len(client.get(f"{API}/materials/{material['id']}/measurements").json()["items"]) == 3
     assert client.delete(f"{API}/materials/{material['id']}").status_code == 204
     assert client.get(f"{API}/materials/{material['id']}").status_code == 404
 
@@ -160,7 +160,7 @@ def test_a_measurement_with_the_key_of_a_stored_one_is_refused_naming_it(s2, fir
     again = client.post(f"{API}/materials/{material_id}/measurements", json=_shear(*second))
     assert again.status_code == 422 and error_loc(again) == ["body", "condition"]
     assert f"measurement {stored.json()['id']}" in again.json()["detail"][0]["msg"]
-    assert len(client.get(f"{API}/materials/{material_id}/measurements").json()) == 1
+    assert len(client.get(f"{API}/materials/{material_id}/measurements").json()["items"]) == 1
     in_one_body = client.post(f"{API}/materials", json={"name": "gravel", "measurements": [_shear(*first),
                                                                                         _shear(*second)]})
     assert in_one_body.status_code == 422 and error_loc(in_one_body) == ["body", "measurements", "1", "condition"]
@@ -173,5 +173,5 @@ def test_measurements_at_different_conditions_are_both_stored(s2):
         response = client.post(f"{API}/materials/{material_id}/measurements", json=_shear(value, "kPa"))
         assert response.status_code == 201, response.text
     stresses = sorted(m["condition"]["normal_stress_pa"]
-                      for m in client.get(f"{API}/materials/{material_id}/measurements").json())
+                      for m in client.get(f"{API}/materials/{material_id}/measurements").json()["items"])
     assert stresses == [24000.0, 25000.0]

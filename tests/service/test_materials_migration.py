@@ -23,7 +23,7 @@ def test_0002_upgrades_a_populated_0001_database_and_downgrades(tmp_path):
             "INSERT INTO jobs (status, evaluator, test, fidelity, spec, seed, priority, attempts, max_attempts, "
             "cancel_requested, progress_fraction, created_at, client_id) VALUES ('succeeded', 'analytic', "
             "'battery', 'screening', '{}', 7, 0, 1, 3, 0, 1.0, '2026-11-22 00:00:00', 'old-client')"))
-    assert upgrade(url) == head_revision()  # through 0002 and the revisions after it
+    assert upgrade(url) == head_revision()  # through 0002_campaigns and every later revision
     tables = set(sa.inspect(engine).get_table_names())
     assert S2_TABLES <= tables
     with engine.connect() as conn:
@@ -31,7 +31,7 @@ def test_0002_upgrades_a_populated_0001_database_and_downgrades(tmp_path):
         # the migrated schema is exactly what the ORM models declare
         assert compare_metadata(MigrationContext.configure(conn, opts={"compare_type": True}), Base.metadata) == []
     with engine.begin() as conn:
-        command.downgrade(alembic_config(url, conn), "0001_jobs")
+        command.downgrade(alembic_config(url, conn), "0001_jobs")  # the later revisions' downgrades too
     assert not S2_TABLES & set(sa.inspect(engine).get_table_names())
     with engine.connect() as conn:
         assert conn.execute(sa.text("SELECT count(*) FROM jobs")).scalar() == 1

@@ -86,7 +86,7 @@ def test_a_job_with_a_g_per_cm3_particle_density_is_queued_with_a_warning(s2):
 
 def test_a_campaign_with_a_stiffness_range_in_kn_per_m_is_created_with_warnings(s2):
     client, _, _ = s2
-    material_id = next(m["id"] for m in client.get(f"{API}/materials").json() if m["bundled"])
+    material_id = next(m["id"] for m in client.get(f"{API}/materials").json()["items"] if m["bundled"])
     body = campaign_body(material_id, factors=[
         {"name": "particle_density_kg_m3", "low": 2300.0, "high": 2700.0},
         {"name": "particle_stiffness_n_per_m", "low": 1e3, "high": 3e3},
@@ -105,13 +105,13 @@ def test_a_campaign_on_a_material_without_measurements_is_refused_naming_materia
     assert refused.status_code == 422, refused.text
     detail = refused.json()["detail"][0]
     assert detail["loc"] == ["body", "material_id"] and "has no measurements" in detail["msg"]
-    assert client.get(f"{API}/campaigns").json() == []
+    assert client.get(f"{API}/campaigns").json()["items"] == []
 
 
 def test_a_campaign_whose_targets_its_test_does_not_run_is_refused_naming_targets(s2):
     """The thesis aggregate has an angle of repose, but the battery runs the AOR only with include_aor."""
     client, _, _ = s2
-    material_id = next(m["id"] for m in client.get(f"{API}/materials").json() if m["bundled"])
+    material_id = next(m["id"] for m in client.get(f"{API}/materials").json()["items"] if m["bundled"])
     aor = [{"test": "aor", "quantity": "angle_of_repose_deg"}]
     refused = client.post(f"{API}/campaigns", json=campaign_body(material_id, targets=aor))
     assert refused.status_code == 422, refused.text
@@ -139,7 +139,7 @@ def test_a_next_iteration_whose_targets_its_test_does_not_run_is_refused_and_not
     """The same refusal when a completed campaign's next iteration changes its targets: the campaign stays
     completed with its configuration, rather than running a design whose targets it cannot compare."""
     client, app, settings = s2
-    material_id = next(m["id"] for m in client.get(f"{API}/materials").json() if m["bundled"])
+    material_id = next(m["id"] for m in client.get(f"{API}/materials").json()["items"] if m["bundled"])
     cid = client.post(f"{API}/campaigns", json=campaign_body(material_id, diagnose=False, polish_steps=0)).json()["id"]
     client.post(f"{API}/campaigns/{cid}/start")
     assert run_to_end(client, app, settings, cid)["status"] == "completed"

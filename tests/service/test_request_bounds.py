@@ -53,7 +53,7 @@ def test_depth_limit_is_the_setting(client, settings):
     assert ok.status_code == 201, ok.text
     over = client.post(f"{API}/materials", json={"name": "over", "direct_estimates": {"x": nested(inside + 1)}})
     assert over.status_code == 422 and locs(over) == [["body", "direct_estimates"]]
-    assert [m["name"] for m in client.get(f"{API}/materials").json()] == ["at the limit"]
+    assert [m["name"] for m in client.get(f"{API}/materials").json()["items"]] == ["at the limit"]
 
 
 def test_depth_scan_ignores_brackets_in_strings():
@@ -88,7 +88,7 @@ def test_a_write_whose_response_cannot_be_built_leaves_no_row(settings, monkeypa
         r = client.post(f"{API}/materials", json={"name": "unlucky"})
         assert r.status_code == 500
         listing = client.get(f"{API}/materials")
-        assert listing.status_code == 200 and listing.json() == []
+        assert listing.status_code == 200 and listing.json()["items"] == []
 
 
 # -- body size ---------------------------------------------------------------------------------------
@@ -132,7 +132,7 @@ def test_body_over_the_cap_is_413_through_http(settings):
     with TestClient(create_app(settings.model_copy(update={"max_body_bytes": 4096})), base_url=LOCAL) as client:
         r = client.post(f"{API}/materials", json={"name": "big", "description": "x" * 5000})
         assert r.status_code == 413 and locs(r) == [["body"]] and "DEMCAL_MAX_BODY_BYTES" in r.text
-        assert client.get(f"{API}/materials").json() == []
+        assert client.get(f"{API}/materials").json()["items"] == []
 
 
 # -- free text and constraints -----------------------------------------------------------------------
@@ -148,7 +148,7 @@ def test_40_mb_prior_source_is_refused(tmp_path):
         body = campaign_body(thesis_material_id(client), priors=_prior("x" * 40_000_000))
         r = client.post(f"{API}/campaigns", json=body)
         assert r.status_code == 422 and ["body", "priors", 0, "source"] in locs(r)
-        assert client.get(f"{API}/campaigns").json() == []
+        assert client.get(f"{API}/campaigns").json()["items"] == []
         ok = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client), priors=_prior("Table 4.2")))
         assert ok.status_code == 201, ok.text
 
@@ -167,7 +167,7 @@ def test_long_constraint_is_refused_naming_it(s2, terms, loc):
         " + friction_pp <= 1000"
     r = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client), constraints=[text]))
     assert r.status_code == 422 and loc in locs(r), r.text
-    assert client.get(f"{API}/campaigns").json() == []
+    assert client.get(f"{API}/campaigns").json()["items"] == []
 
 
 # -- hygiene -----------------------------------------------------------------------------------------
@@ -301,7 +301,7 @@ def test_a_campaign_whose_response_cannot_be_built_leaves_no_row(s2, monkeypatch
     client_500 = TestClient(client.app, base_url=LOCAL, raise_server_exceptions=False)
     r = client_500.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client)))
     assert r.status_code == 500
-    assert client.get(f"{API}/campaigns").json() == []
+    assert client.get(f"{API}/campaigns").json()["items"] == []
 
 
 def test_an_effect_parameter_refuses_a_boolean(client):

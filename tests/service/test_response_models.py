@@ -176,7 +176,7 @@ def test_typed_answers_equal_what_the_builders_return(s2):
             checked.append(url)
 
         check(f"/campaigns/{cid}", routes.status(campaign_id=cid, session=session))
-        check("/campaigns", routes.list_all(session=session, status=None))
+        check("/campaigns", routes.list_all(session=session, status=None, limit=100, offset=0))
         check(f"/campaigns/{cid}/iterations", routes.iterations(campaign_id=cid, session=session))
         check(f"/campaigns/{cid}/history", routes.history(campaign_id=cid, session=session))
         for n in numbers:

@@ -93,7 +93,7 @@ def test_missed_runs_coalesce_into_one_catch_up(tmp_path):
     with running_app(settings) as (client, app):  # restarted at 09:00 on the 20th
         started = Scheduler(app.state.session_factory, settings).tick(datetime(2026, 11, 20, 9, 0))
         assert len(started) == 1
-        (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()
+        (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()["items"]
         assert firing["due_at"] == "2026-11-20T02:00:00Z" and firing["missed_count"] == 2
         assert client.get(f"{API}/schedules/{schedule['id']}").json()["next_run_at"] == "2026-11-21T02:00:00Z"
         assert Scheduler(app.state.session_factory, settings).tick(datetime(2026, 11, 20, 9, 1)) == []
@@ -106,7 +106,7 @@ def test_skip_policy_drops_stale_due_times(s2):
     schedule = _schedule(client, thesis_material_id(client), missed_run_policy="skip")
     _set_next(app, schedule["id"], datetime(2026, 11, 20, 2, 0))
     assert Scheduler(app.state.session_factory, settings).tick(datetime(2026, 11, 20, 9, 0)) == []
-    (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()
+    (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()["items"]
     assert firing["campaign_id"] is None and "policy skip" in firing["skipped_reason"]
     # within the grace period it still fires
     _set_next(app, schedule["id"], datetime(2026, 11, 21, 2, 0))
@@ -123,7 +123,7 @@ def test_only_when_new_measurements_arrived(s2):
     assert len(scheduler.tick(day)) == 1  # first run: everything is new
     _set_next(app, schedule["id"], day + timedelta(days=1))
     assert scheduler.tick(day + timedelta(days=1)) == []
-    firings = client.get(f"{API}/schedules/{schedule['id']}/firings").json()
+    firings = client.get(f"{API}/schedules/{schedule['id']}/firings").json()["items"]
     assert firings[-1]["skipped_reason"] == "no new measurements since the last run"
     added = client.post(f"{API}/materials/{material_id}/measurements", json={
         "test": "dst", "quantity": "residual_shear_stress_pa", "values": [17.0, 18.0], "unit": "kPa",
@@ -152,7 +152,7 @@ def test_deleted_material_skips_with_reason(s2):
     client.delete(f"{API}/materials/{material['id']}")
     _set_next(app, schedule["id"], datetime(2026, 11, 21, 2, 0))
     assert Scheduler(app.state.session_factory, settings).tick(datetime(2026, 11, 21, 2, 0)) == []
-    (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()
+    (firing,) = client.get(f"{API}/schedules/{schedule['id']}/firings").json()["items"]
     assert "no longer exists" in firing["skipped_reason"]
 
 
@@ -187,7 +187,7 @@ def test_schedule_api_crud_and_errors(s2):
     material_id = thesis_material_id(client)
     created = _schedule(client, material_id)
     assert created["missed_run_policy"] == "coalesce" and created["material_id"] == material_id
-    assert [s["id"] for s in client.get(f"{API}/schedules").json()] == [created["id"]]
+    assert [s["id"] for s in client.get(f"{API}/schedules").json()["items"]] == [created["id"]]
     bad_cron = client.post(f"{API}/schedules", json={"name": "x", "cron": "61 * * * *",
                                                       "template": campaign_body(material_id)})
     assert bad_cron.status_code == 422 and error_loc(bad_cron) == ["body", "cron"]
@@ -211,7 +211,7 @@ def test_schedule_api_crud_and_errors(s2):
     bad_preview = client.get(f"{API}/schedules/cron-preview", params={"expr": "0 25 * * *"})
     assert bad_preview.status_code == 422 and error_loc(bad_preview) == ["query", "expr"]
     assert client.delete(f"{API}/schedules/{created['id']}").status_code == 204
-    assert client.get(f"{API}/schedules").json() == []
+    assert client.get(f"{API}/schedules").json()["items"] == []
 
 
 def test_a_scheduled_campaign_can_run_the_loop_unattended(s2):

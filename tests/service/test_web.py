@@ -83,7 +83,7 @@ def test_ui_pages_show_campaign_and_material_data_through_the_api(s2):
                   "reachability", "reachable", "uncertainty_assumed"):
         assert field in campaigns_js
     materials_js = client.get("/static/js/materials.js").text
-    material = client.get("/api/v1/materials").json()[0]["measurements"][0]
+    material = client.get("/api/v1/materials").json()["items"][0]["measurements"][0]
     for field in ("mean", "standard_uncertainty", "values", "reported_replicates", "condition"):
         assert f"m.{field}" in materials_js and field in material
     assert client.get("/ui", follow_redirects=False).status_code in (307, 302)

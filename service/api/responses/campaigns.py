@@ -13,6 +13,7 @@ from service.api.responses.common import (
     Condition,
     Factor,
     Out,
+    Page,
     ParameterValues,
 )
 from service.api.responses.designs import DesignView
@@ -36,6 +37,7 @@ class CampaignSummary(Out):
     runs_failed: int = Field(description="failed or cancelled runs of the current iteration")
     error: str | None = Field(description="why the campaign failed")
     schedule_id: int | None = Field(description="the schedule that created it")
+    owner: str | None = Field(None, description="the user (bearer token name) who made it; null when made without a token")
     created_at: str | None = Field(description="ISO 8601, UTC ('Z')")
     started_at: str | None
     finished_at: str | None
@@ -46,6 +48,12 @@ class CampaignSummary(Out):
                                 description="factor ranges, fixed parameters and options outside their typical "
                                             "ranges, each with the unit slip it probably is "
                                             "(engine.lab.plausibility); accepted, not refused")
+
+
+class CampaignList(Page):
+    """A page of campaigns, newest first."""
+
+    items: list[CampaignSummary]
 
 
 class Response(Out):

@@ -25,6 +25,16 @@ def typed(model: Any) -> dict[str, Any]:
     return {"response_model": model, "response_model_exclude_unset": True}
 
 
+class Page(Out):
+    """What every listing answers besides its items: the total matching the filters (on every page), and
+    the limit and offset this page was cut with. The next page starts at ``offset + limit`` while it is
+    below ``total``."""
+
+    total: int = Field(description="rows matching the filters, whatever the page")
+    limit: int = Field(description="rows per page asked for")
+    offset: int = Field(description="rows skipped before this page")
+
+
 Condition = dict[str, float]
 CONDITION = "the test condition, SI, e.g. {'normal_stress_pa': 24000.0}; {} when the test has none"
 ParameterValues = dict[str, float | None]

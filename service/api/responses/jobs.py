@@ -6,7 +6,7 @@ from typing import Any
 
 from pydantic import BaseModel, Field, field_serializer
 
-from service.api.responses.common import CONDITION, Condition, Out
+from service.api.responses.common import CONDITION, Condition, Out, Page
 from service.vocabulary import JobStatus
 
 
@@ -38,6 +38,7 @@ class JobOut(BaseModel):
     lease_expires_at: datetime | None
     idempotency_key: str | None
     client_id: str
+    owner: str | None = Field(None, description="the user (bearer token name) who made it; null when made without a token")
     campaign_id: int | None
     result_available: bool
     spec: dict[str, Any]
@@ -54,11 +55,8 @@ class JobOut(BaseModel):
         return (value if value.tzinfo else value.replace(tzinfo=timezone.utc)).isoformat().replace("+00:00", "Z")
 
 
-class JobList(BaseModel):
+class JobList(Page):
     items: list[JobOut]
-    total: int
-    limit: int
-    offset: int
 
 
 class ResultProperty(Out):

@@ -5,7 +5,7 @@ from typing import Any
 
 from pydantic import Field
 
-from service.api.responses.common import Out
+from service.api.responses.common import Out, Page
 
 
 class CronPreview(Out):
@@ -34,4 +34,17 @@ class Schedule(Out):
     last_campaign_id: int | None
     template: dict[str, Any] = Field(description="the campaign each firing creates (CampaignCreate)")
     material_id: int | None
+    owner: str | None = Field(None, description="the user (bearer token name) who made it; null when made without a token")
     recent_firings: list[Firing]
+
+
+class ScheduleList(Page):
+    """A page of schedules, by id."""
+
+    items: list[Schedule]
+
+
+class FiringList(Page):
+    """A page of a schedule's firings, oldest first (one per due time: a daily schedule adds 365 a year)."""
+
+    items: list[Firing]

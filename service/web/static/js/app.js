@@ -14,13 +14,13 @@ const ROUTES = [
   [/^\/submit$/, (v) => submitPage(v)],
   [/^\/jobs$/, (v, _, q) => jobsPage(v, q)],
   [/^\/jobs\/(\d+)$/, (v, m) => jobPage(v, m[1])],
-  [/^\/materials$/, (v) => materialsPage(v)],
+  [/^\/materials$/, (v, _, q) => materialsPage(v, q)],
   [/^\/materials\/(\d+)$/, (v, m) => materialPage(v, m[1])],
   [/^\/rigs$/, (v) => rigsPage(v)],
   [/^\/rigs\/(\d+)$/, (v, m) => rigPage(v, m[1])],
   [/^\/campaigns$/, (v, _, q) => campaignsPage(v, q)],
   [/^\/campaigns\/(\d+)$/, (v, m, q) => campaignPage(v, m[1], q)],
-  [/^\/schedules$/, (v) => schedulesPage(v)],
+  [/^\/schedules$/, (v, _, q) => schedulesPage(v, q)],
 ];
 
 function notFound(view, what) {
@@ -53,13 +53,17 @@ async function render() {
     if (ticket !== rendering) return;
     schedule(false);
     if (error.status === 404) notFound(view, error.detail?.[0]?.msg || `There is no page ${path}.`);
-    else { view.replaceChildren(h("section", { className: "card" }, h("h2", {}, "This page could not be shown"), h("p", { className: "bad" }, error.message))); flash(""); }
+    else {
+      // 401: the server has tokens and this browser sent none (or a wrong one): say where it goes
+      const hint = error.status === 401 ? h("p", {}, "This server needs a token: enter yours in the Token field above.") : "";
+      view.replaceChildren(h("section", { className: "card" }, h("h2", {}, "This page could not be shown"), h("p", { className: "bad" }, error.message), hint)); flash("");
+    }
   }
 }
 
 setRenderer(render);
 const tokenInput = document.getElementById("token");
 tokenInput.value = localStorage.getItem("demcal-token") || "";
-tokenInput.addEventListener("change", () => localStorage.setItem("demcal-token", tokenInput.value));
+tokenInput.addEventListener("change", () => { localStorage.setItem("demcal-token", tokenInput.value); render(); });
 window.addEventListener("hashchange", () => { flash(""); render(); });
 render();

@@ -2,7 +2,7 @@
 // picked from the material's measurements, factors (micro parameters or effect strengths), design,
 // fixed parameters and contact effects, options, priors, constraints, automatic mode (the loop adds
 // the indicated effects by itself, up to max_iterations).
-import { api, condition, h, schemas, status, submitForm, table } from "./core.js";
+import { api, condition, h, pageQuery, pager, schemas, status, submitForm, table } from "./core.js";
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
 import { evaluatorSelect, evaluators } from "./evaluators.js";
 import { batteryChecks, batteryOptions, labTests, testSelect } from "./labtests.js";
@@ -32,8 +32,13 @@ function rowList(list, makeRow, initial) {
 
 function field(label, input) { return h("label", {}, label, input); }
 
+const MATERIAL_CHOICES = 200;  // GET /materials answers at most 200 a page (service.api.params.MaterialLimit)
+
 export async function campaignsPage(view, params) {
-  const [campaigns, materials, effects, defs, backends, tests] = await Promise.all([api("/campaigns"), api("/materials"), catalogue(), schemas(), evaluators(), labTests()]);
+  // the form's material choice lists the first MATERIAL_CHOICES materials (the listing's largest page)
+  const [page, materialPage, effects, defs, backends, tests] = await Promise.all([api(`/campaigns?${pageQuery(params)}`),
+    api(`/materials?limit=${MATERIAL_CHOICES}`), catalogue(), schemas(), evaluators(), labTests()]);
+  const campaigns = page.items, materials = materialPage.items;
   const micro = microNames(defs);
   const factorNames = [...micro, ...effects.effects.flatMap((e) => e.parameters.map((p) => `effects.${e.name}.${p.name}`))];
   const chosen = params.get("material") || (materials.find((m) => m.bundled) || materials[0] || {}).id;
@@ -112,10 +117,13 @@ export async function campaignsPage(view, params) {
     const made = await submitForm(form, () => api("/campaigns", { method: "POST", body: campaignBody(form, material, tests) }));
     if (made) location.hash = `#/campaigns/${made.id}`;
   });
-  view.replaceChildren(h("h2", {}, "Campaigns"),
-    h("div", { className: "scroll" }, table(["Id", "Name", "Material", "Evaluator", "Status", "Iteration", "Phase", "Runs"],
+  view.replaceChildren(h("h2", {}, `Campaigns (${page.total})`),
+    h("div", { className: "scroll" }, table(["Id", "Name", "Material", "Evaluator", "Status", "Iteration", "Phase", "Runs", "Owner"],
       campaigns.map((c) => [h("a", { href: `#/campaigns/${c.id}` }, `#${c.id}`), c.name, String(c.material_id), c.evaluator,
-        status(c.status), String(c.current_iteration), c.phase || "–", `${c.runs_succeeded}/${c.runs_total}`]))), form);
+        status(c.status), String(c.current_iteration), c.phase || "–", `${c.runs_succeeded}/${c.runs_total}`, c.owner || "–"]))),
+    pager(page, params, "/campaigns"),
+    materialPage.total > materials.length ? h("p", { className: "muted" }, `The form lists the first ${materials.length} of ${materialPage.total} materials.`) : "",
+    form);
   return campaigns.some((c) => c.status === "running");
 }
 

@@ -15,7 +15,8 @@ export class ApiError extends Error {
 export async function api(path, { method = "GET", body } = {}) {
   const headers = { Accept: "application/json" };
   if (body !== undefined) headers["Content-Type"] = "application/json";
-  if (method !== "GET" && token()) headers.Authorization = `Bearer ${token()}`;
+  // every request: a server with tokens needs one for reads too (unless its operator opened them)
+  if (token()) headers.Authorization = `Bearer ${token()}`;
   const response = await fetch(API + path, { method, headers, body: body === undefined ? undefined : JSON.stringify(body) });
   if (response.status === 204) return null;
   const data = await response.json().catch(() => ({ detail: [{ msg: response.statusText, loc: [] }] }));
@@ -65,6 +66,31 @@ export function table(headers, rows) {
   return h("table", {}, h("thead", {}, h("tr", {}, headers.map((x) => h("th", {}, x)))),
     h("tbody", {}, rows.map((row) => h("tr", {}, row.map((cell) =>
       cell instanceof Node ? h("td", {}, cell) : h("td", { className: typeof cell === "number" ? "num" : "" }, fmt(cell)))))));
+}
+
+// Listings come a page at a time ({items, total, limit, offset}); the page's address keeps the offset
+// (#/materials?offset=50), so a refresh or a shared link shows the same rows.
+export const PAGE_SIZE = 50;
+
+export function pageQuery(params, filters = {}, limit = PAGE_SIZE) {
+  const offset = Math.max(0, parseInt(params.get("offset") || "0", 10) || 0);
+  const query = new URLSearchParams({ ...filters, limit: String(limit), offset: String(offset) });
+  for (const [key, value] of [...query]) if (value === "") query.delete(key);
+  return query;
+}
+
+// "51–100 of 230" with Previous / Next links to the neighbouring pages of the same listing.
+export function pager(page, params, route) {
+  const link = (offset, text) => {
+    const next = new URLSearchParams(params);
+    if (offset > 0) next.set("offset", String(offset)); else next.delete("offset");
+    return h("a", { href: `#${route}${next.size ? "?" + next : ""}`, className: "pager-link" }, text);
+  };
+  const first = page.items.length ? page.offset + 1 : page.offset;
+  const last = page.offset + page.items.length;
+  return h("p", { className: "pager muted" }, page.total ? `${first}–${last} of ${page.total}` : "none yet",
+    page.offset > 0 ? [" · ", link(Math.max(0, page.offset - page.limit), "← previous")] : "",
+    last < page.total ? [" · ", link(last, "next →")] : "");
 }
 
 export function flash(message, kind = "error") {

@@ -1,6 +1,6 @@
 // Jobs: the submission form (micro parameters from the OpenAPI schema, effects from the catalogue),
 // the list with progress, and a job's page (status, one-line error, properties, engineering curves).
-import { api, attempt, condition, h, oneLine, schemas, status, submitForm, table } from "./core.js";
+import { api, attempt, condition, h, oneLine, pageQuery, pager, schemas, status, submitForm, table } from "./core.js";
 import { catalogue, effectPicker, pickedEffects } from "./effects.js";
 import { evaluatorSelect, evaluators } from "./evaluators.js";
 import { curveViews } from "./jobcurves.js";
@@ -72,17 +72,17 @@ function progress(job) {
 // (campaign_id) shows that campaign's.
 const ORIGINS = [["direct", "submitted directly"], ["campaign", "campaign batteries"], ["all", "all"]];
 
+const JOBS_PAGE = 100;
+
 export async function jobsPage(view, params) {
   const filter = params.get("status") || "";
   const campaign = params.get("campaign_id") || "";
   const origin = params.get("origin") || (campaign ? "all" : "direct");
-  const query = new URLSearchParams({ limit: "100", origin });
-  if (filter) query.set("status", filter);
-  if (campaign) query.set("campaign_id", campaign);
+  const query = pageQuery(params, { origin, status: filter, campaign_id: campaign }, JOBS_PAGE);
   const [list, defs] = await Promise.all([api(`/jobs?${query}`), schemas()]);
   // the page's own address keeps the filters, so a refresh or a shared link shows the same list
   const go = (changed) => {
-    const next = new URLSearchParams({ ...Object.fromEntries(params), ...changed });
+    const next = new URLSearchParams({ ...Object.fromEntries(params), offset: "", ...changed });  // a new filter starts at its first page
     for (const [key, value] of [...next]) if (!value) next.delete(key);
     location.hash = `#/jobs${next.size ? "?" + next : ""}`;
   };
@@ -97,7 +97,7 @@ export async function jobsPage(view, params) {
     h("div", { className: "scroll" }, table(["Id", "Test", "Evaluator", "Fidelity", "Seed", "Status", "Progress", "Campaign", "Created"],
       list.items.map((j) => [h("a", { href: `#/jobs/${j.id}` }, `#${j.id}`), j.test, j.evaluator, j.fidelity, String(j.seed),
         status(j.status), progress(j), j.campaign_id ? h("a", { href: `#/campaigns/${j.campaign_id}` }, `#${j.campaign_id}`) : "–",
-        j.created_at.replace("T", " ").slice(0, 19)]))));
+        j.created_at.replace("T", " ").slice(0, 19)]))), pager(list, params, "/jobs"));
   return list.items.some((j) => j.status === "queued" || j.status === "running");  // keep refreshing
 }
 

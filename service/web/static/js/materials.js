@@ -1,11 +1,12 @@
 // Materials: list, measurements (SI, with replicates and uncertainty), adding measurements in any accepted unit.
-import { api, attempt, condition, flash, fmt, h, submitForm, table } from "./core.js";
+import { api, attempt, condition, flash, fmt, h, pageQuery, pager, submitForm, table } from "./core.js";
 import { nameAndUnit } from "./labels.js";
 import { refresh } from "./live.js";
 import { numberInput, numberListField, readNumber, readNumberList } from "./numbers.js";
 
-export async function materialsPage(view) {
-  const materials = await api("/materials");
+export async function materialsPage(view, params = new URLSearchParams()) {
+  const page = await api(`/materials?${pageQuery(params)}`);
+  const materials = page.items;
   const form = h("form", { className: "card" }, h("h3", {}, "New material"),
     h("label", {}, "Name", h("input", { name: "name", required: true })),
     h("label", {}, "Description", h("input", { name: "description" })),
@@ -16,10 +17,10 @@ export async function materialsPage(view) {
     const made = await attempt(() => api("/materials", { method: "POST", body: { name: data.get("name"), description: data.get("description") } }));
     if (made) location.hash = `#/materials/${made.id}`;
   });
-  view.replaceChildren(h("h2", {}, "Materials"),
-    table(["Id", "Name", "Measurements", "Bundled", "Description"],
+  view.replaceChildren(h("h2", {}, `Materials (${page.total})`),
+    table(["Id", "Name", "Measurements", "Bundled", "Owner", "Description"],
       materials.map((m) => [String(m.id), h("a", { href: `#/materials/${m.id}` }, m.name), String(m.measurements.length),
-        m.bundled ? "yes" : "no", m.description])), form);
+        m.bundled ? "yes" : "no", m.owner || "–", m.description])), pager(page, params, "/materials"), form);
 }
 
 export async function materialPage(view, id) {
