@@ -4,7 +4,7 @@ The same calls as GET/POST /api/v1/rigs; errors are one line on stderr and exit 
 """
 from __future__ import annotations
 
-from service.cli_http import call, emit, leaf, read_json, table
+from service.cli_http import call, emit, leaf, page_footer, page_options, page_params, read_json, table
 
 
 def _box(r: dict) -> str:
@@ -20,10 +20,10 @@ def _warnings(r: dict) -> str:
 
 
 def rig_list(args) -> int:
-    data = call(args, "GET", "/rigs")
+    data = call(args, "GET", "/rigs", params=page_params(args))
     rows = [[r["id"], r["name"], _box(r), ", ".join(k for k in ("shear_box", "fill", "angle_of_repose", "anchor")
-                                                     if r.get(k)), r["bundled"]] for r in data]
-    return emit(args, data, table(["id", "name", "shear box", "sections", "bundled"], rows))
+                                                     if r.get(k)), r["bundled"]] for r in data["items"]]
+    return emit(args, data, table(["id", "name", "shear box", "sections", "bundled"], rows) + page_footer(data))
 
 
 def _params(args) -> dict:
@@ -51,7 +51,7 @@ def rig_create(args) -> int:
 def register(subparsers) -> None:
     rig = subparsers.add_parser("rig", help="rigs: the apparatus measurements were made in")
     rsub = rig.add_subparsers(dest="rig_command", required=True)
-    leaf(rsub, "list", rig_list, "list rigs (the bundled ones are read-only)")
+    page_options(leaf(rsub, "list", rig_list, "list rigs (the bundled ones are read-only)"))
     show = leaf(rsub, "show", rig_show, "show a rig's record (SI)")
     show.add_argument("id", type=int)
     show.add_argument("--material", type=int, help="check it against this material's particles")

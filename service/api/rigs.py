@@ -10,6 +10,8 @@ from sqlalchemy.orm import Session
 from engine.lab.bounds import SQLITE_INT_MAX
 from engine.lab.rigs import Rig
 from service.api.openapi import errors
+from service.api.params import Offset, page_limit
+from service.api.responses.common import Page
 from service.db import DbSession, built_then_committed
 from service.errors import NotFound
 from service.materials.store import get_material
@@ -22,6 +24,9 @@ RigId = Annotated[int, Path(ge=1, le=SQLITE_INT_MAX, description="rig id")]
 ForMaterial = Annotated[int | None, Query(ge=1, le=SQLITE_INT_MAX,
                                           description="check the rig against this material's particles: a gap they "
                                                       "fall through is refused, a box too small for them warned")]
+
+
+RigLimit = page_limit(500)
 
 
 class RigOut(Rig):
@@ -58,9 +63,17 @@ def _warnings(session: Session, rig: Rig, material_id: int | None) -> list[str]:
     return particles_warnings(rig, material.particles)
 
 
-@router.get("", response_model=list[RigOut], summary="List rigs, in id order (the bundled ones are seeded at first start)")
-def list_all(session: DbSession) -> list[dict[str, Any]]:
-    return [rig_dict(row) for row in list_rigs(session)]
+class RigList(Page):
+    """A page of rigs, by id."""
+
+    items: list[RigOut]
+
+
+@router.get("", response_model=RigList,
+            summary="List rigs by id (the bundled ones are seeded at first start); a page and the total")
+def list_all(session: DbSession, limit: RigLimit = 100, offset: Offset = 0) -> dict[str, Any]:
+    rows, total = list_rigs(session, limit, offset)
+    return {"items": [rig_dict(row) for row in rows], "total": total, "limit": limit, "offset": offset}
 
 
 @router.post("", response_model=RigOut, status_code=201, summary="Create a rig",

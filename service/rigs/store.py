@@ -7,6 +7,8 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from service.pagination import paged
+
 from engine.lab.errors import SpecFieldError
 from engine.lab.rigs import Rig, bundled_rigs, check_for_particles, rig_json
 from engine.particles.description import Particles
@@ -28,8 +30,9 @@ def record_of(row: RigRow) -> Rig:
     return Rig.model_validate(row.record)
 
 
-def list_rigs(session: Session) -> list[RigRow]:
-    return list(session.scalars(select(RigRow).order_by(RigRow.id)))
+def list_rigs(session: Session, limit: int, offset: int) -> tuple[list[RigRow], int]:
+    """A page of rigs by id, and the total."""
+    return paged(session, RigRow, order=(RigRow.id,), limit=limit, offset=offset)
 
 
 def find_by_name(session: Session, name: str) -> RigRow | None:

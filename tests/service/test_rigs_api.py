@@ -21,7 +21,7 @@ def _thesis_record(name: str = "lab 300 mm box") -> dict:
 
 
 def _rig_id(client, name: str) -> int:
-    return next(r["id"] for r in client.get(f"{API}/rigs").json() if r["name"] == name)
+    return next(r["id"] for r in client.get(f"{API}/rigs").json()["items"] if r["name"] == name)
 
 
 def _gravel(client, rig: str | None = None, name: str = "gravel 8-16 mm") -> dict:
@@ -37,7 +37,7 @@ def _gravel(client, rig: str | None = None, name: str = "gravel 8-16 mm") -> dic
 
 def test_bundled_rigs_are_seeded_and_the_thesis_material_names_its_rig(s2):
     client, _, _ = s2
-    rigs = {r["name"]: r for r in client.get(f"{API}/rigs").json()}
+    rigs = {r["name"]: r for r in client.get(f"{API}/rigs").json()["items"]}
     assert rigs[THESIS_RIG]["bundled"] and rigs[APPENDIX_A_RIG]["bundled"]
     assert rigs[THESIS_RIG]["shear_box"]["container_diameter_m"] == 0.590  # the thesis's 590 mm box
     assert rigs[APPENDIX_A_RIG]["shear_box"]["container_diameter_m"] == 0.400  # Table A.7: radius 200 mm
@@ -60,7 +60,7 @@ def test_create_read_list(s2):
     assert rig["shear_box"]["container_diameter_m"] == 0.300
     shown = client.get(f"{API}/rigs/{rig['id']}").json()
     assert shown["name"] == "lab 300 mm box" and shown["fill"]["level_height_m"] == 0.200
-    assert "lab 300 mm box" in [r["name"] for r in client.get(f"{API}/rigs").json()]
+    assert "lab 300 mm box" in [r["name"] for r in client.get(f"{API}/rigs").json()["items"]]
     # a user's rig can be replaced; a second rig of the same name cannot be created
     body["description"] = "measured again"
     assert client.put(f"{API}/rigs/{rig['id']}", json=body).json()["description"] == "measured again"
@@ -81,7 +81,7 @@ def test_bad_rig_is_refused_naming_the_field(s2, section, key, value, loc):
     response = client.post(f"{API}/rigs", json=body)
     assert response.status_code == 422
     assert response.json()["detail"][0]["loc"] == loc
-    assert "lab 300 mm box" not in [r["name"] for r in client.get(f"{API}/rigs").json()]
+    assert "lab 300 mm box" not in [r["name"] for r in client.get(f"{API}/rigs").json()["items"]]
 
 
 def test_bundled_rig_edit_is_refused(s2):

@@ -22,7 +22,7 @@ def test_0003_upgrades_a_populated_0002_database(tmp_path):
                 "VALUES (:n, '', '', :b, '{}', '2026-11-22 00:00:00', '2026-11-22 00:00:00')"), {"n": name, "b": bundled})
     engine.dispose()
     with running_app(settings) as (client, _):  # upgrades to head, seeds the bundled rigs and material
-        materials = {m["name"]: m for m in client.get(f"{API}/materials").json()}
+        materials = {m["name"]: m for m in client.get(f"{API}/materials").json()["items"]}
         assert materials[THESIS_MATERIAL]["rig"] == "thesis-590mm-shear-box"
         assert materials[THESIS_MATERIAL]["particles"]["solid_density_kg_m3"] == 2586.5
         assert materials["old gravel"]["rig"] is None and materials["old gravel"]["particles"] is None
