@@ -18,7 +18,7 @@ down_revision = "0003_rigs"
 branch_labels = None
 depends_on = None
 
-OWNED = ("jobs", "materials", "campaigns", "schedules")
+OWNED = ("jobs", "materials", "campaigns", "schedules", "rigs")
 
 
 def upgrade() -> None:

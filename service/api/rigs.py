@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Path, Query
+from fastapi import APIRouter, Depends, Path, Query
 from pydantic import BaseModel, ConfigDict, Field
 from sqlalchemy.orm import Session
 
@@ -14,8 +14,10 @@ from service.api.params import Offset, page_limit
 from service.api.responses.common import Page
 from service.db import DbSession, built_then_committed
 from service.errors import NotFound
+from service.ownership import Caller, caller, owner_of
 from service.materials.store import get_material
-from service.rigs.store import create_rig, list_rigs, particles_warnings, record_of, replace_rig, rig_dict
+from service.rigs.store import (create_rig, list_rigs, particles_warnings, record_of, replace_rig, require_editable,
+                                rig_dict)
 from service.models.rig import Rig as RigRow
 
 router = APIRouter(prefix="/rigs", tags=["rigs"])
@@ -35,6 +37,7 @@ class RigOut(Rig):
     model_config = ConfigDict(extra="forbid", strict=False)
     id: int
     bundled: bool
+    owner: str | None = Field(None, description="the user who made it (none: bundled, or made without a token)")
     created_at: str
     updated_at: str
     warnings: list[str] = Field(default_factory=list, description="sizes outside the direct-shear standards' "
@@ -79,9 +82,10 @@ def list_all(session: DbSession, limit: RigLimit = 100, offset: Offset = 0) -> d
 @router.post("", response_model=RigOut, status_code=201, summary="Create a rig",
              responses=errors(404, 409, c404="the material named by ?material_id does not exist",
                               c409="a rig with this name exists"))
-def create(body: Rig, session: DbSession, material_id: ForMaterial = None):
+def create(body: Rig, session: DbSession, material_id: ForMaterial = None,
+           owner: str | None = Depends(owner_of)):
     warnings = _warnings(session, body, material_id)
-    row = create_rig(session, body)
+    row = create_rig(session, body, owner=owner)
     return built_then_committed(session, lambda: rig_dict(row, warnings), RigOut)
 
 
@@ -93,9 +97,13 @@ def show(rig_id: RigId, session: DbSession, material_id: ForMaterial = None):
 
 @router.put("/{rig_id}", response_model=RigOut,
             summary="Replace a rig's record (not a bundled one, nor one a material names)",
-            responses=errors(409, c409="the rig is bundled (read-only) or a material's, or another rig has the name"))
-def replace(rig_id: RigId, body: Rig, session: DbSession, material_id: ForMaterial = None):
+            responses=errors(403, 409, c403="the rig is another user's",
+                             c409="the rig is bundled (read-only) or a material's, or another rig has the name"))
+def replace(rig_id: RigId, body: Rig, session: DbSession, material_id: ForMaterial = None,
+            who: Caller = Depends(caller)):
     row = _rig_or_404(session, rig_id)
+    require_editable(row)  # bundled: read-only for everyone (409), administrators included
+    who.require(row.owner, f"rig {rig_id}", ["path", "rig_id"])
     warnings = _warnings(session, body, material_id)
     replace_rig(session, row, body)
     return built_then_committed(session, lambda: rig_dict(row, warnings), RigOut)

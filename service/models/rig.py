@@ -23,5 +23,7 @@ class Rig(Base):
     # bundled records (the thesis's and Appendix A's rigs) are read-only: results name them
     bundled: Mapped[bool] = mapped_column(Boolean, default=False, nullable=False)
     record: Mapped[dict[str, Any]] = mapped_column(JSON, nullable=False)
+    # the user (bearer token name) who made it; None without a token (service.ownership)
+    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)
     created_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, nullable=False)
     updated_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, onupdate=utcnow, nullable=False)

@@ -19,7 +19,7 @@ from service.models.rig import Rig as RigRow
 
 def rig_dict(row: RigRow, warnings: list[str] | None = None) -> dict[str, Any]:
     """The API view: the record's fields, with the row's id, bundled flag and times."""
-    out = {**row.record, "id": row.id, "bundled": row.bundled,
+    out = {**row.record, "id": row.id, "bundled": row.bundled, "owner": row.owner,
            "created_at": row.created_at.isoformat() + "Z", "updated_at": row.updated_at.isoformat() + "Z"}
     if warnings is not None:
         out["warnings"] = warnings
@@ -57,10 +57,10 @@ def particles_warnings(rig: Rig, particles: dict | None, where: str = "") -> lis
         raise Invalid(exc.message, f"{where}{exc.field}") from None
 
 
-def create_rig(session: Session, rig: Rig, *, bundled: bool = False) -> RigRow:
+def create_rig(session: Session, rig: Rig, *, bundled: bool = False, owner: str | None = None) -> RigRow:
     if find_by_name(session, rig.name) is not None:
         raise Conflict(f"a rig named {rig.name!r} exists", "name")
-    row = RigRow(name=rig.name, bundled=bundled, record=rig_json(rig))
+    row = RigRow(name=rig.name, bundled=bundled, record=rig_json(rig), owner=owner)
     session.add(row)
     return row
 

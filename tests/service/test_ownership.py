@@ -214,3 +214,21 @@ def test_roles_on_named_tokens(settings):
     for bad in (f"alice:{ALICE}:boss", f"alice:{ALICE}:admin:x"):
         with pytest.raises(SystemExit, match="name:token or name:token:admin"):
             token_users(settings.model_copy(update={"tokens": bad}))
+
+
+def test_a_user_cannot_replace_another_s_rig_and_a_bundled_one_is_read_only_for_all(team):
+    """Rigs are owned like materials: bob may not replace alice's record (403); the bundled rigs stay 409 for
+    everyone, the administrator included (results name them)."""
+    from test_rigs_api import _thesis_record
+
+    client, _ = team
+    made = client.post(f"{API}/rigs", json=_thesis_record("alice 300 mm box"), headers=auth(ALICE))
+    assert made.status_code == 201 and made.json()["owner"] == "alice", made.text
+    rig = made.json()
+    body = {**_thesis_record("alice 300 mm box"), "description": "changed by bob"}
+    r = client.put(f"{API}/rigs/{rig['id']}", json=body, headers=auth(BOB))
+    assert r.status_code == 403 and r.json()["detail"][0]["loc"] == ["path", "rig_id"], r.text
+    assert client.put(f"{API}/rigs/{rig['id']}", json=body, headers=auth(ALICE)).status_code == 200
+    bundled = next(x for x in client.get(f"{API}/rigs", headers=auth(ROOT)).json()["items"] if x["bundled"])
+    assert client.put(f"{API}/rigs/{bundled['id']}", json={**_thesis_record(bundled["name"])},
+                      headers=auth(ROOT)).status_code == 409
