@@ -18,7 +18,10 @@ down_revision = "0003_rigs"
 branch_labels = None
 depends_on = None
 
-OWNED = ("jobs", "materials", "campaigns", "schedules", "rigs")
+OWNED = ("jobs", "materials", "campaigns", "schedules")
+# rigs: altered in place, not through a batch copy: SQLite's batch mode recreates the table, and dropping
+# the old one fails while materials.rig_id references it (SQLite 3.35+ adds and drops columns natively)
+OWNED_IN_PLACE = ("rigs",)
 
 
 def upgrade() -> None:
@@ -27,9 +30,13 @@ def upgrade() -> None:
             batch.add_column(sa.Column("owner", sa.String(100), nullable=True))
     with op.batch_alter_table("schedules") as batch:
         batch.add_column(sa.Column("client_id", sa.String(100), nullable=True))
+    for table in OWNED_IN_PLACE:
+        op.add_column(table, sa.Column("owner", sa.String(100), nullable=True))
 
 
 def downgrade() -> None:
+    for table in OWNED_IN_PLACE:
+        op.drop_column(table, "owner")
     with op.batch_alter_table("schedules") as batch:
         batch.drop_column("client_id")
     for table in reversed(OWNED):
