@@ -24,6 +24,10 @@ from __future__ import annotations
 import math
 
 SQRT_FIVE_SIXTHS = math.sqrt(5.0 / 6.0)
+# LIGGGHTS refuses coefficientRestitution <= 0.05 ("0.05 < coefficientRestitution <= 1 required",
+# src/global_properties.cpp, seen running the export): the smallest value it takes, just above the bound
+LIGGGHTS_MIN_RESTITUTION = 0.05
+LIGGGHTS_SMALLEST_RESTITUTION = 0.0500001
 
 
 def _positive(name: str, value: float) -> float:
@@ -112,6 +116,11 @@ def hertz_restitution_for_damping_ratio(damping_ratio: float) -> float:
         raise ValueError(f"damping ratio {zeta:g} exceeds sqrt(5/6) = {SQRT_FIVE_SIXTHS:.4f}, the strongest "
                          "dashpot LIGGGHTS' hertz model can express (restitution 0)")
     return math.exp(-math.pi * b / math.sqrt(1.0 - b * b))
+
+
+def hertz_damping_ratio_of_restitution(restitution: float) -> float:
+    """The damping ratio LIGGGHTS' hertz dashpot gives at restitution e: zeta = -sqrt(5/6) beta(e)."""
+    return -SQRT_FIVE_SIXTHS * hertz_beta(restitution)
 
 
 def hertz_effective_moduli_pa(e1_pa: float, nu1: float, e2_pa: float, nu2: float) -> tuple[float, float]:

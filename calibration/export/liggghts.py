@@ -157,7 +157,18 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
         nu_wall = hertz.wall_poisson_ratio if hertz.wall_poisson_ratio is not None else hertz.poisson_ratio
         young = " ".join([_fmt(hertz.young_modulus_pa)] * n_part + [_fmt(e_wall)])
         poisson = " ".join([_fmt(hertz.poisson_ratio)] * n_part + [_fmt(nu_wall)])
-        e_rest = cv.hertz_restitution_for_damping_ratio(zn)
+        zeta_max = cv.hertz_damping_ratio_of_restitution(cv.LIGGGHTS_SMALLEST_RESTITUTION)
+        if zn < zeta_max:
+            e_rest = cv.hertz_restitution_for_damping_ratio(zn)
+        else:
+            e_rest = cv.LIGGGHTS_SMALLEST_RESTITUTION
+            inexact.append(
+                f"Hertz damping ratio {zn:g}: LIGGGHTS' hertz takes coefficientRestitution > "
+                f"{cv.LIGGGHTS_MIN_RESTITUTION:g} only, i.e. a damping ratio of at most {zeta_max:.3f}. Nearest: "
+                f"restitution {e_rest:g} (damping ratio {zeta_max:.3f} normal and tangential); expected difference: "
+                "less dissipation per collision (faster, bouncier settling, possibly a slightly denser fill); the "
+                "quasi-static stiffness is unchanged. Alternatively use demcal's damping ratio <= "
+                f"{zeta_max:.3f} in the calibration.")
         rest = {k: e_rest for k in pairs}
         props += [f"fix demcal_E all property/global youngsModulus peratomtype {young}",
                   f"fix demcal_nu all property/global poissonsRatio peratomtype {poisson}",
@@ -169,7 +180,8 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
             f"(wall type: {_fmt(e_wall)} Pa, {_fmt(nu_wall)}); both codes combine them to Y* = {_fmt(y_pp)} Pa, "
             f"G* = {_fmt(g_pp)} Pa particle-particle. demcal's kp/kw are not used by a Hertz contact",
             f"coefficientRestitution {_fmt(e_rest)} = exp(-pi b/sqrt(1-b^2)), b = zeta_n sqrt(6/5): LIGGGHTS' "
-            f"hertz dashpot -2 sqrt(5/6) beta sqrt(Sn m*) then equals demcal's 2 zeta sqrt(Sn m*), zeta = {_fmt(zn)}",
+            f"hertz dashpot -2 sqrt(5/6) beta sqrt(Sn m*) then equals demcal's 2 zeta sqrt(Sn m*) at zeta = "
+            f"{_fmt(cv.hertz_damping_ratio_of_restitution(e_rest))} (demcal: {_fmt(zn)})",
         ]
         model = "model hertz tangential history"
         if zt == 0.0:
@@ -277,15 +289,19 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
         t = cl.template()
         spheres = " ".join(f"{_fmt(x)} {_fmt(y)} {_fmt(z)} {_fmt(r)}"
                            for (x, y, z), r in zip(t.sphere_offsets_m, t.sphere_radii_m))
+        ixx, iyy, izz = (float(v) for v in t.principal_inertia_kg_m2(rho))
         templates.append(f"fix demcal_pt{type_id} all particletemplate/multisphere {seeds[len(p.spheres) + k]} "
                          f"atom_type {type_id} density constant {_fmt(rho)} nspheres {t.n_spheres} ntry 1000000 "
-                         f"spheres {spheres} type {k + 1}")
+                         f"spheres {spheres} type {k + 1} mass {_fmt(t.mass_kg(rho))} use_density "
+                         f"inertia_tensor {_fmt(ixx)} 0 0 {_fmt(iyy)} 0 {_fmt(izz)}")
         fractions.append(f"demcal_pt{type_id} {_fmt(cl.volume_fraction)}")
     if p.clumps:
         conv.append("clumps: one multisphere template per clump (spheres in demcal's principal frame, CoM at the "
-                    "origin); LIGGGHTS estimates each body's mass and inertia by Monte Carlo (ntry 1e6, ~0.1 % "
-                    "error) where demcal integrates the union exactly; fix multisphere integrates the bodies "
-                    "(do not add nve/sphere for them); m* is the body mass in both codes")
+                    "origin) with demcal's exact mass and principal inertia of the union (overlaps counted once) given "
+                    "by 'mass ... use_density inertia_tensor', so LIGGGHTS' Monte Carlo estimate is not used; "
+                    "fix multisphere integrates the bodies and sets their spheres itself, so 'fix integ all "
+                    "nve/sphere' stays for the single spheres (checked in LIGGGHTS 3.8.0: a clump's sphere "
+                    "distances stay exact and single spheres need it to move); m* is the body mass in both codes")
         for cl in p.clumps:
             t = cl.template()
             conv.append(f"  {cl.name}: {t.n_spheres} spheres, solid volume {_fmt(t.volume_m3)} m3 (overlaps "
@@ -302,10 +318,13 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
     ]
     header += [f"#   {i + 1}: {names[i]} ({kinds[i]}, body mass {_fmt(masses[i])} kg)" for i in range(n_part)]
     header += [f"#   {wall}: walls (fix wall/gran ${{demcal_wall_model}} primitive type "
-               "${{demcal_wall_type}} <shape> ${{demcal_wall_settings}}, or ... mesh n_meshes 1 meshes <id> "
-               "${{demcal_wall_settings}})",
+               "${demcal_wall_type} <shape> ${demcal_wall_settings}, or ... mesh n_meshes 1 meshes <id> "
+               "${demcal_wall_settings})",
                "# Conversions made:"]
     header += [f"#   - {line}" for line in conv]
+    if material.notes:
+        header.append("# Particles as given to the export:")
+        header += [f"#   - {line}" for line in material.notes]
     if inexact:
         header.append("# NOT EXACTLY EXPRESSIBLE IN LIGGGHTS-PUBLIC (read before use):")
         header += [f"#   ! {line}" for line in inexact]

@@ -103,6 +103,8 @@ class ExportMaterial(BaseModel):
     particles: ParticleSpec
     contact: ContactSpec
     effects: dict[str, dict[str, Any]] = Field(default_factory=dict)
+    notes: list[str] = Field(default_factory=list, max_length=50,
+                             description="how the particles were derived (e.g. a size range discretised)")
 
     @field_validator("effects")
     @classmethod
@@ -174,6 +176,13 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
                                          volume_fraction=shape.volume_fraction * v / sum(volumes)))
         else:
             raise ValueError(f"fidelity {fidelity}: shape {shape.shape!r} has no export")
+    notes = []
+    for shape in preset.shapes:
+        if shape.template is None and shape.radius_min_m != shape.radius_max_m:
+            notes.append(f"{shape.shape} radii {shape.radius_min_m * 1000:g}-{shape.radius_max_m * 1000:g} mm "
+                         f"(demcal: truncated Gaussian) as {bins_per_range} discrete sizes at the bin centres"
+                         + ("; demcal draws the two spheres of a double clump independently, the export makes "
+                            "them equal" if shape.shape == "double_clump" else ""))
     total = sum(s.volume_fraction for s in spheres) + sum(c.volume_fraction for c in clumps)
     for item in (*spheres, *clumps):  # exact sum after float rounding of the shares
         item.volume_fraction = item.volume_fraction / total
@@ -188,6 +197,7 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
             friction_pp=parameters.friction_pp, friction_pw=parameters.friction_pw,
             local_damping=parameters.local_damping),
         effects={k: dict(v) for k, v in parameters.effects.items()},
+        notes=notes,
     )
 
 

@@ -100,8 +100,8 @@ compute rad all property/atom radius
 variable top atom z+c_rad
 compute ztop all reduce max v_top
 variable mass_total equal mass(all)
-variable ke_ratio equal (ke+c_rke)/(v_mass_total*9.81*{mean_diameter_m:.8g})
-thermo_style custom step time atoms ke c_rke v_ke_ratio
+variable ke_ratio equal (ke+c_rke)/((v_mass_total+1e-30)*9.81*{mean_diameter_m:.8g})
+thermo_style custom step time atoms ke c_rke v_ke_ratio c_ztop
 thermo       {chunk_settle * 10}
 thermo_modify lost ignore norm no
 run 1
@@ -219,7 +219,7 @@ def check_syntax(export: LiggghtsExport, steps: int = 10) -> str:
     exe = liggghts_executable()
     if exe is None:
         raise FileNotFoundError("liggghts not found (apt-get install -y liggghts)")
-    integrate = "" if export.has_clumps else "fix integ all nve/sphere\n"
+    integrate = "fix integ all nve/sphere\n"
     main = f"""atom_style granular
 atom_modify map array
 boundary f f f
