@@ -197,7 +197,9 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
     mu = {(i, j): (c.friction_pw if wall in (i, j) else c.friction_pp) for i, j in pairs}
     props.append(f"fix demcal_mu all property/global coefficientFriction peratomtypepair {n} {_pair_table(mu, n)}")
     conv.append(f"coefficientFriction {_fmt(c.friction_pp)} particle-particle, {_fmt(c.friction_pw)} particle-wall "
-                "(the Coulomb limit is mu times the normal force with its dashpot part in both codes)")
+                "(the Coulomb limit is mu times the normal force with its dashpot part in both codes; where the "
+                "dashpot makes that force tensile, at the end of a contact, demcal's limit is 0 and LIGGGHTS' "
+                "mu |Fn|)")
 
     # rolling resistance
     rolling = None

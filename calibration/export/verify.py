@@ -73,6 +73,7 @@ class Comparison:
     scatter: float  # standard error of that difference, relative
     tolerance: float
     holds: bool
+    gating: bool = True  # False: printed for information, not part of the verdict
 
 
 @dataclass
@@ -86,7 +87,8 @@ class VerifyReport:
 
     @property
     def holds(self) -> bool:
-        return bool(self.comparisons) and all(c.holds for c in self.comparisons)
+        gating = [c for c in self.comparisons if c.gating]
+        return bool(gating) and all(c.holds for c in gating)
 
     def to_dict(self) -> dict:
         return {**asdict(self), "holds": self.holds}
@@ -101,12 +103,13 @@ class VerifyReport:
         for c in self.comparisons:
             lines.append(f"  {c.quantity:34s} {c.demcal_mean:11.5g} +- {c.demcal_sd:<6.3g} {c.liggghts_mean:11.5g} +- "
                          f"{c.liggghts_sd:<6.3g} {c.difference * 100:+6.1f}% {c.scatter * 100:6.1f}% {c.tolerance * 100:4.0f}% "
-                         f"{'holds' if c.holds else 'DIFFERS'}")
+                         f"{'holds' if c.holds else 'DIFFERS'}{'' if c.gating else ' (information)'}")
         for note in self.inexact:
             lines.append(f"  not exact in LIGGGHTS: {note}")
-        lines.append(f"  hand-off {'HOLDS' if self.holds else 'DOES NOT HOLD'} (bulk density within "
-                     f"{BULK_TOLERANCE * 100:g} %, E' within {MODULUS_TOLERANCE * 100:g} %, or within "
-                     f"{SCATTER_MULTIPLE:g} x the difference's standard error)")
+        lines.append(f"  hand-off {'HOLDS' if self.holds else 'DOES NOT HOLD'}: bulk density and porosity within "
+                     f"{BULK_TOLERANCE * 100:g} %, E' (mean of cycles 2..N) within {MODULUS_TOLERANCE * 100:g} %, each "
+                     f"or within {SCATTER_MULTIPLE:g} x the difference's standard error; E' per window is judged the "
+                     "same way but for information (five more 2-sigma tests would fail one in four agreeing runs)")
         return "\n".join(lines)
 
 
@@ -196,4 +199,5 @@ def verify_export(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: 
         report.comparisons.append(_compare(f"E' at {mid / 1000:.1f} kPa (window {k + 1})",
                                            [f.window_modulus_pa[k] for f in dem], [f.window_modulus_pa[k] for f in lig],
                                            MODULUS_TOLERANCE))
+        report.comparisons[-1].gating = False
     return report
