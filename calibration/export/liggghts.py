@@ -191,7 +191,8 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
             if abs(zt - zn) > 1e-12:
                 inexact.append(
                     f"Shear damping ratio {zt:g} differs from the normal one {zn:g}: LIGGGHTS' hertz damps the "
-                    f"tangential direction with the normal beta, so its shear damping ratio is {zn:g}. Nearest: "
+                    f"tangential direction with the normal beta, so its shear damping ratio is "
+                    f"{cv.hertz_damping_ratio_of_restitution(e_rest):.3g}. Nearest: "
                     "this include (tangential dashpot at the normal ratio); expected difference: the dissipation of "
                     "sliding contacts, small in quasi-static tests.")
     mu = {(i, j): (c.friction_pw if wall in (i, j) else c.friction_pp) for i, j in pairs}

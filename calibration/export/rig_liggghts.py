@@ -9,7 +9,9 @@ highest sphere top, then N cycles of loading at constant lid speed to the CCT st
 zero force, sampled every 20 um of lid travel. Set-up differences that remain: LIGGGHTS' container is
 one primitive cylinder (demcal's is two halves with a 1 mm gap closed by rings, aligned during the
 CCT) and the lid is a square mesh plate covering the cylinder (demcal: a disc of the container's
-radius). The include itself is ``calibration.export.liggghts.render``'s text, unchanged.
+radius), and a clump is deleted when any of its spheres has its centre above the level (LIGGGHTS' fix
+multisphere removes a body with its first sphere; demcal deletes by the body's centre of mass). The
+include itself is ``calibration.export.liggghts.render``'s text, unchanged.
 """
 from __future__ import annotations
 
@@ -62,11 +64,30 @@ def screening_rig(cct_cycles: int, speed_factor: float | None = None) -> Rig:
                LID_TRAVEL_PER_SAMPLE_M, LID_START_GAP_FRACTION)
 
 
+@dataclass(frozen=True)
+class ClumpBody:
+    """The one clump of a clump material in the rig: LIGGGHTS' ``mass(all)`` is refused with fix multisphere,
+    so the bulk mass is counted as atoms / spheres per body x the body's mass."""
+
+    spheres_per_body: int
+    mass_kg: float
+
+
 def rig_input(export: LiggghtsExport, rig: Rig, seed_prime: int, r_min_m: float, r_max_m: float,
-              mean_diameter_m: float) -> str:
-    """The LIGGGHTS main input: reads ``material.in`` (the export) and runs fill + CCT."""
-    if export.has_clumps:
-        raise ValueError("the LIGGGHTS screening rig runs spheres only (multisphere fill not verified yet)")
+              mean_diameter_m: float, clump: ClumpBody | None = None) -> str:
+    """The LIGGGHTS main input: reads ``material.in`` (the export) and runs fill + CCT. A material with
+    clumps runs with exactly one clump shape (``clump``) and no single spheres, as the screening rig's."""
+    if export.has_clumps and clump is None:
+        raise ValueError("a clump material needs its clump body (spheres per body, mass) in the rig")
+    if clump is None:
+        energy = f"""compute rke all erotate/sphere
+variable mass_total equal mass(all)
+variable ke_ratio equal (ke+c_rke)/((v_mass_total+1e-30)*9.81*{mean_diameter_m:.8g})"""
+    else:
+        energy = f"""compute kems all ke/multisphere
+compute rkems all erotate/multisphere
+variable mass_total equal atoms/{clump.spheres_per_body}*{clump.mass_kg:.10g}
+variable ke_ratio equal (c_kems+c_rkems)/((v_mass_total+1e-30)*9.81*{mean_diameter_m:.8g})"""
     r = rig.container_radius_m
     solid = rig.fill_margin * rig.expected_solid_fraction * rig.area_m2 * rig.packing_height_m
     column_h = solid / (rig.column_solid_fraction * rig.area_m2)
@@ -95,13 +116,11 @@ fix cyl all wall/gran ${{demcal_wall_model}} primitive type ${{demcal_wall_type}
 region ins cylinder z 0.0 0.0 {r:.6g} 0.0 {column_h:.6g} units box
 fix ins all insert/pack seed {seed_prime} distributiontemplate demcal_pdd maxattempt 1000 insert_every once &
     overlapcheck yes all_in yes vel constant 0. 0. 0. region ins volumefraction_region {rig.column_solid_fraction:.6g}
-compute rke all erotate/sphere
+{energy}
 compute rad all property/atom radius
 variable top atom z+c_rad
 compute ztop all reduce max v_top
-variable mass_total equal mass(all)
-variable ke_ratio equal (ke+c_rke)/((v_mass_total+1e-30)*9.81*{mean_diameter_m:.8g})
-thermo_style custom step time atoms ke c_rke v_ke_ratio c_ztop
+thermo_style custom step time atoms v_ke_ratio c_ztop
 thermo       {chunk_settle * 10}
 thermo_modify lost ignore norm no
 run 1
@@ -182,7 +201,8 @@ class RigRun:
 
 
 def run_rig(export: LiggghtsExport, rig: Rig, seed_prime: int, r_min_m: float, r_max_m: float,
-            mean_diameter_m: float, workdir: str | None = None, timeout_s: float = 3600.0) -> RigRun:
+            mean_diameter_m: float, workdir: str | None = None, timeout_s: float = 3600.0,
+            clump: ClumpBody | None = None) -> RigRun:
     import time
 
     from engine.io.stl import plate, write_stl
@@ -194,7 +214,7 @@ def run_rig(export: LiggghtsExport, rig: Rig, seed_prime: int, r_min_m: float, r
     with open(os.path.join(work, "material.in"), "w") as fh:
         fh.write(export.text)
     with open(os.path.join(work, "in.rig"), "w") as fh:
-        fh.write(rig_input(export, rig, seed_prime, r_min_m, r_max_m, mean_diameter_m))
+        fh.write(rig_input(export, rig, seed_prime, r_min_m, r_max_m, mean_diameter_m, clump))
     write_stl(os.path.join(work, "lid.stl"), plate(rig.container_radius_m * 1.2))
     t0 = time.monotonic()
     with open(os.path.join(work, "screen.txt"), "w") as screen:
@@ -208,8 +228,9 @@ def run_rig(export: LiggghtsExport, rig: Rig, seed_prime: int, r_min_m: float, r
     filled = [ln for ln in log.splitlines() if ln.startswith("FILLED ")][-1]
     fields = dict(kv.split("=") for kv in filled.split()[1:])
     data = np.loadtxt(os.path.join(work, "lid.txt"), ndmin=2)
+    atoms = int(fields["atoms"])
     return RigRun(packing_height_m=float(fields["height"]), bulk_mass_kg=float(fields["mass"]),
-                  particle_count=int(fields["atoms"]), time_s=data[:, 0], lid_z_m=data[:, 1],
+                  particle_count=atoms if clump is None else atoms // clump.spheres_per_body, time_s=data[:, 0], lid_z_m=data[:, 1],
                   lid_force_n=data[:, 2], workdir=work, wall_time_s=wall)
 
 

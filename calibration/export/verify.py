@@ -22,7 +22,7 @@ import numpy as np
 
 from calibration.export.liggghts import _primes_above, render
 from calibration.export.material import ExportMaterial
-from calibration.export.rig_liggghts import Rig, run_rig, screening_rig
+from calibration.export.rig_liggghts import ClumpBody, Rig, run_rig, screening_rig
 
 BULK_TOLERANCE = 0.02
 MODULUS_TOLERANCE = 0.10
@@ -33,10 +33,21 @@ def to_micro_parameters(material: ExportMaterial):
     """The lab's ``MicroParameters`` for the material; the screening rig takes mono-sized spheres."""
     from engine.lab.spec import MicroParameters
 
+    from engine.lab.shape import aspect_ratio_of
+
     p, c = material.particles, material.contact
-    if p.clumps or len(p.spheres) != 1:
-        raise ValueError("verify-export runs the screening rig, which takes one sphere size; this material has "
-                         f"{len(p.spheres)} sphere size(s) and {len(p.clumps)} clump(s)")
+    if len(p.spheres) + len(p.clumps) != 1:
+        raise ValueError("verify-export runs the screening rig, which takes one sphere size or one two-sphere "
+                         f"clump; this material has {len(p.spheres)} sphere size(s) and {len(p.clumps)} clump(s)")
+    if p.clumps:
+        template = p.clumps[0].template()
+        radii = np.asarray(template.sphere_radii_m)
+        if template.n_spheres != 2 or radii[0] != radii[1]:
+            raise ValueError("verify-export: the screening rig's clumps are two equal spheres "
+                             f"(clump_aspect_ratio); {p.clumps[0].name} has {template.n_spheres} sphere(s)")
+        radius, aspect = template.equivalent_radius_m, aspect_ratio_of(template)
+    else:
+        radius, aspect = p.spheres[0].radius_m, 1.0
     if c.damping_ratio_normal != c.damping_ratio_shear:
         raise ValueError("verify-export: demcal's lab takes one damping ratio for both directions; the material "
                          f"has {c.damping_ratio_normal} normal and {c.damping_ratio_shear} shear")
@@ -45,7 +56,7 @@ def to_micro_parameters(material: ExportMaterial):
         wall_stiffness_n_per_m=c.wall_stiffness_n_per_m,
         shear_to_normal_stiffness_ratio=c.shear_to_normal_stiffness_ratio, friction_pp=c.friction_pp,
         friction_pw=c.friction_pw, damping_ratio=c.damping_ratio_normal, local_damping=c.local_damping,
-        particle_radius_m=p.spheres[0].radius_m, effects=material.effects)
+        particle_radius_m=radius, clump_aspect_ratio=aspect, effects=material.effects)
 
 
 @dataclass
@@ -135,12 +146,20 @@ def _demcal_packing(params, seed: int, cct_cycles: int, speed_factor: float | No
                           time.monotonic() - t0)
 
 
-def _liggghts_packing(export, rig: Rig, params, seed: int, workdir: str | None) -> PackingFigures:
+def _liggghts_packing(export, rig: Rig, params, material: ExportMaterial, seed: int,
+                      workdir: str | None) -> PackingFigures:
     from engine.lab.reducers.cct import reduce_cct
     from engine.lab.reducers.packing import PackingState, bulk_properties
 
-    r = float(params.particle_radius_m)
-    run = run_rig(export, rig, _primes_above(32452843 + 7919 * seed, 1)[0], r, r, 2.0 * r, workdir)
+    r_equivalent = float(params.particle_radius_m)  # the volume-equivalent radius of a body
+    clump = None
+    r_sphere = r_equivalent
+    if material.particles.clumps:
+        template = material.particles.clumps[0].template()
+        clump = ClumpBody(template.n_spheres, template.mass_kg(params.particle_density_kg_m3))
+        r_sphere = float(np.min(template.sphere_radii_m))
+    run = run_rig(export, rig, _primes_above(32452843 + 7919 * seed, 1)[0], r_sphere, r_sphere, 2.0 * r_equivalent,
+                  workdir, clump=clump)
     rho = params.particle_density_kg_m3
     props = bulk_properties(PackingState(run.bulk_mass_kg / rho, rho, run.packing_height_m, rig.area_m2,
                                          run.particle_count))
@@ -184,7 +203,7 @@ def verify_export(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: 
             if progress:
                 progress(f"{engine} seed {seed}")
             fig = (_demcal_packing(params, seed, cct_cycles, speed_factor) if engine == "demcal"
-                   else _liggghts_packing(export, rig, params, seed, workdir))
+                   else _liggghts_packing(export, rig, params, material, seed, workdir))
             report.packings.append(fig)
     dem = [f for f in report.packings if f.engine == "demcal"]
     lig = [f for f in report.packings if f.engine == "LIGGGHTS"]

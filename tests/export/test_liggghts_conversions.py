@@ -183,3 +183,13 @@ def test_hertz_damping_beyond_liggghts_bound_is_reported():
     export = render(m)
     assert any("at most 0.630" in note for note in export.inexact)
     assert all(e > 0.05 for e in _pair_values(export.text, "coefficientRestitution"))
+
+
+def test_every_registered_effect_has_an_export():
+    """A new effect in engine/effects must get a LIGGGHTS export (or a stated 'not expressible') before a
+    calibrated material using it can leave demcal: render refuses unknown effects, and this keeps the
+    two lists together."""
+    from calibration.export.liggghts import _HANDLED_EFFECTS
+    from engine.effects import REGISTRY
+
+    assert set(REGISTRY) == set(_HANDLED_EFFECTS)
