@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"verify_export: {exc}".splitlines()[0], file=sys.stderr)
         return 2
     report = verify_export(material, args.seeds, args.cycles, args.speed_factor, args.keep,
-                           progress=lambda m: print(f"  running {m}", file=sys.stderr, flush=True))
+                           progress=lambda m: print(f"  {m}", file=sys.stderr, flush=True))
     print(report.text())
     if args.json:
         with open(args.json, "w") as fh:

@@ -238,7 +238,8 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
         ced = {k: sjkr.cohesion_energy_density_j_m3 for k in pairs}
         props.append(f"fix demcal_ced all property/global cohesionEnergyDensity peratomtypepair {n} {_pair_table(ced, n)}")
         conv.append(f"cohesion sjkr, cohesionEnergyDensity {_fmt(sjkr.cohesion_energy_density_j_m3)} J/m3: "
-                    "k_c times the intersection area, the same model in both codes")
+                    "k_c times the area of the sphere-sphere intersection circle in both codes (wall contacts: "
+                    "not compared)")
     nearest_lines: list[str] = []
     if adhesive is not None:
         gamma = adhesive.surface_energy_j_m2
@@ -273,8 +274,8 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
 
     dt = demcal_timestep_s(material) if timestep_s is None else float(timestep_s)
     conv.append(f"time step {_fmt(dt)} s: demcal's rule, {DEMCAL_SAFETY_FACTOR} x the critical step of the normal and "
-                "rotation-coupled tangential modes (engine/timestep.py); with a tangential dashpot at zeta 0.8 "
-                "LIGGGHTS is unstable at 0.2 sqrt(m/kn) (engine/timestep.py), so keep at most this step")
+                "rotation-coupled tangential modes (engine/timestep.py); LIGGGHTS went unstable with a tangential "
+                "dashpot at zeta 0.8 and dt = 0.2 sqrt(m/kn) (docs/engine.md), so keep at most this step")
 
     # particle templates and the distribution the user's insertion fix takes
     seeds = _primes_above(15485863, n_part + 1)

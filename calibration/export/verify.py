@@ -191,7 +191,8 @@ def verify_export(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: 
                   speed_factor: float | None = None, workdir: str | None = None, progress=None) -> VerifyReport:
     """Run the export in LIGGGHTS and demcal's lab over ``seeds`` packings each and compare (see module doc).
 
-    One engine runs at a time (the machine is shared). ``progress(message)`` is told each packing."""
+    One engine runs at a time (the machine is shared). ``progress(message)`` is told each packing as it
+    starts and its figures when it ends."""
     if not isinstance(material, ExportMaterial):
         material = ExportMaterial.model_validate(material)
     params = to_micro_parameters(material)
@@ -205,6 +206,10 @@ def verify_export(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: 
             fig = (_demcal_packing(params, seed, cct_cycles, speed_factor) if engine == "demcal"
                    else _liggghts_packing(export, rig, params, material, seed, workdir))
             report.packings.append(fig)
+            if progress:
+                progress(f"{engine} seed {seed}: rho_b {fig.bulk_density_kg_m3:.1f} kg/m3, n {fig.porosity:.4f}, "
+                         f"E' {fig.confined_modulus_pa / 1e6:.3f} MPa, windows "
+                         f"{[round(m / 1e6, 3) for m in fig.window_modulus_pa]} MPa ({fig.wall_time_s:.0f} s)")
     dem = [f for f in report.packings if f.engine == "demcal"]
     lig = [f for f in report.packings if f.engine == "LIGGGHTS"]
     report.comparisons.append(_compare("bulk_density_kg_m3", [f.bulk_density_kg_m3 for f in dem],
