@@ -37,7 +37,8 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-_STRICT = ConfigDict(extra="forbid", allow_inf_nan=False)
+# strict like the lab's job specs (engine.lab.spec.STRICT_INPUT): no false for a number, no NaN or infinity
+_STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 
 
 class SphereClass(BaseModel):
@@ -49,12 +50,14 @@ class SphereClass(BaseModel):
 class ClumpClass(BaseModel):
     model_config = _STRICT
     name: str = Field(min_length=1, max_length=64)
-    sphere_centres_m: list[tuple[float, float, float]] = Field(min_length=1, max_length=500)
+    sphere_centres_m: list[list[float]] = Field(min_length=1, max_length=500, description="[x, y, z] per sphere, m")
     sphere_radii_m: list[float] = Field(min_length=1, max_length=500)
     volume_fraction: float = Field(ge=0, le=1)
 
     @model_validator(mode="after")
     def _same_length(self) -> "ClumpClass":
+        if any(len(c) != 3 for c in self.sphere_centres_m):
+            raise ValueError(f"clump {self.name}: every sphere centre is [x, y, z]")
         if len(self.sphere_centres_m) != len(self.sphere_radii_m):
             raise ValueError(f"clump {self.name}: sphere_centres_m and sphere_radii_m differ in length")
         if any(r <= 0 for r in self.sphere_radii_m):
@@ -156,7 +159,7 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
     for shape in preset.shapes:
         if shape.template is not None:
             t = shape.template
-            clumps.append(ClumpClass(name=t.name, sphere_centres_m=[tuple(map(float, c)) for c in t.sphere_offsets_m],
+            clumps.append(ClumpClass(name=t.name, sphere_centres_m=[[float(x) for x in c] for c in t.sphere_offsets_m],
                                      sphere_radii_m=[float(r) for r in t.sphere_radii_m],
                                      volume_fraction=shape.volume_fraction))
             continue
@@ -171,7 +174,7 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
             for (t, _), v in zip(templates, volumes):
                 r = float(t.sphere_radii_m[0])
                 clumps.append(ClumpClass(name=f"{shape.shape}_{r * 1000:.2f}mm",
-                                         sphere_centres_m=[tuple(map(float, c)) for c in t.sphere_offsets_m],
+                                         sphere_centres_m=[[float(x) for x in c] for c in t.sphere_offsets_m],
                                          sphere_radii_m=[float(x) for x in t.sphere_radii_m],
                                          volume_fraction=shape.volume_fraction * v / sum(volumes)))
         else:

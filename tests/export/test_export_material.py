@@ -42,3 +42,11 @@ def test_the_proof_refuses_a_mix_it_cannot_run():
             "particles": {"solid_density_kg_m3": 2500.0, "spheres": [{"radius_m": 0.02, "volume_fraction": 1.0}]},
             "contact": {"particle_stiffness_n_per_m": 1e6, "wall_stiffness_n_per_m": 1e7, "damping_ratio_normal": 0.5,
                         "damping_ratio_shear": 0.2, "friction_pp": 0.5, "friction_pw": 0.3}}))
+
+
+def test_a_boolean_is_not_a_number():
+    with pytest.raises(ValueError, match="friction_pp"):
+        ExportMaterial.model_validate({
+            "particles": {"solid_density_kg_m3": 2500.0, "spheres": [{"radius_m": 0.02, "volume_fraction": 1.0}]},
+            "contact": {"particle_stiffness_n_per_m": 1e6, "wall_stiffness_n_per_m": 1e7, "damping_ratio_normal": 0.5,
+                        "damping_ratio_shear": 0.5, "friction_pp": False, "friction_pw": 0.3}})
