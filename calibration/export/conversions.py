@@ -12,9 +12,10 @@ demcal (engine/config.py, engine/kernel_template.py):
 
 LIGGGHTS-PUBLIC 3.8.0 (src/normal_model_hooke_stiffness.h, normal_model_hertz.h, pair_gran_base.h):
 * ``model hooke/stiffness`` takes kn, kt per type pair (N/m) and, with ``absolute_damping off`` (the
-  default), c = m* gamman: gamman is a damping *per unit effective mass* (1/s); m* is the body
-  mass where a sphere belongs to a multisphere body (pair_gran_base.h: "if I or J part of rigid body,
-  use body mass") and the particle's mass for a wall;
+  default), c = m* gamman: gamman is a damping *per unit effective mass* (1/s); m* = mi mj/(mi + mj)
+  of the atoms' masses (pair_gran_base.h), the particle's mass for a wall. A sphere of a multisphere
+  body carries the body's mass as its atom mass (checked in 3.8.0: a dump of a two-sphere clump's
+  atoms shows the clump's mass on each), so m* is the body mass for clumps, as in demcal;
 * ``model hertz`` takes Young's modulus and Poisson's ratio per type and a restitution coefficient
   per type pair: c = -2 sqrt(5/6) beta sqrt(S m*), S = 2 Y* sqrt(R* delta), beta = ln e /
   sqrt(ln^2 e + pi^2); the tangential dashpot uses the same beta with St = 8 G* sqrt(R* delta).
