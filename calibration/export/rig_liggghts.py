@@ -120,7 +120,7 @@ fix ins all insert/pack seed {seed_prime} distributiontemplate demcal_pdd maxatt
 compute rad all property/atom radius
 variable top atom z+c_rad
 compute ztop all reduce max v_top
-thermo_style custom step time atoms v_ke_ratio c_ztop
+thermo_style custom step time atoms ke v_ke_ratio c_ztop
 thermo       {chunk_settle * 10}
 thermo_modify lost ignore norm no
 run 1
@@ -221,7 +221,7 @@ def run_rig(export: LiggghtsExport, rig: Rig, seed_prime: int, r_min_m: float, r
         proc = subprocess.run([exe, "-in", "in.rig", "-log", "log.lammps"], cwd=work, stdout=screen,
                               stderr=subprocess.STDOUT, timeout=timeout_s)
     wall = time.monotonic() - t0
-    log = open(os.path.join(work, "log.lammps")).read()
+    log = open(os.path.join(work, "log.lammps"), errors="replace").read()
     if proc.returncode != 0 or "DONE" not in log:
         tail = "\n".join(log.strip().splitlines()[-5:])
         raise RuntimeError(f"liggghts failed (exit {proc.returncode}) in {work}:\n{tail}")
@@ -268,7 +268,7 @@ print "SYNTAX_OK"
             fh.write(main)
         proc = subprocess.run([exe, "-in", "in.check", "-log", "log.lammps"], cwd=work, capture_output=True,
                               text=True, timeout=600)
-        log = open(os.path.join(work, "log.lammps")).read() if os.path.exists(
+        log = open(os.path.join(work, "log.lammps"), errors="replace").read() if os.path.exists(
             os.path.join(work, "log.lammps")) else proc.stdout
     if proc.returncode != 0 or "SYNTAX_OK" not in log:
         errors = [ln for ln in (log + proc.stdout).splitlines() if "ERROR" in ln]

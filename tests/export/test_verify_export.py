@@ -1,7 +1,8 @@
 """The proof of the LIGGGHTS hand-over (issue 30): a screening material with rolling resistance, exported,
 run in LIGGGHTS and in demcal's lab over three packings each (fill + 2-cycle confined compression).
 
-Slow: about 5 minutes on the 2-core CI machine (demcal ~45 s, LIGGGHTS ~45 s per packing, one at a time).
+Slow: 2.7 min measured on the shared 2-core machine (5 min when it was loaded); demcal ~30 s and LIGGGHTS
+~25 s per packing, one at a time.
 The tolerances are the issue's: bulk density within 2 %, E' within 10 %, or within twice the standard error
 of the difference when the three packings scatter more than that (calibration/export/verify.py).
 """
