@@ -79,6 +79,29 @@ def material_import_card(args) -> int:
                           f"{len(m['measurements'])} measurements)")
 
 
+def campaign_verify_export(args) -> int:
+    """Fetch the campaign's material card from the service, then run the LIGGGHTS proof here: the exported
+    material in LIGGGHTS and demcal's own lab on the screening fill and confined compression, ``--packings``
+    each (calibration.export.verify). Minutes per packing; LIGGGHTS must be installed on this machine."""
+    from calibration.export.material import from_micro_parameters
+    from calibration.export.rig_liggghts import liggghts_executable
+    from calibration.export.verify import verify_export
+    from service.export.card import CardError, load_text, micro_parameters, validate
+
+    if liggghts_executable() is None:
+        raise CliError("LIGGGHTS is not installed here (apt-get install liggghts): the proof runs it")
+    params = {"number": args.iteration} if args.iteration else {}
+    try:
+        card = validate(load_text(_text(args, f"/campaigns/{args.id}/material-card", params)))
+    except CardError as exc:
+        raise CliError(f"campaign {args.id}'s material card: {exc}") from exc
+    material = from_micro_parameters(micro_parameters(card), card.rig.fidelity)
+    report = verify_export(material, seeds=tuple(range(1, args.packings + 1)),
+                           progress=lambda message: print(message, file=sys.stderr, flush=True))
+    _emit(args, report.to_dict(), report.text())
+    return 0 if report.holds else 1
+
+
 def register_campaign(csub) -> None:
     """``demcal campaign export``; ``csub``: the campaign command's subparsers."""
     export = _leaf(csub, "export", campaign_export, "the calibrated material as a file: the material card "
@@ -89,6 +112,13 @@ def register_campaign(csub) -> None:
                              "GET /api/v1/export-formats")
     export.add_argument("--output", "-o", help="file to write (default stdout)")
     export.add_argument("--iteration", type=int, help="a calibrated iteration (default the latest with a report)")
+    verify = _leaf(csub, "verify-export", campaign_verify_export, "run the LIGGGHTS export of the calibrated "
+                   "material beside demcal's own lab (fill, confined compression) and say whether the hand-off "
+                   "holds (exit 1 when it does not)")
+    verify.add_argument("id", type=int)
+    verify.add_argument("--packings", type=int, default=3, choices=range(1, 11), metavar="N",
+                        help="packings per engine (default 3)")
+    verify.add_argument("--iteration", type=int, help="a calibrated iteration (default the latest with a report)")
 
 
 def register_material(msub) -> None:

@@ -35,6 +35,22 @@ register(ExportFormat("card-json", "application/json", ".card.json", dump_json,
                       "the neutral material card, JSON"))
 
 
+def liggghts_include(card: dict) -> str:
+    """The card's material as a LIGGGHTS-PUBLIC 3.8.0 input include (calibration.export.liggghts): its
+    header lists every conversion made and what LIGGGHTS cannot express exactly."""
+    from calibration.export.liggghts import render
+    from calibration.export.material import from_micro_parameters
+    from service.export.card import micro_parameters, validate
+
+    model = validate(card)
+    return render(from_micro_parameters(micro_parameters(model), model.rig.fidelity)).text
+
+
+register(ExportFormat("liggghts", "text/plain", ".liggghts", liggghts_include,
+                      "LIGGGHTS-PUBLIC 3.8.0 input include: atom types, property/global blocks, pair style, "
+                      "multisphere templates; every conversion in its header (docs/export.md)"))
+
+
 def get(name: str) -> ExportFormat:
     try:
         return FORMATS[name]

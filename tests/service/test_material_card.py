@@ -229,7 +229,7 @@ def test_export_formats_are_a_registry(calibrated):
     """Every registered format is served from the card alone; an unknown one is a 422 listing them."""
     client, _, _, cid = calibrated
     listed = {f["name"]: f for f in client.get(f"{API}/export-formats").json()}
-    assert {"card", "card-json"} <= set(listed) and set(listed) == set(formats.names())
+    assert {"card", "card-json", "liggghts"} <= set(listed) and set(listed) == set(formats.names())
     card = client.get(f"{API}/campaigns/{cid}/material-card").json()
     for name, fmt in listed.items():
         response = client.get(f"{API}/campaigns/{cid}/export", params={"format": name})
