@@ -16,6 +16,8 @@ from service.migrate import upgrade
 from service.models.material import Material, Measurement
 from service.workers.local import Worker
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 
 def locs(response) -> list[list]:
     return [err["loc"] for err in response.json()["detail"]]

@@ -13,6 +13,8 @@ import sys
 
 import pytest
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 SEED = 13
 MAX_EXAMPLES = 10  # per operation and phase; ~40 operations
 # server errors, schema violations, undocumented status codes, wrong content types, and schema-invalid

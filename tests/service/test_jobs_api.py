@@ -9,6 +9,8 @@ from service.app import create_app
 from service.migrate import head_revision
 from service.workers.local import Worker
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 API = "/api/v1"
 
 

@@ -13,6 +13,8 @@ from service.errors import Conflict, Invalid, TooMany
 from service.models.job import Job
 from service.workers.local import Worker
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 
 def _submit(sf, n: int = 1, **kwargs) -> list[int]:
     with sf() as s:
