@@ -11,7 +11,7 @@ from pydantic import BaseModel, Field, ValidationInfo, field_validator, model_va
 
 from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from calibration.settings import _FINITE, DesignIn, DesignPreviewIn, FactorIn, LoopSettings, PriorIn  # noqa: F401
-from engine.lab.bounds import SQLITE_INT_MAX, CONDITION_BOUNDS
+from engine.lab.bounds import ID_MAX, CONDITION_BOUNDS
 from engine.lab.registry import known_quantity, known_test
 from engine.lab.spec import STRICT_PAIR, MicroParameters, TestOptions
 from engine.lab.units import UnitError, condition_si_unit
@@ -55,7 +55,7 @@ class CampaignCreate(LoopSettings):
     model_config = _FINITE
 
     name: str = Field(..., min_length=1, max_length=200)
-    material_id: int = Field(..., ge=1, le=SQLITE_INT_MAX)
+    material_id: int = Field(..., ge=1, le=ID_MAX)
     evaluator: EvaluatorName = Field(DEFAULT.name, description="the backend every run goes to (GET /api/v1/evaluators)")
     targets: list[TargetIn] | None = Field(
         None, max_length=1000, description="measurements to calibrate against; default every measurement the battery simulates"

@@ -59,6 +59,15 @@ def test_submit_single_test_and_battery(client):
     assert battery["test"] == "battery" and battery["evaluator"] == "analytic"
 
 
+def test_the_largest_seed_is_stored_and_replayed(client):
+    """Seeds run to 2^32 - 1, past PostgreSQL's INTEGER: there this answered 500 until the column was a BIGINT."""
+    largest = 2**32 - 1
+    job = submit(client, seed=largest, idempotency_key="largest-seed").json()
+    assert job["seed"] == largest and job["spec"]["seed"] == largest
+    assert client.get(f"/api/v1/jobs/{job['id']}").json()["seed"] == largest
+    assert submit(client, seed=largest, idempotency_key="largest-seed").json()["id"] == job["id"]
+
+
 @pytest.mark.parametrize("body, loc", [
     ({"parameters": {"friction_pp": -0.1}}, ["body", "parameters", "friction_pp"]),
     ({"test": "triaxial"}, ["body", "test"]),
