@@ -15,6 +15,7 @@ from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 from pydantic import BaseModel
 
+from service.api.links import add_links
 from service.security import WRITE_METHODS
 
 
@@ -81,6 +82,7 @@ def document_errors(app: FastAPI) -> None:
                     codes.append(401)
                 for code in codes:
                     responses.setdefault(str(code), _error_response(ref, code))
+        add_links(schema)
         app.openapi_schema = schema
         return schema
 
