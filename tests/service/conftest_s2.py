@@ -1,8 +1,8 @@
 """Helpers shared by S2's tests (materials, designs, campaigns, schedules, web); imported explicitly.
 
-Each test gets its own database (``db_url``: a SQLite file, or PostgreSQL in modules marked ``postgres``); the app runs without executors or background
-ticks so that tests drive the campaign runner, the scheduler and the workers
-themselves, step by step and deterministically.
+Each test gets its own database (``db_url``: a SQLite file, or PostgreSQL in modules marked
+``postgres``); the app runs without executors or background ticks so that tests drive the campaign
+runner, the scheduler and the workers themselves, step by step and deterministically.
 """
 from __future__ import annotations
 
