@@ -1,4 +1,4 @@
-"""Queue semantics on a real SQLite file: claims, leases, retries, cancellation, late ack."""
+"""Queue semantics on a real database (a SQLite file, and PostgreSQL): claims, leases, retries, cancellation, late ack."""
 from __future__ import annotations
 
 import math
