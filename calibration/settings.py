@@ -11,7 +11,7 @@ from calibration.discrepancy import Discrepancy
 from doe.constraints import MAX_CONSTRAINT_CHARS, parse_constraint
 from doe.factors import DoeError
 from engine.lab.registry import BATTERY, JobTestName
-from engine.lab.spec import STRICT_INPUT, MicroParameters, TestOptions
+from engine.lab.spec import STRICT_INPUT, MicroParameters, MicroParametersDict, TestOptions, TestOptionsDict
 
 # Every schema here refuses NaN and infinities: stored, they come back as null and the campaign fails later
 # with an empty reason.
@@ -102,10 +102,10 @@ class LoopSettings(BaseModel):
     )
     factors: list[FactorIn] = Field(..., min_length=1, max_length=8)
     design: DesignIn = Field(default_factory=DesignIn)
-    fixed_parameters: dict[str, Any] = Field(
+    fixed_parameters: MicroParametersDict = Field(
         default_factory=dict, description="MicroParameters held fixed (and contact effects) for every run"
     )
-    options: dict[str, Any] = Field(default_factory=dict, description="TestOptions of every battery")
+    options: TestOptionsDict = Field(default_factory=dict, description="TestOptions of every battery")
     default_relative_uncertainty: float = Field(
         0.05, gt=0, le=1,
         description="standard uncertainty assumed, relative to the mean, for a target published without replicates",

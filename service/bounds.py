@@ -11,11 +11,15 @@ guard), for every client. Free-form JSON fields (``direct_estimates``, ``fixed_p
 ``options``) are ``Any``, so the one place that sees every one of them is the body. A JSON body nested
 deeper than ``max_json_depth`` is a 422 naming the top-level field it nests under, before it is decoded
 (a deep enough body would also exhaust the decoder's own recursion).
+
+A NUL character anywhere in the path, the query or a JSON body's strings is a 422 too (``service.nul_text``:
+PostgreSQL's text columns cannot hold it).
 """
 from __future__ import annotations
 
 import json
 
+from service import nul_text
 from service.config import Settings
 
 
@@ -79,6 +83,10 @@ class RequestBounds:
     async def __call__(self, scope, receive, send):
         if scope["type"] != "http":
             return await self.app(scope, receive, send)
+        if nul_text.NUL in scope.get("path", ""):
+            return await self._reply(send, 422, ["path"], "NUL (U+0000) is not allowed in text", "value_error")
+        if (name := nul_text.in_query(scope.get("query_string", b""))) is not None:
+            return await self._reply(send, 422, ["query", name], "NUL (U+0000) is not allowed in text", "value_error")
         headers = dict(scope.get("headers") or ())
         length = headers.get(b"content-length")
         if length is not None:
@@ -108,6 +116,9 @@ class RequestBounds:
                 return await self._reply(
                     send, 422, ["body"] + ([key] if key is not None else []),
                     f"JSON nested deeper than {self.max_depth} levels (DEMCAL_MAX_JSON_DEPTH)", "value_error")
+            if (where := nul_text.in_json(body)) is not None:
+                return await self._reply(send, 422, ["body", *where], "NUL (U+0000) is not allowed in text",
+                                         "value_error")
         replayed = False
 
         async def replay():

@@ -3,6 +3,8 @@
 SQLite is tuned for many processes sharing one file (the API, local workers, the
 background thread): WAL so readers never block the writer, a busy timeout so a
 second writer waits instead of failing, and foreign keys on (off by default there).
+PostgreSQL (``postgresql+psycopg://``, tested in CI) gets the JSON codec that keeps
+NaN and infinities (``service.json_columns``), which its ``json`` type refuses.
 """
 from __future__ import annotations
 
@@ -15,6 +17,8 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 from sqlalchemy.pool import StaticPool
+
+from service import json_columns
 
 SQLITE_BUSY_TIMEOUT_MS = 30_000
 
@@ -29,8 +33,11 @@ def _is_uri(url) -> bool:
 
 def make_engine(url: str) -> Engine:
     parsed = make_url(url)
+    if parsed.get_backend_name() == "postgresql":
+        return create_engine(url, pool_pre_ping=True, json_serializer=json_columns.dumps,
+                             json_deserializer=json_columns.loads)
     if parsed.get_backend_name() != "sqlite":
-        return create_engine(url, pool_pre_ping=True, future=True)
+        return create_engine(url, pool_pre_ping=True)
     kwargs: dict = {"connect_args": {"check_same_thread": False, "timeout": SQLITE_BUSY_TIMEOUT_MS / 1000}}
     if _is_memory(parsed):
         kwargs["poolclass"] = StaticPool  # one shared connection, or each would see its own database

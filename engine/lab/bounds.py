@@ -35,8 +35,11 @@ MAX_PARTICLE_RADIUS_M = 0.5
 # A Coulomb friction coefficient is tan of a friction angle; 10 is tan(84.3 deg), steeper than any slope a
 # contact of real materials holds (measured inter-particle and wall values are 0.1-1.0; thesis Table 4.4).
 MAX_FRICTION_COEFFICIENT = 10.0
-# The largest integer SQLite (and PostgreSQL BIGINT) stores: ids, offsets, counts.
+# The largest integer SQLite (and PostgreSQL BIGINT) stores: offsets, counts.
 SQLITE_INT_MAX = 2**63 - 1
+# The largest id: ids are INTEGER columns, 32-bit on PostgreSQL (SQLite's hold 64 bits); a larger one reached
+# the driver there and answered 500 ("integer out of range").
+ID_MAX = 2**31 - 1
 # Random seeds are 32-bit (numpy's SeedSequence accepts more, but seeds are stored and replayed).
 MAX_SEED = 2**32 - 1
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, Strict, field_validator
+from pydantic import BaseModel, ConfigDict, Field, Strict, WithJsonSchema, field_validator
 
 from engine.lab.bounds import (CONTACT_STIFFNESS_TYPICAL, DENSEST_SOLID_KG_M3, FRICTION_COEFFICIENT_TYPICAL,
                                MAX_CONTACT_STIFFNESS_N_PER_M, MAX_FRICTION_COEFFICIENT, MAX_PARTICLE_RADIUS_M,
@@ -203,6 +203,11 @@ class TestOptions(BaseModel):
         return value
 
 
+# TestOptions kept as the dict that was sent (campaigns store it so), validated as TestOptions, and documented
+# with TestOptions' JSON schema: "any object" in the OpenAPI document let schema-valid options be refused.
+TestOptionsDict = Annotated[dict[str, Any], WithJsonSchema(TestOptions.model_json_schema())]
+
+
 class JobSpec(BaseModel):
     model_config = _FINITE
 
@@ -211,3 +216,8 @@ class JobSpec(BaseModel):
     seed: int = Field(0, ge=0, le=MAX_SEED)
     parameters: MicroParameters = Field(default_factory=MicroParameters)
     options: TestOptions = Field(default_factory=TestOptions)
+
+
+# Fixed micro parameters kept as the dict that was sent, validated as MicroParameters (campaigns), documented
+# with MicroParameters' JSON schema for the same reason as TestOptionsDict.
+MicroParametersDict = Annotated[dict[str, Any], WithJsonSchema(MicroParameters.model_json_schema())]

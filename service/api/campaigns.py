@@ -9,6 +9,7 @@ from service.campaigns.store import (campaign_summary, create_campaign, get_camp
                                      list_campaigns, next_iteration, transition)
 from service.api.openapi import errors
 from service.api.params import CampaignId, CampaignLimit, IterationNumber, Offset
+from engine.lab.bounds import ID_MAX
 from service.api.responses.campaigns import (CampaignDesign, CampaignList, CampaignModels, CampaignOptimum, CampaignSummary,
                                              Confirmation, Iteration)
 from service.api.responses.common import typed
@@ -96,7 +97,7 @@ def _product(session: Session, campaign_id: CampaignId, number: int | None, attr
     return campaign, it, value
 
 
-IterationQ = Query(None, ge=1, le=2**63 - 1, description="iteration number; default the current one")
+IterationQ = Query(None, ge=1, le=ID_MAX, description="iteration number; default the current one")
 
 
 @router.get("/{campaign_id}/iterations/{number}", summary="One iteration", **typed(Iteration))

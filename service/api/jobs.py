@@ -8,7 +8,7 @@ from fastapi import Path as PathParam
 from pydantic import BaseModel, Field
 
 from calibration.evaluator_registry import DEFAULT, EvaluatorName
-from engine.lab.bounds import MAX_SEED, SQLITE_INT_MAX
+from engine.lab.bounds import ID_MAX, MAX_SEED
 from engine.lab.plausibility import options_warnings, parameter_warnings
 from engine.lab.registry import BATTERY, JobTestName
 from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, TestOptions
@@ -43,7 +43,7 @@ class JobSubmit(BaseModel):
     priority: int = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="higher runs first")
     idempotency_key: str | None = Field(None, min_length=1, max_length=200,
                                         description="resubmitting the same key returns the same job")
-    campaign_id: int | None = Field(None, ge=1, le=SQLITE_INT_MAX)
+    campaign_id: int | None = Field(None, ge=1, le=ID_MAX)
     max_attempts: int | None = Field(None, ge=1, le=20, description="claims before a lost job fails")
 
     def spec(self) -> JobSpec:
@@ -104,7 +104,7 @@ def submit(body: JobSubmit, request: Request, response: Response, session: DbSes
 
 @router.get("", response_model=JobList, summary="List jobs, newest first (by id), filtered; a page and the total")
 def list_jobs(session: DbSession, status_: JobStatus | None = Query(None, alias="status"),
-              test: JobTestName | None = None, campaign_id: int | None = Query(None, ge=1, le=SQLITE_INT_MAX),
+              test: JobTestName | None = None, campaign_id: int | None = Query(None, ge=1, le=ID_MAX),
               evaluator: EvaluatorName | None = None,
               origin: JobOrigin = Query(JobOrigin.ALL, description="direct: jobs submitted without a campaign; "
                                         "campaign: the batteries campaigns queued; all: both"),

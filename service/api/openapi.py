@@ -17,6 +17,7 @@ from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 from pydantic import BaseModel
 
+from service.api.links import add_links
 from service.security import OPEN_API_PATHS, WRITE_METHODS
 
 
@@ -84,6 +85,7 @@ def document_errors(app: FastAPI) -> None:
                     codes.append(401)  # writes, and reads unless opened, need a token when tokens are configured
                 for code in codes:
                     responses.setdefault(str(code), _error_response(ref, code))
+        add_links(schema)
         app.openapi_schema = schema
         return schema
 

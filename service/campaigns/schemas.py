@@ -11,9 +11,9 @@ from pydantic import BaseModel, Field, ValidationInfo, field_validator, model_va
 
 from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from calibration.settings import _FINITE, DesignIn, DesignPreviewIn, FactorIn, LoopSettings, PriorIn  # noqa: F401
-from engine.lab.bounds import SQLITE_INT_MAX, CONDITION_BOUNDS
+from engine.lab.bounds import ID_MAX, CONDITION_BOUNDS
 from engine.lab.registry import known_quantity, known_test
-from engine.lab.spec import STRICT_PAIR, MicroParameters, TestOptions
+from engine.lab.spec import STRICT_PAIR, MicroParameters, MicroParametersDict, TestOptions, TestOptionsDict
 from engine.lab.units import UnitError, condition_si_unit
 
 # One priority scale for jobs and campaigns (service.api.params mirrors it for jobs).
@@ -55,7 +55,7 @@ class CampaignCreate(LoopSettings):
     model_config = _FINITE
 
     name: str = Field(..., min_length=1, max_length=200)
-    material_id: int = Field(..., ge=1, le=SQLITE_INT_MAX)
+    material_id: int = Field(..., ge=1, le=ID_MAX)
     evaluator: EvaluatorName = Field(DEFAULT.name, description="the backend every run goes to (GET /api/v1/evaluators)")
     targets: list[TargetIn] | None = Field(
         None, max_length=1000, description="measurements to calibrate against; default every measurement the battery simulates"
@@ -87,13 +87,13 @@ class IterationIn(BaseModel):
             TestOptions.model_validate(options)
         return options
 
-    fixed_parameters: dict[str, Any] | None = Field(
+    fixed_parameters: MicroParametersDict | None = Field(
         None, description="replaces the fixed micro parameters, e.g. with effects={'rolling_epsd2': {...}}"
     )
     factors: list[FactorIn] | None = Field(None, min_length=1, max_length=8)
     design: DesignIn | None = None
     targets: list[TargetIn] | None = Field(None, max_length=1000)
-    options: dict[str, Any] | None = None
+    options: TestOptionsDict | None = None
     add_effect: str | None = Field(
         None, max_length=64, description="a diagnosis candidate (GET /api/v1/effects) whose strength becomes one more design "
         "factor, keeping the previous factors: from 'off' over its plausible range, or to twice the last "

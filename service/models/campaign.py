@@ -8,7 +8,7 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import JSON, DateTime, ForeignKey, Integer, String, Text, UniqueConstraint
+from sqlalchemy import JSON, BigInteger, DateTime, ForeignKey, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from calibration.evaluator_registry import DEFAULT, NAME_MAX
@@ -93,7 +93,7 @@ class CampaignRun(Base):
     is_centre: Mapped[bool] = mapped_column(default=False, nullable=False)
     coded: Mapped[dict[str, float]] = mapped_column(JSON, default=dict, nullable=False)
     natural: Mapped[dict[str, float]] = mapped_column(JSON, default=dict, nullable=False)
-    seed: Mapped[int] = mapped_column(Integer, nullable=False)
+    seed: Mapped[int] = mapped_column(BigInteger, nullable=False)  # to MAX_SEED = 2^32 - 1, past a 32-bit INTEGER
     job_id: Mapped[int | None] = mapped_column(Integer, nullable=True, index=True)
     status: Mapped[str] = mapped_column(String(16), default="pending", nullable=False)
     responses: Mapped[dict[str, float] | None] = mapped_column(JSON, nullable=True)

@@ -9,7 +9,7 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import JSON, Boolean, DateTime, Float, Index, Integer, String, Text, UniqueConstraint
+from sqlalchemy import JSON, BigInteger, Boolean, DateTime, Float, Index, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
 from calibration.evaluator_registry import DEFAULT, NAME_MAX
@@ -34,7 +34,7 @@ class Job(Base):
     test: Mapped[str] = mapped_column(String(16), nullable=False, index=True)
     fidelity: Mapped[str] = mapped_column(String(16), nullable=False)
     spec: Mapped[dict[str, Any]] = mapped_column(JSON, nullable=False)
-    seed: Mapped[int] = mapped_column(Integer, nullable=False)
+    seed: Mapped[int] = mapped_column(BigInteger, nullable=False)  # to MAX_SEED = 2^32 - 1, past a 32-bit INTEGER
     priority: Mapped[int] = mapped_column(Integer, default=0, nullable=False)
     attempts: Mapped[int] = mapped_column(Integer, default=0, nullable=False)
     max_attempts: Mapped[int] = mapped_column(Integer, default=3, nullable=False)

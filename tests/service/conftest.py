@@ -18,10 +18,30 @@ from service.migrate import upgrade
 
 from service_net import LOCAL_BASE_URL, LOOPBACK_PEER, free_port, wait_healthy  # noqa: F401  (re-exported for older imports)
 
+import backends
+
+
+def pytest_generate_tests(metafunc):
+    """Every test of a module marked ``postgres`` that uses a database runs once per backend."""
+    if "db_backend" in metafunc.fixturenames and metafunc.definition.get_closest_marker("postgres"):
+        metafunc.parametrize("db_backend", backends.BACKENDS, indirect=True)
+
 
 @pytest.fixture
-def db_url(tmp_path: Path) -> str:
-    return f"sqlite:///{(tmp_path / 'demcal.db').as_posix()}"
+def db_backend(request) -> str:
+    return getattr(request, "param", backends.SQLITE)
+
+
+@pytest.fixture
+def db_url(db_backend: str, tmp_path: Path, request):
+    """A fresh, empty database for the test: a SQLite file, or a database of its own on the PostgreSQL server."""
+    if db_backend == backends.SQLITE:
+        yield f"sqlite:///{(tmp_path / 'demcal.db').as_posix()}"
+        return
+    server = backends.server_url()
+    url = backends.create_database(server, request.node.name)
+    yield url
+    backends.drop_database(server, url)
 
 
 @pytest.fixture

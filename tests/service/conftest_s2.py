@@ -1,8 +1,8 @@
 """Helpers shared by S2's tests (materials, designs, campaigns, schedules, web); imported explicitly.
 
-Each test gets its own SQLite file; the app runs without executors or background
-ticks so that tests drive the campaign runner, the scheduler and the workers
-themselves, step by step and deterministically.
+Each test gets its own database (``db_url``: a SQLite file, or PostgreSQL in modules marked
+``postgres``); the app runs without executors or background ticks so that tests drive the campaign
+runner, the scheduler and the workers themselves, step by step and deterministically.
 """
 from __future__ import annotations
 
@@ -22,9 +22,11 @@ API = "/api/v1"
 THESIS_MATERIAL = "thesis-coarse-aggregate"
 
 
-def s2_settings(tmp_path: Path) -> Settings:
-    return Settings(database_url=f"sqlite:///{(tmp_path / 's2.db').as_posix()}", start_workers=False,
-                    start_background=False, seed_materials=True, lease_s=30.0, heartbeat_s=5.0)
+def s2_settings(database: Path | str) -> Settings:
+    """``database``: a URL (the ``db_url`` fixture: SQLite or PostgreSQL), or a directory for a SQLite file."""
+    url = database if isinstance(database, str) else f"sqlite:///{(database / 's2.db').as_posix()}"
+    return Settings(database_url=url, start_workers=False, start_background=False, seed_materials=True,
+                    lease_s=30.0, heartbeat_s=5.0)
 
 
 @contextmanager
@@ -36,8 +38,8 @@ def running_app(settings: Settings):
 
 
 @pytest.fixture
-def s2(tmp_path):
-    settings = s2_settings(tmp_path)
+def s2(db_url):
+    settings = s2_settings(db_url)
     with running_app(settings) as (client, app):
         yield client, app, settings
 

@@ -10,7 +10,8 @@ import json
 import pytest
 from conftest_s2 import API, campaign_body, editable_thesis_copy, s2, thesis_material_id  # noqa: F401
 
-SQLITE_INT_MAX = 2**63 - 1
+SQLITE_INT_MAX = 2**63 - 1  # the largest integer SQLite and PostgreSQL BIGINT hold
+ID_MAX = 2**31 - 1  # the largest PostgreSQL INTEGER
 
 
 def locs(response) -> list[list]:
@@ -175,19 +176,23 @@ def test_legacy_non_finite_row_does_not_break_listings(s2):
 
 
 # -- integers the database cannot hold -------------------------------------------------------------
+# Ids are INTEGER columns, 32-bit on PostgreSQL (2^31 - 1 is the largest; an id past it answered 500 there);
+# offsets are bigints on both stores.
 
+@pytest.mark.postgres
 @pytest.mark.parametrize("path, loc", [
-    (f"/jobs/{SQLITE_INT_MAX + 1}", ["path", "job_id"]),
+    (f"/jobs/{ID_MAX + 1}", ["path", "job_id"]),
     (f"/jobs/{2**70}/result", ["path", "job_id"]),
-    (f"/materials/{SQLITE_INT_MAX + 1}", ["path", "material_id"]),
-    (f"/materials/1/measurements/{SQLITE_INT_MAX + 1}", ["path", "measurement_id"]),
-    (f"/campaigns/{SQLITE_INT_MAX + 1}", ["path", "campaign_id"]),
-    (f"/campaigns/1/iterations/{SQLITE_INT_MAX + 1}", ["path", "number"]),
-    (f"/schedules/{SQLITE_INT_MAX + 1}", ["path", "schedule_id"]),
+    (f"/materials/{ID_MAX + 1}", ["path", "material_id"]),
+    (f"/materials/1/measurements/{ID_MAX + 1}", ["path", "measurement_id"]),
+    (f"/campaigns/{ID_MAX + 1}", ["path", "campaign_id"]),
+    (f"/campaigns/1/iterations/{ID_MAX + 1}", ["path", "number"]),
+    (f"/campaigns/1/report?number={ID_MAX + 1}", ["query", "number"]),
+    (f"/schedules/{ID_MAX + 1}", ["path", "schedule_id"]),
     (f"/jobs?offset={SQLITE_INT_MAX + 1}", ["query", "offset"]),
-    (f"/jobs?campaign_id={SQLITE_INT_MAX + 1}", ["query", "campaign_id"]),
+    (f"/jobs?campaign_id={ID_MAX + 1}", ["query", "campaign_id"]),
 ])
-def test_ids_and_offsets_beyond_sqlite_integers(s2, path, loc):
+def test_ids_and_offsets_beyond_the_database_integers(s2, path, loc):
     client, _, _ = s2
     before = snapshot(client)
     method = client.delete if "measurements/" in path else client.get
@@ -195,10 +200,54 @@ def test_ids_and_offsets_beyond_sqlite_integers(s2, path, loc):
     assert snapshot(client) == before  # the same connection still answers
 
 
-def test_largest_sqlite_integer_is_a_plain_404(s2):
+@pytest.mark.postgres
+def test_largest_id_and_offset_are_a_plain_404_and_an_empty_page(s2):
     client, _, _ = s2
-    assert client.get(f"{API}/jobs/{SQLITE_INT_MAX}").status_code == 404
+    assert client.get(f"{API}/jobs/{ID_MAX}").status_code == 404
+    assert client.get(f"{API}/campaigns/{ID_MAX}").status_code == 404
+    assert client.get(f"{API}/jobs?campaign_id={ID_MAX}").json()["items"] == []
     assert client.get(f"{API}/jobs?offset={SQLITE_INT_MAX}").json()["items"] == []
+
+
+# -- NUL characters: PostgreSQL's text cannot hold them (a name or key holding one answered 500 there) --
+
+NUL_BODIES = [
+    ("/materials", {"name": "gravel\u0000"}, ["body", "name"]),
+    ("/materials", {"name": "gravel", "source": "lab\u0000book"}, ["body", "source"]),
+    ("/materials", {"name": "gravel", "direct_estimates": {"k\u0000ey": 1.0}}, ["body", "direct_estimates", "key"]),
+    ("/jobs", {"evaluator": "analytic", "idempotency_key": "k\u0000"}, ["body", "idempotency_key"]),
+]
+
+
+@pytest.mark.postgres
+@pytest.mark.parametrize("path, body, loc", NUL_BODIES)
+def test_nul_in_a_body_string_is_refused_on_both_stores(s2, path, body, loc):
+    client, _, _ = s2
+    before = snapshot(client)
+    text = json.dumps(body)
+    assert "\\u0000" in text  # JSON's escape for U+0000
+    assert_refused(post_raw(client, path, text), loc)
+    assert snapshot(client) == before
+
+
+@pytest.mark.postgres
+@pytest.mark.parametrize("path, loc", [
+    ("/schedules/cron-preview?expr=0%002%20*%20*%20*", ["query", "expr"]),
+    ("/materials?name%00=1", ["query", "name"]),
+    ("/jobs/1/curves/shear%00", ["path"]),
+])
+def test_nul_in_the_query_or_path_is_refused_on_both_stores(s2, path, loc):
+    client, _, _ = s2
+    assert_refused(client.get(f"{API}{path}"), loc)
+    assert snapshot(client)  # the server still answers
+
+
+def test_an_escaped_backslash_before_u0000_is_no_nul(s2):
+    """``\\\\u0000`` in JSON is a backslash and the text "u0000": a path on Windows, say, not a NUL."""
+    client, _, _ = s2
+    response = post_raw(client, "/materials", json.dumps({"name": "C:\\u0000 gravel"}))
+    assert response.status_code == 201, response.text
+    assert response.json()["name"] == "C:\\u0000 gravel"
 
 
 @pytest.mark.parametrize("body, loc", [

@@ -3,10 +3,14 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from conftest_s2 import API, campaign_body, run_to_end, s2, thesis_material_id  # noqa: F401
 from calibration.attribute import signature_seeds
 from engine.candidates import candidates
 from service.models.job import Job
+
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
 
 
 def test_analytic_campaign_from_creation_to_report(s2):

@@ -13,6 +13,8 @@ from conftest_s2 import API, campaign_body, drain, run_to_end, s2, thesis_materi
 from calibration.decisions import effect_range
 from engine.candidates import candidates
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 
 def test_diagnosis_names_the_effect_and_adding_it_lets_the_error_fall(s2):
     client, app, settings = s2

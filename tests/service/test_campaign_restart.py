@@ -1,6 +1,7 @@
 """The campaign state machine lives in the database: a restarted service carries on where it was."""
 from __future__ import annotations
 
+import pytest
 from sqlalchemy import select
 
 from engine.candidates import candidates
@@ -11,9 +12,11 @@ from service.models.campaign import CampaignRun
 from service.models.job import Job
 from service import queue
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
 
-def test_restart_mid_campaign_completes_without_duplicate_jobs(tmp_path):
-    settings = s2_settings(tmp_path)
+
+def test_restart_mid_campaign_completes_without_duplicate_jobs(db_url):
+    settings = s2_settings(db_url)
     with running_app(settings) as (client, app):
         cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
         client.post(f"{API}/campaigns/{cid}/start")
@@ -40,10 +43,10 @@ def test_restart_mid_campaign_completes_without_duplicate_jobs(tmp_path):
         assert len(report["targets"]) == 3
 
 
-def test_restart_mid_diagnosis_resumes_without_duplicate_jobs(tmp_path):
+def test_restart_mid_diagnosis_resumes_without_duplicate_jobs(db_url):
     """The service dies with the diagnosis batteries half run: the new one queues none twice and
     ranks the effects from the batteries the old one ran."""
-    settings = s2_settings(tmp_path)
+    settings = s2_settings(db_url)
     n_diagnosis = 2 * (1 + sum(c.applies_to("thesis") for c in candidates().values()))  # baseline + each
     with running_app(settings) as (client, app):
         cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
@@ -71,9 +74,9 @@ def test_restart_mid_diagnosis_resumes_without_duplicate_jobs(tmp_path):
         assert diagnosis["batteries"] == n_diagnosis and diagnosis["ranking"]
 
 
-def test_restart_between_queuing_and_recording_a_job_finds_the_same_job(tmp_path):
+def test_restart_between_queuing_and_recording_a_job_finds_the_same_job(db_url):
     """A crash after submit_job committed but before the run stored the job id must not queue a twin."""
-    settings = s2_settings(tmp_path)
+    settings = s2_settings(db_url)
     with running_app(settings) as (client, app):
         cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
         client.post(f"{API}/campaigns/{cid}/start")
@@ -90,8 +93,8 @@ def test_restart_between_queuing_and_recording_a_job_finds_the_same_job(tmp_path
             assert session.query(Job).filter(Job.campaign_id == cid).count() == 11
 
 
-def test_a_failed_battery_fails_the_campaign_with_its_reason(tmp_path):
-    settings = s2_settings(tmp_path)
+def test_a_failed_battery_fails_the_campaign_with_its_reason(db_url):
+    settings = s2_settings(db_url)
     with running_app(settings) as (client, app):
         cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
         client.post(f"{API}/campaigns/{cid}/start")

@@ -6,6 +6,8 @@ import pytest
 from conftest_s2 import API, campaign_body, drain, error_loc, s2, thesis_material_id  # noqa: F401
 from service.campaigns.runner import CampaignRunner
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 PRODUCTS = ("design", "models", "optimum", "confirmation", "report")
 
 

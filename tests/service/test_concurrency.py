@@ -4,10 +4,13 @@ from __future__ import annotations
 import threading
 
 import httpx
+import pytest
 from sqlalchemy import func, select
 
 from service.db import make_engine
 from service.models.job import Job
+
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
 
 CLIENTS = 50
 PER_CLIENT = 10

@@ -8,6 +8,9 @@ import sys
 import time
 
 import httpx
+import pytest
+
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
 
 # Short leases so a dead worker is noticed in seconds; spare attempts so a heartbeat delayed by a
 # loaded CI machine cannot fail the job.

@@ -9,6 +9,8 @@ from service.app import create_app
 from service.migrate import head_revision
 from service.workers.local import Worker
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 API = "/api/v1"
 
 
@@ -55,6 +57,15 @@ def test_submit_single_test_and_battery(client):
     assert job["spec"]["options"]["dst_normal_stresses_pa"] == [10e3, 20e3]
     battery = submit(client).json()
     assert battery["test"] == "battery" and battery["evaluator"] == "analytic"
+
+
+def test_the_largest_seed_is_stored_and_replayed(client):
+    """Seeds run to 2^32 - 1, past PostgreSQL's INTEGER: there this answered 500 until the column was a BIGINT."""
+    largest = 2**32 - 1
+    job = submit(client, seed=largest, idempotency_key="largest-seed").json()
+    assert job["seed"] == largest and job["spec"]["seed"] == largest
+    assert client.get(f"/api/v1/jobs/{job['id']}").json()["seed"] == largest
+    assert submit(client, seed=largest, idempotency_key="largest-seed").json()["id"] == job["id"]
 
 
 @pytest.mark.parametrize("body, loc", [

@@ -9,6 +9,8 @@ import pytest
 from conftest_s2 import API, THESIS_MATERIAL, editable_thesis_copy, error_loc, s2, thesis_material_id  # noqa: F401
 from service.materials import seed_bundled_materials
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 
 def _measurement(material: dict, test: str, quantity: str, **condition) -> dict:
     found = [m for m in material["measurements"] if m["test"] == test and m["quantity"] == quantity

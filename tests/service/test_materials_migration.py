@@ -1,6 +1,8 @@
-"""Revision 0002_campaigns: applies on a database at 0001_jobs without touching its jobs, and reverts."""
+"""Revision 0002_campaigns and the later ones: they apply on a database at 0001_jobs without touching its jobs,
+and revert to it (on SQLite and on PostgreSQL)."""
 from __future__ import annotations
 
+import pytest
 import sqlalchemy as sa
 from alembic import command
 from alembic.autogenerate import compare_metadata
@@ -10,20 +12,22 @@ from service.db import make_engine
 from service.migrate import alembic_config, head_revision, upgrade
 from service.models import Base
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 S2_TABLES = {"materials", "measurements", "campaigns", "campaign_iterations", "campaign_runs", "schedules",
              "schedule_firings"}
 
 
-def test_0002_upgrades_a_populated_0001_database_and_downgrades(tmp_path):
-    url = f"sqlite:///{(tmp_path / 'old.db').as_posix()}"
+def test_later_revisions_upgrade_a_populated_0001_database_and_downgrade(db_url):
+    url = db_url
     assert upgrade(url, "0001_jobs") == "0001_jobs"
     engine = make_engine(url)
     with engine.begin() as conn:
         conn.execute(sa.text(
             "INSERT INTO jobs (status, evaluator, test, fidelity, spec, seed, priority, attempts, max_attempts, "
             "cancel_requested, progress_fraction, created_at, client_id) VALUES ('succeeded', 'analytic', "
-            "'battery', 'screening', '{}', 7, 0, 1, 3, 0, 1.0, '2026-11-22 00:00:00', 'old-client')"))
-    assert upgrade(url) == head_revision()  # through 0002_campaigns and every later revision
+            "'battery', 'screening', '{}', 7, 0, 1, 3, FALSE, 1.0, '2026-11-22 00:00:00', 'old-client')"))
+    assert upgrade(url) == head_revision()
     tables = set(sa.inspect(engine).get_table_names())
     assert S2_TABLES <= tables
     with engine.connect() as conn:

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.runtime.migration import MigrationContext
 from sqlalchemy import text
@@ -11,6 +12,8 @@ from engine.lab.spec import JobSpec
 from service.db import make_engine
 from service.migrate import current_revision, head_revision, upgrade
 from service.models import Base
+
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
 
 
 def test_upgrade_from_0001_keeps_jobs(db_url):
@@ -40,10 +43,11 @@ def test_upgrade_from_0001_keeps_jobs(db_url):
     engine = make_engine(db_url)
     with engine.connect() as conn:
         after = conn.execute(text("SELECT * FROM jobs ORDER BY id")).mappings().all()
-    # every stored value kept; the owner columns of 0003 are NULL: nobody's (service.ownership)
+    # every stored value kept; the owner columns of 0004 are NULL: nobody's (service.ownership)
     assert [{k: r[k] for k in before[0]} for r in after] == [dict(r) for r in before]
     assert {r["owner"] for r in after} == {None}
-    assert json.loads(after[1]["spec"]) == specs[1]
+    spec = after[1]["spec"]  # SQLite hands JSON columns back as text to raw SQL, PostgreSQL as decoded JSON
+    assert (json.loads(spec) if isinstance(spec, str) else spec) == specs[1]
     assert current_revision(engine) == head_revision()
     # Upgrading again is a no-op.
     assert upgrade(db_url) == head_revision()
@@ -60,8 +64,8 @@ def test_models_match_migrations(db_url):
     assert diff == []
 
 
-def test_sqlite_pragmas(db_url):
-    engine = make_engine(db_url)
+def test_sqlite_pragmas(tmp_path):
+    engine = make_engine(f"sqlite:///{(tmp_path / 'demcal.db').as_posix()}")
     with engine.connect() as conn:
         assert conn.execute(text("PRAGMA journal_mode")).scalar() == "wal"
         assert conn.execute(text("PRAGMA foreign_keys")).scalar() == 1

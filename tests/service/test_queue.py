@@ -1,17 +1,21 @@
-"""Queue semantics on a real SQLite file: claims, leases, retries, cancellation, late ack."""
+"""Queue semantics on a real database (a SQLite file, and PostgreSQL): claims, leases, retries, cancellation, late ack."""
 from __future__ import annotations
 
+import math
 import threading
 import time
 
 import pytest
 
+from calibration.evaluator_registry import run_job
 from engine.lab.result import Cancelled
 from engine.lab.spec import JobSpec
 from service import queue
 from service.errors import Conflict, Invalid, TooMany
 from service.models.job import Job
 from service.workers.local import Worker
+
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
 
 
 def _submit(sf, n: int = 1, **kwargs) -> list[int]:
@@ -190,6 +194,33 @@ def test_worker_runs_reports_progress_and_acknowledges_late(session_factory, set
     assert job.status == "succeeded" and job.progress_fraction == 1.0 and job.wall_time_s >= 0.5
     assert seen_phases == ["shearing"]
     assert worker.run_one() is None
+
+
+def test_a_result_holding_nan_and_infinity_is_stored_and_read_back(session_factory, settings, client):
+    """A diverged curve point is NaN or infinite. PostgreSQL's json type refuses those tokens, so there the
+    job could not be completed (the UPDATE failed, the job with it); stored through service.json_columns,
+    the worker's result reads back as it was on both backends, and the API shows the points as null."""
+    (job_id,) = _submit(session_factory, 1)
+    diverged: list[tuple[str, str]] = []
+
+    def evaluate(evaluator, spec, progress, should_cancel):
+        result = run_job(evaluator, spec)
+        name = next(iter(result.curves))
+        column = next(iter(result.curves[name]))
+        result.curves[name][column][:3] = [math.nan, math.inf, -math.inf]
+        result.properties[0].value = math.nan
+        diverged.append((name, column))
+        return result
+
+    assert Worker(session_factory, settings, "w-nan", evaluate=evaluate).run_one() == "succeeded"
+    ((name, column),) = diverged
+    stored = _job(session_factory, job_id).result
+    first = stored["curves"][name][column][:3]
+    assert math.isnan(first[0]) and first[1] == math.inf and first[2] == -math.inf
+    assert math.isnan(stored["properties"][0]["value"])
+    shown = client.get(f"/api/v1/jobs/{job_id}/result")
+    assert shown.status_code == 200
+    assert shown.json()["properties"][0]["value"] is None
 
 
 def test_worker_failure_keeps_reason(session_factory, settings):

@@ -11,6 +11,8 @@ from service.models.schedule import Schedule
 from service.schedules.cron import CronError, parse_cron
 from service.schedules.scheduler import Scheduler
 
+pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on PostgreSQL (backends.py)
+
 T0 = datetime(2026, 11, 20, 12, 0)  # a Friday
 
 
@@ -84,9 +86,9 @@ def test_due_schedule_starts_a_campaign_once(s2):
     assert shown["recent_firings"][0]["missed_count"] == 0
 
 
-def test_missed_runs_coalesce_into_one_catch_up(tmp_path):
+def test_missed_runs_coalesce_into_one_catch_up(db_url):
     """Service down three nights: on restart one campaign starts, covering the two missed due times."""
-    settings = s2_settings(tmp_path)
+    settings = s2_settings(db_url)
     with running_app(settings) as (client, app):
         schedule = _schedule(client, thesis_material_id(client))
         _set_next(app, schedule["id"], datetime(2026, 11, 18, 2, 0))
