@@ -390,7 +390,7 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
         return all(_same_or_alias(name, truth, o) for name in o["accepted"])
 
     def claims_effect(o):
-        return o["diagnosis_verdict"] == "effect indicated" or bool(o["accepted"])
+        return o["diagnosis_verdict"] == DiagnosisVerdict.INDICATED or bool(o["accepted"])
 
     def first_pick(o):
         return bool(o["tried"]) and _same_or_alias(o["tried"][0], set(o["effects"]), o)

@@ -44,7 +44,7 @@ class ConstantRadius(BaseModel):
     """Mono-sized: every sphere of the shape has this radius."""
 
     model_config = _MODEL
-    form: Literal["constant"] = "constant"
+    form: Literal["constant"]
     radius_m: _Radius
 
     def distribution(self) -> dist.ConstantSize:
@@ -57,7 +57,7 @@ class ConstantRadius(BaseModel):
 
 class UniformRadius(BaseModel):
     model_config = _MODEL
-    form: Literal["uniform"] = "uniform"
+    form: Literal["uniform"]
     radius_min_m: _Radius
     radius_max_m: _Radius
 
@@ -80,7 +80,7 @@ class GaussianRadius(BaseModel):
     mean at the midpoint and sd = range / 6 unless given (engine.particles.distributions.TruncatedGaussian)."""
 
     model_config = _MODEL
-    form: Literal["gaussian"] = "gaussian"
+    form: Literal["gaussian"]
     radius_min_m: _Radius
     radius_max_m: _Radius
     mean_m: _Radius | None = None
@@ -106,7 +106,7 @@ class SieveCurve(BaseModel):
     The first sieve is the smallest size present (its passing fraction is what is finer, usually 0)."""
 
     model_config = _MODEL
-    form: Literal["sieve"] = "sieve"
+    form: Literal["sieve"]
     sieve_sizes_m: list[Annotated[float, Field(ge=2 * _MIN_RADIUS_M, le=2 * _MAX_RADIUS_M)]] = Field(
         ..., min_length=2, max_length=_MAX_SIEVES)
     passing_fractions: list[Annotated[float, Field(ge=0.0, le=1.0)]] = Field(..., min_length=2, max_length=_MAX_SIEVES)

@@ -7,7 +7,7 @@ from fastapi import APIRouter, Depends, Path, Query
 from pydantic import BaseModel, ConfigDict, Field
 from sqlalchemy.orm import Session
 
-from engine.lab.bounds import SQLITE_INT_MAX
+from engine.lab.bounds import ID_MAX
 from engine.lab.rigs import Rig
 from service.api.openapi import errors
 from service.api.params import Offset, page_limit
@@ -22,8 +22,8 @@ from service.models.rig import Rig as RigRow
 
 router = APIRouter(prefix="/rigs", tags=["rigs"])
 
-RigId = Annotated[int, Path(ge=1, le=SQLITE_INT_MAX, description="rig id")]
-ForMaterial = Annotated[int | None, Query(ge=1, le=SQLITE_INT_MAX,
+RigId = Annotated[int, Path(ge=1, le=ID_MAX, description="rig id")]
+ForMaterial = Annotated[int | None, Query(ge=1, le=ID_MAX,
                                           description="check the rig against this material's particles: a gap they "
                                                       "fall through is refused, a box too small for them warned")]
 
@@ -111,7 +111,7 @@ def replace(rig_id: RigId, body: Rig, session: DbSession, material_id: ForMateri
 
 @router.get("/{rig_id}/check", response_model=RigCheck,
             summary="Check a rig against a material's particles (422 naming the field if they cannot run in it)")
-def check(rig_id: RigId, session: DbSession, material_id: Annotated[int, Query(ge=1, le=SQLITE_INT_MAX)]):
+def check(rig_id: RigId, session: DbSession, material_id: Annotated[int, Query(ge=1, le=ID_MAX)]):
     row = _rig_or_404(session, rig_id)
     return {"rig_id": rig_id, "material_id": material_id, "warnings": _warnings(session, record_of(row), material_id)}
 

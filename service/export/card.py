@@ -172,7 +172,7 @@ class Calibration(BaseModel):
     verdict: str | None = Field(None, max_length=200)
     meaning: str | None = Field(None, max_length=10_000)
     confirmation_seeds: list[int] = Field(default_factory=list, max_length=1000)
-    calibrated: list[CalibratedParameter] = Field(default_factory=list, max_length=64)
+    parameters: list[CalibratedParameter] = Field(default_factory=list, max_length=64)
     trades: list[Annotated[str, Field(max_length=1000)]] = Field(
         default_factory=list, max_length=64,
         description="parameter pairs the measurements fix only in combination (their correlation reaches 0.9)")
@@ -396,7 +396,7 @@ def build_card(*, material: dict[str, Any], measurements: list[dict[str, Any]], 
                         "evaluator": campaign["evaluator"], "verdict": report.get("verdict"),
                         "meaning": report.get("meaning"),
                         "confirmation_seeds": list(report.get("confirmation_seeds") or []),
-                        "calibrated": calibrated, "trades": trades,
+                        "parameters": calibrated, "trades": trades,
                         "fixed_by_campaign": sorted(report.get("fixed_parameters") or {})},
         "measurements": [measurement_card(m, row) for m, row in used],
     }

@@ -13,6 +13,7 @@ from collections import defaultdict
 from html import escape
 from typing import Any
 
+from calibration.vocabulary import Verdict
 from engine.lab.units import parameter_si_unit
 from service.export import svg
 
@@ -60,7 +61,7 @@ def _table(headers: list[str], rows: list[list[Any]], numeric: set[int] = frozen
 
 
 def _verdict_class(verdict: str | None) -> str:
-    return "ok" if verdict == "calibrated" else "bad" if verdict else ""
+    return "ok" if verdict == Verdict.CALIBRATED else "bad" if verdict else ""
 
 
 def _parameters(report: dict[str, Any], factors: list[dict], parameter_std: dict | None) -> str:

@@ -52,7 +52,7 @@ def test_the_card_states_the_calibrated_material_in_si_with_units(calibrated):
     # the parameters the campaign did not vary are demcal's defaults, stated all the same
     assert card["contact"]["parameters"]["damping_ratio"]["value"] == MicroParameters().damping_ratio
     assert card["contact"]["law"] == "linear_spring_dashpot_pfc" and "series" in card["contact"]["description"]
-    calibrated = {p["name"]: p for p in card["calibration"]["calibrated"]}
+    calibrated = {p["name"]: p for p in card["calibration"]["parameters"]}
     assert set(calibrated) == set(optimum)
     assert calibrated["friction_pp"]["design_range"] == [0.3, 1.0]
     assert calibrated["particle_density_kg_m3"]["standard_uncertainty"] > 0
