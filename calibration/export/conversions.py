@@ -45,28 +45,29 @@ def _damping_ratio(zeta: float) -> float:
     return zeta
 
 
+def _in_series(name: str, a: float, b: float | None) -> float:
+    """a b / (a + b), the one combination of two springs, masses or radii of a pair; ``b`` None is a wall
+    (infinitely stiff, heavy, flat): a."""
+    a = _positive(f"{name}1", a)
+    if b is None:
+        return a
+    b = _positive(f"{name}2", b)
+    return a * b / (a + b)
+
+
 def series_stiffness_n_per_m(k1_n_per_m: float, k2_n_per_m: float) -> float:
     """Contact stiffness of two PFC-style entity springs in series: k1 k2 / (k1 + k2)."""
-    k1, k2 = _positive("k1", k1_n_per_m), _positive("k2", k2_n_per_m)
-    return k1 * k2 / (k1 + k2)
+    return _in_series("k", k1_n_per_m, _positive("k2", k2_n_per_m))
 
 
 def effective_mass_kg(m1_kg: float, m2_kg: float | None = None) -> float:
     """m* = m1 m2 / (m1 + m2); ``m2_kg`` None is a wall (infinitely heavy): m* = m1."""
-    m1 = _positive("m1", m1_kg)
-    if m2_kg is None:
-        return m1
-    m2 = _positive("m2", m2_kg)
-    return m1 * m2 / (m1 + m2)
+    return _in_series("m", m1_kg, m2_kg)
 
 
 def effective_radius_m(r1_m: float, r2_m: float | None = None) -> float:
     """R* = r1 r2 / (r1 + r2); ``r2_m`` None is a wall: R* = r1 (both codes)."""
-    r1 = _positive("r1", r1_m)
-    if r2_m is None:
-        return r1
-    r2 = _positive("r2", r2_m)
-    return r1 * r2 / (r1 + r2)
+    return _in_series("r", r1_m, r2_m)
 
 
 def sphere_mass_kg(density_kg_m3: float, radius_m: float) -> float:
