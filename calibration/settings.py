@@ -11,7 +11,7 @@ from calibration.discrepancy import Discrepancy
 from doe.constraints import MAX_CONSTRAINT_CHARS, parse_constraint
 from doe.factors import DoeError
 from engine.lab.registry import BATTERY, JobTestName
-from engine.lab.spec import STRICT_INPUT, MicroParameters, MicroParametersDict, TestOptions, TestOptionsDict
+from engine.lab.spec import STRICT_INPUT, MicroParameters, MicroParametersDict, TestOptions, TestOptionsDict, WholeNumber
 
 # Every schema here refuses NaN and infinities: stored, they come back as null and the campaign fails later
 # with an empty reason.
@@ -56,8 +56,8 @@ class DesignIn(BaseModel):
     generators: list[Annotated[str, Field(max_length=MAX_GENERATOR_CHARS)]] | None = Field(
         None, max_length=14, description="fractional only, e.g. ['D=ABC'] for the thesis's 2^(4-1) design (Table A.8)"
     )
-    centre_runs: int = Field(3, ge=0, le=50, description="centre replicates, each with its own seed")
-    replicates: int = Field(1, ge=1, le=10)
+    centre_runs: WholeNumber = Field(3, ge=0, le=50, description="centre replicates, each with its own seed")
+    replicates: WholeNumber = Field(1, ge=1, le=10)
     randomise: bool = True
     axial: Literal["none", "face"] = Field(
         "none", description="'face': add face-centred axial runs (2 per factor), making a central composite "
@@ -76,7 +76,7 @@ class DesignPreviewIn(DesignIn):
     """A design preview is DEM-agnostic: any factor names."""
 
     factors: list[FactorIn] = Field(..., min_length=1, max_length=15)
-    seed: int = Field(0, ge=0, le=2**32 - 1)
+    seed: WholeNumber = Field(0, ge=0, le=2**32 - 1)
 
 
 class PriorIn(BaseModel):
@@ -132,13 +132,13 @@ class LoopSettings(BaseModel):
         "its directed test (the candidates' score along their signatures) sees a misfit spread thinly over many "
         "targets that the omnibus lack of fit misses; costs a baseline and one battery per candidate, per confirmation seed",
     )
-    confirmation_seeds: int = Field(
+    confirmation_seeds: WholeNumber = Field(
         2, ge=1, le=8, description="batteries at the optimum, each with its own seed; the report compares their "
         "mean with the measurements, so the simulator's seed-to-seed scatter enters the lack of fit divided by "
         "this number, and the polishing steps and the diagnosis run at the same seeds (common random numbers). "
         "1 is cheapest; the diagnosis then adds a second seed at the optimum",
     )
-    polish_steps: int = Field(
+    polish_steps: WholeNumber = Field(
         3, ge=0, le=6, description="Gauss-Newton steps on the batteries after the confirmation (0: none); each "
         "costs 3 batteries per confirmation seed, plus one per factor and seed for the Jacobian: the surfaces' "
         "optimum is biased inside the box for saturating responses",
@@ -155,8 +155,8 @@ class LoopSettings(BaseModel):
         "iteration by itself, until the lack of fit passes, nothing improves, or max_iterations is reached "
         "(the reason is in the summary's stop_reason)",
     )
-    max_iterations: int = Field(4, ge=1, le=10, description="automatic mode: iterations at most, the first included")
-    seed: int = Field(0, ge=0, le=2**31 - 1_000_000)
+    max_iterations: WholeNumber = Field(4, ge=1, le=10, description="automatic mode: iterations at most, the first included")
+    seed: WholeNumber = Field(0, ge=0, le=2**31 - 1_000_000)
     @field_validator("factors")
     @classmethod
     def _factor_names(cls, factors: list[FactorIn]) -> list[FactorIn]:

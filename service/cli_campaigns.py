@@ -246,9 +246,11 @@ def campaign_next(args) -> int:
         body["proposed_design"] = True
     if args.override:
         body["override"] = True
-    before = _call(args, "GET", f"/campaigns/{args.id}/iterations")
+    total = _call(args, "GET", f"/campaigns/{args.id}/iterations", params={"limit": 1})["total"]
+    last = (_call(args, "GET", f"/campaigns/{args.id}/iterations", params={"limit": 1, "offset": total - 1})["items"][0]
+            if total else None)
     c = _call(args, "POST", f"/campaigns/{args.id}/iterations", body=body)
-    return _emit(args, c, _next_text(c, before[-1] if before else None, args.add_effect))
+    return _emit(args, c, _next_text(c, last, args.add_effect))
 
 
 def _next_text(c: dict, last: dict | None, effect: str | None) -> str:

@@ -28,6 +28,7 @@ from fastapi.responses import JSONResponse
 
 from service.config import Settings
 from service.errors import Unauthorized
+from service.models.base import IDENTITY_LENGTH
 
 WRITE_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 DEFAULT_TOKEN_NAME = "token"
@@ -36,6 +37,10 @@ ROLES = frozenset({ADMIN_ROLE})
 # A guessable token is no token: one character (or whitespace) was accepted. 16 characters of a random
 # generator (e.g. ``python3 -c "import secrets; print(secrets.token_urlsafe(24))"``) are beyond guessing.
 MIN_TOKEN_LENGTH = 16
+# A request with a token counts against ``token:<name>``, stored in the identity columns: a longer name
+# would overflow them on PostgreSQL (SQLite does not enforce VARCHAR widths, so tests there never saw it).
+TOKEN_CLIENT_PREFIX = "token:"
+MAX_USER_NAME_LENGTH = IDENTITY_LENGTH - len(TOKEN_CLIENT_PREFIX)
 # Paths under the API any reader may fetch although tokens are configured: health (counts only, for load
 # balancers and ``wait_healthy``), the OpenAPI document (the page's forms read their bounds there) and the
 # API docs that show it (service.web.docs). None of them holds anyone's data.
@@ -84,10 +89,13 @@ def token_users(settings: Settings) -> dict[str, TokenUser]:
     DEMCAL_TOKENS ("name:token[:admin],...").
 
     Refused with one line (at start: ``check_bind`` calls this before the socket opens) when a token is
-    shorter than ``MIN_TOKEN_LENGTH`` or two users share one: a shared token silently merged two users
+    shorter than ``MIN_TOKEN_LENGTH``, a user name longer than ``MAX_USER_NAME_LENGTH`` or two users share one: a shared token silently merged two users
     into whichever name came last."""
     table: dict[str, TokenUser] = {}
     for variable, name, token, admin in _entries(settings):
+        if len(name) > MAX_USER_NAME_LENGTH:
+            raise SystemExit(f"{variable}: the user name {name[:20]!r}... has {len(name)} characters; at most "
+                             f"{MAX_USER_NAME_LENGTH} are stored")
         if len(token) < MIN_TOKEN_LENGTH:
             raise SystemExit(f"{variable}: the token of {name!r} has {len(token)} characters (after trimming "
                              f"spaces); at least {MIN_TOKEN_LENGTH} are needed")
@@ -208,7 +216,7 @@ def client_id(request: Request, x_client_id: str | None = Header(
     else the client's address (``peer_address``). Nobody else can choose an identity by header."""
     name = getattr(request.state, "client_name", None)
     if name:
-        return f"token:{name}"
+        return f"{TOKEN_CLIENT_PREFIX}{name}"
     if x_client_id and from_trusted_proxy(request):
         return x_client_id
     return peer_address(request) or "anonymous"

@@ -33,6 +33,7 @@ from typing import Annotated
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from engine.lab.errors import SpecFieldError
+from engine.lab.spec import WholeNumber
 from engine.particles.description import Particles
 
 _MODEL = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True, frozen=True)
@@ -79,7 +80,7 @@ class ShearBox(BaseModel):
     cct_max_stress_pa: float | None = Field(None, gt=0, le=_MAX_STRESS_PA,
                                             description="CCT peak normal stress (give this or the force)")
     cct_max_force_n: float | None = Field(None, gt=0, le=_MAX_FORCE_N, description="CCT peak lid force")
-    cct_cycles: int = Field(4, ge=1, le=_MAX_CYCLES, description="CCT load-unload cycles")
+    cct_cycles: WholeNumber = Field(4, ge=1, le=_MAX_CYCLES, description="CCT load-unload cycles")
     lid_speed_m_s: Speed = Field(0.001, description="lid speed of the CCT and the DST's loading")
     shear_speed_m_s: Speed = Field(0.001, description="DST shear speed")
     shear_distance_m: Length = Field(..., description="DST shear travel")

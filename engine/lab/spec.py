@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, Strict, WithJsonSchema, field_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, WithJsonSchema, field_validator
 
 from engine.lab.bounds import (CONTACT_STIFFNESS_TYPICAL, DENSEST_SOLID_KG_M3, FRICTION_COEFFICIENT_TYPICAL,
                                MAX_CONTACT_STIFFNESS_N_PER_M, MAX_FRICTION_COEFFICIENT, MAX_PARTICLE_RADIUS_M,
@@ -25,6 +25,18 @@ STRICT_INPUT = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 _FINITE = STRICT_INPUT
 # A pair of numbers sent as a JSON list: a strict tuple would refuse the list, a lax one take booleans.
 STRICT_PAIR = tuple[Annotated[float, Strict()], Annotated[float, Strict()]]
+
+
+def _whole_float_to_int(value: Any) -> Any:
+    """2.0 -> 2; anything else (2.5, true, "2") left for the strict check to refuse."""
+    return int(value) if type(value) is float and value.is_integer() else value
+
+
+# An integer field of an input model. JSON has one number type and JSON Schema's "integer" admits 2.0,
+# which is what a client computing a seed or a count in floating point sends; strict mode alone refused
+# it ("Input should be a valid integer") while the published schema allowed it. Booleans, strings and
+# fractions are still refused.
+WholeNumber = Annotated[int, BeforeValidator(_whole_float_to_int)]
 # Speeds, lengths and counts of a laboratory test: ceilings well above any lab set-up, so that the
 # cost model (engine.lab.cost) rather than an overflow decides what is too big.
 _MAX_LAB_LENGTH_M = 100.0
@@ -118,7 +130,7 @@ class TestOptions(BaseModel):
         description="DST normal stresses, Pa: at least two distinct levels (a Mohr-Coulomb line needs two)",
     )
     cct_max_stress_pa: Annotated[float | None, NORMAL_STRESS_TYPICAL] = Field(None, gt=0, le=STIFFEST_SOLID_PA)
-    cct_cycles: int | None = Field(None, ge=1, le=_MAX_CCT_CYCLES,
+    cct_cycles: WholeNumber | None = Field(None, ge=1, le=_MAX_CCT_CYCLES,
                                    description="load-unload cycles; each counts in the simulated-time limit")
     cct_window_stresses_pa: list[float] | None = Field(
         None, max_length=_MAX_CCT_WINDOW_STRESSES,
@@ -139,7 +151,7 @@ class TestOptions(BaseModel):
     residual_window_strain: STRICT_PAIR = Field(
         (0.08, 0.10), strict=False, description="DST shear-strain window for residual stresses and dilatancy"
     )
-    moving_average_span: int = Field(21, ge=1, le=100_001, description="DST smoothing span, points (odd)")
+    moving_average_span: WholeNumber = Field(21, ge=1, le=100_001, description="DST smoothing span, points (odd)")
     aor_lift_speed_m_s: float | None = Field(None, ge=_MIN_LAB_SPEED_M_S, le=_MAX_LAB_SPEED_M_S)
     aor_bucket_friction: float | None = Field(None, ge=0, le=MAX_FRICTION_COEFFICIENT,
                                               description="particle-bucket friction (plastic 0.67)")
@@ -213,7 +225,7 @@ class JobSpec(BaseModel):
 
     test: JobTestName = BATTERY
     fidelity: Fidelity = "screening"
-    seed: int = Field(0, ge=0, le=MAX_SEED)
+    seed: WholeNumber = Field(0, ge=0, le=MAX_SEED)
     parameters: MicroParameters = Field(default_factory=MicroParameters)
     options: TestOptions = Field(default_factory=TestOptions)
 

@@ -8,16 +8,18 @@ from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.campaigns.store import (campaign_summary, create_campaign, get_campaign, iteration, iteration_view,
                                      list_campaigns, next_iteration, transition)
 from service.api.openapi import errors
-from service.api.params import CampaignId, CampaignLimit, IterationNumber, Offset
+from service.api.params import CampaignId, CampaignLimit, IterationLimit, IterationNumber, Offset
 from engine.lab.bounds import ID_MAX
 from service.api.responses.campaigns import (CampaignDesign, CampaignList, CampaignModels, CampaignOptimum, CampaignSummary,
-                                             Confirmation, Iteration)
+                                             Confirmation, Iteration, IterationList)
 from service.api.responses.common import typed
 from service.api.responses.diagnosis import DiagnosisOut
 from service.api.responses.history import History
 from service.api.responses.report import ReportOut
 from service.db import DbSession, built_then_committed
 from service.errors import Conflict, NotFound
+from service.models.campaign import CampaignIteration
+from service.pagination import paged
 from service.ownership import Caller, caller, owner_of
 from service.security import client_id
 from calibration.vocabulary import Phase, Verdict
@@ -73,10 +75,13 @@ def resume(campaign_id: CampaignId, session: DbSession, who: Caller = Depends(ca
     return campaign_summary(_change(session, campaign_id, who, "resume"))
 
 
-@router.get("/{campaign_id}/iterations", summary="All iterations with their parameters, design, runs and report",
-            **typed(list[Iteration]))
-def iterations(campaign_id: CampaignId, session: DbSession) -> list[dict]:
-    return [iteration_view(it) for it in get_campaign(session, campaign_id).iterations]
+@router.get("/{campaign_id}/iterations", summary="A page of the iterations with their parameters, design, runs and report",
+            **typed(IterationList))
+def iterations(campaign_id: CampaignId, session: DbSession, limit: IterationLimit = 20, offset: Offset = 0) -> dict:
+    get_campaign(session, campaign_id)  # 404 for an unknown campaign, not an empty page
+    rows, total = paged(session, CampaignIteration, where=[CampaignIteration.campaign_id == campaign_id],
+                        order=(CampaignIteration.number, CampaignIteration.id), limit=limit, offset=offset)
+    return {"items": [iteration_view(it) for it in rows], "total": total, "limit": limit, "offset": offset}
 
 
 @router.post("/{campaign_id}/iterations", status_code=201,

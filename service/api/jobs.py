@@ -11,7 +11,7 @@ from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from engine.lab.bounds import ID_MAX, MAX_SEED
 from engine.lab.plausibility import options_warnings, parameter_warnings
 from engine.lab.registry import BATTERY, JobTestName
-from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, TestOptions
+from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, TestOptions, WholeNumber
 from service import queue
 from service.api.jsonsafe import json_safe
 from service.api.openapi import errors
@@ -36,15 +36,15 @@ class JobSubmit(BaseModel):
 
     test: JobTestName = BATTERY
     fidelity: Fidelity = "screening"
-    seed: int = Field(0, ge=0, le=MAX_SEED, description="random seed; same seed and thread count, same result")
+    seed: WholeNumber = Field(0, ge=0, le=MAX_SEED, description="random seed; same seed and thread count, same result")
     parameters: MicroParameters = Field(default_factory=MicroParameters)
     options: TestOptions = Field(default_factory=TestOptions)
     evaluator: EvaluatorName = Field(DEFAULT.name, description="the backend the job runs on (GET /api/v1/evaluators)")
-    priority: int = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="higher runs first")
+    priority: WholeNumber = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="higher runs first")
     idempotency_key: str | None = Field(None, min_length=1, max_length=200,
                                         description="resubmitting the same key returns the same job")
-    campaign_id: int | None = Field(None, ge=1, le=ID_MAX)
-    max_attempts: int | None = Field(None, ge=1, le=20, description="claims before a lost job fails")
+    campaign_id: WholeNumber | None = Field(None, ge=1, le=ID_MAX)
+    max_attempts: WholeNumber | None = Field(None, ge=1, le=20, description="claims before a lost job fails")
 
     def spec(self) -> JobSpec:
         return JobSpec(test=self.test, fidelity=self.fidelity, seed=self.seed,

@@ -42,3 +42,4 @@ CampaignLimit = page_limit(500)
 ScheduleLimit = page_limit(500)
 FiringLimit = page_limit(1000)
 MeasurementLimit = page_limit(1000)
+IterationLimit = page_limit(100)  # an iteration carries its design, runs and report

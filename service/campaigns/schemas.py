@@ -13,7 +13,7 @@ from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from calibration.settings import _FINITE, DesignIn, DesignPreviewIn, FactorIn, LoopSettings, PriorIn  # noqa: F401
 from engine.lab.bounds import ID_MAX, CONDITION_BOUNDS
 from engine.lab.registry import known_quantity, known_test
-from engine.lab.spec import STRICT_PAIR, MicroParameters, MicroParametersDict, TestOptions, TestOptionsDict
+from engine.lab.spec import STRICT_PAIR, MicroParameters, MicroParametersDict, TestOptions, TestOptionsDict, WholeNumber
 from engine.lab.units import UnitError, condition_si_unit
 
 # One priority scale for jobs and campaigns (service.api.params mirrors it for jobs).
@@ -55,12 +55,12 @@ class CampaignCreate(LoopSettings):
     model_config = _FINITE
 
     name: str = Field(..., min_length=1, max_length=200)
-    material_id: int = Field(..., ge=1, le=ID_MAX)
+    material_id: WholeNumber = Field(..., ge=1, le=ID_MAX)
     evaluator: EvaluatorName = Field(DEFAULT.name, description="the backend every run goes to (GET /api/v1/evaluators)")
     targets: list[TargetIn] | None = Field(
         None, max_length=1000, description="measurements to calibrate against; default every measurement the battery simulates"
     )
-    priority: int = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="of every job the campaign queues")
+    priority: WholeNumber = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="of every job the campaign queues")
 
 
 class IterationIn(BaseModel):

@@ -28,7 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from engine.effects import REGISTRY
 from engine.lab.presets import fidelity as fidelity_preset
 from engine.lab.registry import JobTestName
-from engine.lab.spec import Fidelity, MicroParameters, TestOptions
+from engine.lab.spec import Fidelity, MicroParameters, TestOptions, WholeNumber
 from engine.lab.units import parameter_si_unit
 
 CARD_VERSION = 1
@@ -165,13 +165,13 @@ class Calibration(BaseModel):
 
     model_config = _STRICT
 
-    campaign_id: int | None
+    campaign_id: WholeNumber | None
     campaign_name: str = Field(..., max_length=200)
-    iteration: int = Field(..., ge=1)
+    iteration: WholeNumber = Field(..., ge=1)
     evaluator: str = Field(..., max_length=64)
     verdict: str | None = Field(None, max_length=200)
     meaning: str | None = Field(None, max_length=10_000)
-    confirmation_seeds: list[int] = Field(default_factory=list, max_length=1000)
+    confirmation_seeds: list[WholeNumber] = Field(default_factory=list, max_length=1000)
     parameters: list[CalibratedParameter] = Field(default_factory=list, max_length=64)
     trades: list[Annotated[str, Field(max_length=1000)]] = Field(
         default_factory=list, max_length=64,
@@ -205,7 +205,7 @@ class MeasurementCard(BaseModel):
     condition: dict[str, float] = Field(default_factory=dict, max_length=8)
     unit: str = Field(..., max_length=16)
     values: list[float] = Field(..., min_length=1, max_length=1000)
-    reported_replicates: int | None = None
+    reported_replicates: WholeNumber | None = None
     stated_uncertainty: float | None = None
     source: str = Field("", max_length=10_000)
     mean: float | None = Field(None, description="derived from values (informative)")

@@ -9,7 +9,7 @@ from pydantic import BaseModel, Field, ValidationInfo, field_validator
 from service.api.responses.common import Page
 
 from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree
-from engine.lab.spec import STRICT_INPUT
+from engine.lab.spec import STRICT_INPUT, WholeNumber
 from engine.lab.registry import known_quantity, known_test, quantity
 from service.errors import Invalid
 from engine.lab.units import UnitError, condition_si_unit, to_si
@@ -39,7 +39,7 @@ class MeasurementIn(BaseModel):
         default_factory=dict, max_length=8,
         description="unit per condition entry when not SI, e.g. {'normal_stress_pa': 'kPa'}",
     )
-    reported_replicates: int | None = Field(None, ge=1, le=MAX_REPLICATES,
+    reported_replicates: WholeNumber | None = Field(None, ge=1, le=MAX_REPLICATES,
                                             description="replicates behind a published average")
     standard_uncertainty: float | None = Field(None, gt=0, description="stated standard uncertainty, in `unit`")
     source: str = Field("", max_length=MAX_TEXT)

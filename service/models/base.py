@@ -14,6 +14,9 @@ NAMING_CONVENTION = {
     "fk": "fk_%(table_name)s_%(column_0_name)s_%(referred_table_name)s",
     "pk": "pk_%(table_name)s",
 }
+# Who made a row or whose limits it counts against (``owner``, ``client_id``): a token's user name, an
+# address, ``token:<name>`` or ``schedule:<id>``. One width, so the security module can bound user names by it.
+IDENTITY_LENGTH = 100
 
 
 class Base(DeclarativeBase):

@@ -12,7 +12,7 @@ from sqlalchemy import JSON, BigInteger, DateTime, ForeignKey, Integer, String, 
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from calibration.evaluator_registry import DEFAULT, NAME_MAX
-from service.models.base import Base, utcnow
+from service.models.base import IDENTITY_LENGTH, Base, utcnow
 from service.vocabulary import CampaignStatus
 
 CAMPAIGN_STATUSES = CampaignStatus.values()
@@ -34,9 +34,9 @@ class Campaign(Base):
     current_iteration: Mapped[int] = mapped_column(Integer, default=0, nullable=False)
     error: Mapped[str | None] = mapped_column(Text, nullable=True)
     schedule_id: Mapped[int | None] = mapped_column(Integer, nullable=True, index=True)
-    client_id: Mapped[str] = mapped_column(String(100), default="anonymous", nullable=False)
+    client_id: Mapped[str] = mapped_column(String(IDENTITY_LENGTH), default="anonymous", nullable=False)
     # the user (bearer token name) who made it; None without a token (service.ownership)
-    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)
+    owner: Mapped[str | None] = mapped_column(String(IDENTITY_LENGTH), nullable=True)
     created_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, nullable=False)
     updated_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, onupdate=utcnow, nullable=False)
     started_at: Mapped[datetime | None] = mapped_column(DateTime, nullable=True)

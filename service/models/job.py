@@ -13,7 +13,7 @@ from sqlalchemy import JSON, BigInteger, Boolean, DateTime, Float, Index, Intege
 from sqlalchemy.orm import Mapped, mapped_column
 
 from calibration.evaluator_registry import DEFAULT, NAME_MAX
-from service.models.base import Base, utcnow
+from service.models.base import IDENTITY_LENGTH, Base, utcnow
 from service.vocabulary import JobStatus
 
 JOB_STATUSES = JobStatus.values()
@@ -52,7 +52,7 @@ class Job(Base):
     started_at: Mapped[datetime | None] = mapped_column(DateTime, nullable=True)
     finished_at: Mapped[datetime | None] = mapped_column(DateTime, nullable=True)
     idempotency_key: Mapped[str | None] = mapped_column(String(200), nullable=True)
-    client_id: Mapped[str] = mapped_column(String(100), default="anonymous", nullable=False)
+    client_id: Mapped[str] = mapped_column(String(IDENTITY_LENGTH), default="anonymous", nullable=False)
     campaign_id: Mapped[int | None] = mapped_column(Integer, nullable=True, index=True)
     # the user (bearer token name) who made it; None without a token (service.ownership)
-    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)
+    owner: Mapped[str | None] = mapped_column(String(IDENTITY_LENGTH), nullable=True)

@@ -12,7 +12,7 @@ from typing import Any
 from sqlalchemy import JSON, Boolean, DateTime, Float, ForeignKey, Integer, String, Text
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
-from service.models.base import Base, utcnow
+from service.models.base import IDENTITY_LENGTH, Base, utcnow
 from service.models.rig import Rig
 
 
@@ -25,7 +25,7 @@ class Material(Base):
     source: Mapped[str] = mapped_column(Text, default="", nullable=False)
     bundled: Mapped[bool] = mapped_column(Boolean, default=False, nullable=False)
     # the user (bearer token name) who made it; None without a token (service.ownership)
-    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)
+    owner: Mapped[str | None] = mapped_column(String(IDENTITY_LENGTH), nullable=True)
     # Parameters measured directly (particle density, wall friction ...), usable as priors.
     direct_estimates: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict, nullable=False)
     # The rig its measurements were made in (one laboratory's apparatus, every test kind: engine.lab.rigs);

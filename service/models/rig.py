@@ -12,7 +12,7 @@ from typing import Any
 from sqlalchemy import JSON, Boolean, DateTime, Integer, String
 from sqlalchemy.orm import Mapped, mapped_column
 
-from service.models.base import Base, utcnow
+from service.models.base import IDENTITY_LENGTH, Base, utcnow
 
 
 class Rig(Base):
@@ -24,6 +24,6 @@ class Rig(Base):
     bundled: Mapped[bool] = mapped_column(Boolean, default=False, nullable=False)
     record: Mapped[dict[str, Any]] = mapped_column(JSON, nullable=False)
     # the user (bearer token name) who made it; None without a token (service.ownership)
-    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)
+    owner: Mapped[str | None] = mapped_column(String(IDENTITY_LENGTH), nullable=True)
     created_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, nullable=False)
     updated_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, onupdate=utcnow, nullable=False)

@@ -7,7 +7,7 @@ from typing import Any
 from sqlalchemy import JSON, Boolean, DateTime, ForeignKey, Integer, String, Text
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
-from service.models.base import Base, utcnow
+from service.models.base import IDENTITY_LENGTH, Base, utcnow
 
 
 class Schedule(Base):
@@ -27,11 +27,11 @@ class Schedule(Base):
     last_measurement_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
     last_campaign_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
     # the user (bearer token name) who made it; None without a token (service.ownership)
-    owner: Mapped[str | None] = mapped_column(String(100), nullable=True)
+    owner: Mapped[str | None] = mapped_column(String(IDENTITY_LENGTH), nullable=True)
     # the identity per-client limits count against, as the creator's requests had it: the campaigns it
     # starts queue under it, so a schedule is no way past its owner's limit (None: rows from before
     # 0003, whose campaigns count as "schedule:<id>")
-    client_id: Mapped[str | None] = mapped_column(String(100), nullable=True)
+    client_id: Mapped[str | None] = mapped_column(String(IDENTITY_LENGTH), nullable=True)
     created_at: Mapped[datetime] = mapped_column(DateTime, default=utcnow, nullable=False)
 
     firings: Mapped[list["ScheduleFiring"]] = relationship(

@@ -516,7 +516,7 @@ def test_no_physical_match_page_offers_no_add_button(page, service, shots):
     page.once("dialog", lambda d: (dialogs.append(d.message), d.dismiss()))
     override.locator("button.override").click()
     assert dialogs and "no physical match" in dialogs[0] and "goes against it" in dialogs[0]
-    assert len(service.api("GET", f"/campaigns/{cid}/iterations").json()) == 1  # dismissed: nothing added
+    assert len(service.api("GET", f"/campaigns/{cid}/iterations").json()["items"]) == 1  # dismissed: nothing added
     # what holds and what does not, beside the verdict
     expect_text(page, "section.verdict ul.checks", "targets within reach")
     section_shot(page, shots, "Diagnosis", "campaign-diagnosis-no-match")

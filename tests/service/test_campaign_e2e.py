@@ -21,7 +21,7 @@ def test_analytic_campaign_from_creation_to_report(s2):
     assert final["status"] == "completed", final["error"]
 
     # 2^3 factorial + 3 centre replicates, one battery each, plus a confirmation battery per seed (2 by default)
-    (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()
+    (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()["items"]
     runs = iteration["runs"]
     design_runs = [r for r in runs if r["kind"] == "design"]
     assert len(design_runs) == 11 and sum(r["is_centre"] for r in design_runs) == 3
@@ -176,7 +176,7 @@ def test_next_iteration_with_an_effect_keeps_the_first(s2):
     assert client.post(f"{API}/campaigns/{cid}/iterations", json={}).status_code == 409  # running
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
 
-    iterations = client.get(f"{API}/campaigns/{cid}/iterations").json()
+    iterations = client.get(f"{API}/campaigns/{cid}/iterations").json()["items"]
     assert [it["number"] for it in iterations] == [1, 2]
     assert iterations[0]["parameters"]["effects"] == {} and iterations[1]["parameters"]["effects"] == effects
     assert client.get(f"{API}/campaigns/{cid}/report", params={"number": 1}).json()["targets"] == first["targets"]
@@ -200,7 +200,7 @@ def test_one_confirmation_seed_gets_a_baseline_seed_of_its_own_for_the_diagnosis
     cid = client.post(f"{API}/campaigns", json=body).json()["id"]
     client.post(f"{API}/campaigns/{cid}/start")
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
-    (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()
+    (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()["items"]
     (seed,) = [r["seed"] for r in iteration["runs"] if r["kind"] == "confirmation"]
     diagnosis_runs = sorted((r for r in iteration["runs"] if r["kind"] == "diagnosis"), key=lambda r: r["std_order"])
     optimum = client.get(f"{API}/campaigns/{cid}/optimum").json()["parameters"]

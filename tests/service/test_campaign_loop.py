@@ -37,7 +37,7 @@ def test_diagnosis_names_the_effect_and_adding_it_lets_the_error_fall(s2):
     response = client.post(f"{API}/campaigns/{cid}/iterations", json={"add_effect": top})
     assert response.status_code == 201, response.text
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
-    iterations = client.get(f"{API}/campaigns/{cid}/iterations").json()
+    iterations = client.get(f"{API}/campaigns/{cid}/iterations").json()["items"]
     factor = candidates()[top].factor
     added = next(f for f in iterations[1]["parameters"]["factors"] if f["name"] == factor)
     # the range the automatic mode would give from the diagnosis's estimate of the strength
@@ -109,7 +109,7 @@ def test_the_design_the_surface_check_proposes_runs_as_the_next_iteration(s2):
     response = client.post(f"{API}/campaigns/{cid}/iterations", json={"proposed_design": True})
     assert response.status_code == 201, response.text
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
-    second = client.get(f"{API}/campaigns/{cid}/iterations").json()[1]
+    second = client.get(f"{API}/campaigns/{cid}/iterations").json()["items"][1]
     design_runs = [r for r in second["runs"] if r["kind"] == "design"]
     assert len(design_runs) == 8 + 3 + 2 * 3  # 2^3, centre runs, two axial runs per factor
     axial = [r for r in design_runs if sum(abs(v) for v in r["coded"].values()) == 1.0]

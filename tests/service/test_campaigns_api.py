@@ -22,7 +22,7 @@ def test_create_and_read(s2):
     assert [c["id"] for c in client.get(f"{API}/campaigns", params={"status": "draft"}).json()["items"]] == [campaign["id"]]
     assert client.get(f"{API}/campaigns", params={"status": "running"}).json()["items"] == []
     assert client.get(f"{API}/campaigns", params={"status": "sleeping"}).status_code == 422
-    assert client.get(f"{API}/campaigns/{campaign['id']}/iterations").json() == []
+    assert client.get(f"{API}/campaigns/{campaign['id']}/iterations").json()["items"] == []
 
 
 @pytest.mark.parametrize("change, loc", [

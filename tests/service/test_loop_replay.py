@@ -31,7 +31,7 @@ def test_the_notebook_loop_replays_an_automatic_campaign_to_the_same_answers(s2)
     client.post(f"{API}/campaigns/{cid}/start")
     fits.forget()
     assert run_to_end(client, app, settings, cid, max_rounds=60)["status"] == "completed"
-    stored = client.get(f"{API}/campaigns/{cid}/iterations").json()
+    stored = client.get(f"{API}/campaigns/{cid}/iterations").json()["items"]
     assert len(stored) >= 2 and stored[0]["report"].get("diagnosis")  # the loop diagnosed and added an effect
     targets = _targets(app, material_id)
     # the surfaces are fitted once per iteration and target, though analysis, every polishing round, the

@@ -9,7 +9,7 @@ import pytest
 from conftest_s2 import API, campaign_body, s2, thesis_material_id  # noqa: F401
 from test_campaign_cli import run, server  # noqa: F401  (the live-server fixture)
 
-from service.api.params import CampaignLimit, FiringLimit, JobLimit, MaterialLimit, ScheduleLimit
+from service.api.params import CampaignLimit, FiringLimit, IterationLimit, JobLimit, MaterialLimit, ScheduleLimit
 
 
 def walk(client, path: str, limit: int, **params) -> list[dict]:
@@ -98,6 +98,23 @@ def test_schedules_and_firings_page_by_id(s2):  # noqa: F811
     bound = limit_bound(FiringLimit)
     assert client.get(f"{API}/schedules/{ids[1]}/firings", params={"limit": bound + 1}).status_code == 422
 
+
+def test_a_campaign_s_iterations_page_by_number(s2):  # noqa: F811
+    """Iterations grow without bound through manual additions and each carries its design, runs and
+    report: the listing pages them in the order they ran, whatever order the rows were written in."""
+    from service.models.campaign import CampaignIteration
+
+    client, app, _ = s2
+    cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+    with app.state.session_factory() as session:
+        session.add_all([CampaignIteration(campaign_id=cid, number=n, parameters={}) for n in (3, 1, 2)])
+        session.commit()
+    assert [it["number"] for it in walk(client, f"/campaigns/{cid}/iterations", 2)] == [1, 2, 3]
+    last = client.get(f"{API}/campaigns/{cid}/iterations", params={"limit": 1, "offset": 2}).json()
+    assert last["total"] == 3 and [it["number"] for it in last["items"]] == [3]
+    assert client.get(f"{API}/campaigns/999/iterations").status_code == 404
+    bound = limit_bound(IterationLimit)
+    assert client.get(f"{API}/campaigns/{cid}/iterations", params={"limit": bound + 1}).status_code == 422
 
 def test_jobs_order_is_stable_across_pages(client):
     """Newest first by id: paging while nothing changes shows each job once."""

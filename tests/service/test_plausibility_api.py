@@ -59,7 +59,7 @@ def test_each_slip_is_stored_with_a_warning_and_repeated_in_the_campaign_report(
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
     report = client.get(f"{API}/campaigns/{cid}/report").json()
     assert report["warnings"] == entry_warnings
-    stored = client.get(f"{API}/campaigns/{cid}/iterations").json()[0]["report"]
+    stored = client.get(f"{API}/campaigns/{cid}/iterations").json()["items"][0]["report"]
     assert stored["warnings"] == entry_warnings
 
 

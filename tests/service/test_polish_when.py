@@ -22,7 +22,7 @@ def _campaign(client, app, settings, **overrides) -> tuple[dict, list[dict]]:
     cid = response.json()["id"]
     client.post(f"{API}/campaigns/{cid}/start")
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
-    (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()
+    (iteration,) = client.get(f"{API}/campaigns/{cid}/iterations").json()["items"]
     return client.get(f"{API}/campaigns/{cid}/report").json(), iteration["runs"]
 
 

@@ -192,6 +192,8 @@ def test_stale_error_is_cleared_when_a_later_attempt_succeeds(session_factory):
     ({"tokens": "alice:short"}, "'alice'"),
     ({"tokens": "alice:shared-token-0123456789,bob:shared-token-0123456789"}, "same token"),
     ({"token": "shared-token-0123456789", "tokens": "bob:shared-token-0123456789"}, "same token"),
+    # "token:<name>" is the client identity, stored in 100-character columns (PostgreSQL enforces the width)
+    ({"tokens": "n" * 95 + ":long-enough-token-0123"}, "at most 94"),
 ])
 def test_short_or_shared_tokens_are_refused_at_start(settings, update, needle):
     with pytest.raises(SystemExit, match=needle) as refused:
@@ -239,6 +241,25 @@ def test_a_number_is_not_a_boolean_and_json_numbers_still_fit(s2):
         {"name": "friction_pp", "low": 0.3, "high": 1}], options={"residual_window_strain": [0.08, 0.1]}))
     assert ok.status_code == 201, ok.text
 
+
+
+def test_a_whole_float_is_an_integer_and_a_fraction_is_not(s2):
+    """JSON Schema's "integer" admits 2.0 (one JSON number type), what a client computing a seed in floating
+    point sends; strict models refused it while the published schema allowed it. 2.5 and true still fail."""
+    client, _app, _settings = s2
+    job = client.post(f"{API}/jobs", json={"evaluator": "analytic", "seed": 7.0, "priority": 2.0})
+    assert job.status_code == 201, job.text
+    assert (job.json()["spec"]["seed"], job.json()["priority"]) == (7, 2)
+    for bad in (7.5, True, "7"):
+        r = client.post(f"{API}/jobs", json={"evaluator": "analytic", "seed": bad})
+        assert r.status_code == 422 and ["body", "seed"] in locs(r), (bad, r.text)
+    material = thesis_material_id(client)
+    design = {"type": "full", "centre_runs": 2.0}
+    ok = client.post(f"{API}/campaigns", json=campaign_body(material, seed=3.0, design=design))
+    assert ok.status_code == 201 and ok.json()["config"]["seed"] == 3, ok.text
+    assert ok.json()["config"]["design"]["centre_runs"] == 2
+    bad = client.post(f"{API}/campaigns", json=campaign_body(material, design={**design, "centre_runs": 2.5}))
+    assert bad.status_code == 422 and ["body", "design", "centre_runs"] in locs(bad), bad.text
 
 def test_health_is_503_when_a_row_cannot_be_read(client):
     """Corrupted row contents: SELECT 1 answered, health said ok, /jobs answered 500."""

@@ -165,7 +165,7 @@ def test_typed_answers_equal_what_the_builders_return(s2):
     cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client), automatic=True)).json()["id"]
     client.post(f"{API}/campaigns/{cid}/start")
     assert run_to_end(client, app, settings, cid, max_rounds=60)["status"] == "completed"
-    numbers = [it["number"] for it in client.get(f"{API}/campaigns/{cid}/iterations").json()]
+    numbers = [it["number"] for it in client.get(f"{API}/campaigns/{cid}/iterations").json()["items"]]
     assert len(numbers) >= 2
     checked = []
     with app.state.session_factory() as session:

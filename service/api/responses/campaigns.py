@@ -109,6 +109,12 @@ class Iteration(Out):
     runs: list[Run] = Field(default_factory=list)
 
 
+class IterationList(Page):
+    """A page of a campaign's iterations, in the order they were run (number ascending)."""
+
+    items: list[Iteration]
+
+
 class CampaignDesign(DesignView):
     iteration: int
 

@@ -10,6 +10,10 @@ import { diagnosisSection } from "./campaign_diagnosis.js";
 import { historySection } from "./campaign_history.js";
 import { designSection, modelsSection } from "./campaign_models.js";
 
+// Iterations shown as tabs: the service's largest page of iterations (a campaign rarely has more than
+// the automatic mode's 10; a later one asked for by number is read on its own).
+const ITERATION_TABS = 100;
+
 function goTo(hash) {
   if (location.hash === hash) refresh(); else location.hash = hash;
 }
@@ -67,8 +71,13 @@ function scheduleForm(c) {
 }
 
 export async function campaignPage(view, id, params) {
-  const [c, iterations, history] = await Promise.all([api(`/campaigns/${id}`), api(`/campaigns/${id}/iterations`), api(`/campaigns/${id}/history`)]);
+  const [c, iterationPage, history] = await Promise.all([api(`/campaigns/${id}`), api(`/campaigns/${id}/iterations?limit=${ITERATION_TABS}`), api(`/campaigns/${id}/history`)]);
+  const iterations = iterationPage.items;
   const asked = Number(params?.get("iteration"));
+  if (asked && !iterations.some((x) => x.number === asked)) {  // beyond the tabs' page: read that one
+    const one = await optional(`/campaigns/${id}/iterations/${asked}`);
+    if (one) iterations.push(one);
+  }
   const it = iterations.find((x) => x.number === asked) || iterations.find((x) => x.number === c.current_iteration) || iterations[iterations.length - 1];
   const latest = iterations.length ? Math.max(...iterations.map((x) => x.number)) : 0;
   const parts = [h("h2", {}, `Campaign #${c.id} ${c.name} `, status(c.status)), controls(c, id),
