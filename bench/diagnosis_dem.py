@@ -332,7 +332,7 @@ def replay(svc: Service, cid: int, body: dict) -> list[str]:
     from calibration.replay import ReplayEvaluator, differences
     from calibration.settings import LoopSettings
 
-    stored = svc.call("GET", f"/campaigns/{cid}/iterations")
+    stored = svc.every(f"/campaigns/{cid}/iterations")
     material = svc.call("GET", f"/materials/{svc.call('GET', f'/campaigns/{cid}')['material_id']}")
     targets = [Measured.from_record(m) for m in material["measurements"]]
     settings = LoopSettings.model_validate({k: v for k, v in body.items() if k in LoopSettings.model_fields})
@@ -379,7 +379,37 @@ def _wait_campaign(svc: Service, cid: int, poll_s: float) -> dict:
 
 
 def _batteries(svc: Service, cid: int) -> int:
-    return sum(len(it["runs"]) for it in svc.call("GET", f"/campaigns/{cid}/iterations"))
+    """Batteries the campaign ran (a design row reused from an earlier iteration ran once, earlier)."""
+    return sum(1 for it in svc.every(f"/campaigns/{cid}/iterations") for r in it["runs"] if not r.get("reused_from"))
+
+
+def _phases(svc: Service, cid: int) -> tuple[list[dict], int | None]:
+    """Per iteration the batteries of each phase (calibration.history.batteries), and the batteries of the
+    whole loop from the first iteration through the added effect's confirmation (None with no effect added)."""
+    rows = [{"number": h["number"], **(h.get("batteries") or {})}
+            for h in svc.call("GET", f"/campaigns/{cid}/history")["iterations"]]
+    through = None
+    if len(rows) > 1:
+        through = rows[0].get("total", 0) + rows[1].get("design", 0) + rows[1].get("confirmation", 0)
+    return rows, through
+
+
+def _loop_wall_per_battery(svc: Service, cid: int) -> float | None:
+    """The loop's wall time (the union of its batteries' run intervals) over one battery's mean run time,
+    so hosts of different speeds compare."""
+    from datetime import datetime
+
+    jobs = [j for j in svc.call("GET", "/jobs", params={"campaign_id": cid, "limit": 1000})["items"]
+            if j["status"] == "succeeded" and j.get("started_at") and j.get("finished_at") and j.get("wall_time_s")]
+    if not jobs:
+        return None
+    spans = sorted((datetime.fromisoformat(j["started_at"]).timestamp(),
+                    datetime.fromisoformat(j["finished_at"]).timestamp()) for j in jobs)
+    busy, end = 0.0, -float("inf")
+    for start, stop in spans:
+        busy += max(0.0, stop - max(start, end))
+        end = max(end, stop)
+    return busy / (sum(j["wall_time_s"] for j in jobs) / len(jobs))
 
 
 def _battery_seconds(svc: Service, cid: int, measuring_ids: list[int]) -> tuple[float, float]:
@@ -427,6 +457,13 @@ def criteria(outs: list[dict]) -> dict[str, Any]:
     dens = [o for o in effects if o["effect"] in ("rolling_epsd2", "particle_shape")]
     res["density_within_5pc"] = sum(o["density_error"] is not None and abs(o["density_error"]) <= 0.05 for o in dens)
     res["n_effects"], res["n_null"], res["n_density"] = len(effects), len(null), len(dens)
+    loops = [o for o in outs if o.get("loop_batteries") is not None]
+    if loops:
+        # the loop's cost (issue 34): first iteration through the added effect's confirmation (the whole loop
+        # where no effect was added), the largest over the scenarios; its wall time in batteries' run times
+        res["batteries"] = max(o.get("loop_batteries_to_confirmation") or o["loop_batteries"] for o in loops)
+        walls = [o["loop_wall_per_battery"] for o in loops if o.get("loop_wall_per_battery") is not None]
+        res["loop_wall_per_battery"] = round(max(walls), 2) if walls else None
     replayed = [o for o in outs if "replay_differences" in o]
     if replayed:
         res["replay_same"] = sum(not o["replay_differences"] for o in replayed)
@@ -543,7 +580,10 @@ def main(argv=None) -> int:
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)
                 continue
             o = outcome(svc, sc, cid)
-            o["batteries"] = len(measuring_ids) + _batteries(svc, cid)
+            o["loop_batteries"] = _batteries(svc, cid)
+            o["batteries"] = len(measuring_ids) + o["loop_batteries"]
+            o["phases"], o["loop_batteries_to_confirmation"] = _phases(svc, cid)
+            o["loop_wall_per_battery"] = _loop_wall_per_battery(svc, cid)
             o["battery_s"], o["wall_s"] = _battery_seconds(svc, cid, measuring_ids)
             o["evaluator"], o["form"] = args.evaluator, "reduced" if args.reduced else "screening"
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds, args.polish_steps
@@ -571,6 +611,14 @@ def _print_row(o: dict) -> None:
           f"rms={_rms(o)} chi2_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
           f"density_error={_f(o['density_error'])} stop='{o['stop_reason']}' "
           f"batteries={o['batteries']} battery_time={o['battery_s']:.0f}s wall={o['wall_s']:.0f}s", flush=True)
+    for row in o.get("phases") or []:
+        print(f"  iteration {row['number']}: design {row.get('design')} (+{row.get('reused')} reused), confirmation "
+              f"{row.get('confirmation')}, polish {row.get('polish')}, diagnosis {row.get('diagnosis')}: "
+              f"{row.get('total')} batteries; " + "; ".join(row.get("why") or []), flush=True)
+    if o.get("loop_batteries") is not None:
+        print(f"  loop: {o['loop_batteries']} batteries in all, {o.get('loop_batteries_to_confirmation')} from the first "
+              f"iteration through the added effect's confirmation (target <= 30); loop wall over one battery's "
+              f"{_f(o.get('loop_wall_per_battery'))}", flush=True)
 
 
 def _markdown(outs: list[dict]) -> None:
@@ -636,8 +684,9 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
     for o in outs:
         for line in o.get("replay_differences") or []:
             print(f"  replay of {o['scenario']} differs: {line}")
+    tail = {k: res.pop(k) for k in ("batteries", "loop_wall_per_battery") if k in res}  # last, as issue 34 reads them
     print(" ".join(f"{k}={v}" for k, v in res.items()) + f" evaluator={evaluator}"
-          + f" form={'reduced' if reduced else 'screening'}")
+          + f" form={'reduced' if reduced else 'screening'}" + "".join(f" {k}={v}" for k, v in tail.items()))
 
 
 def _add_truth_floors(svc: Service, path: str, poll_s: float) -> int:

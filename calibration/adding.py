@@ -49,11 +49,27 @@ def with_effect_factor(config: dict, name: str, strength_range=None, *, strength
             reference = float(c.reference(MicroParameters.model_validate(optimum)))
         low, high, log = effect_range(c, strength, reference)
     factors = list(config["factors"]) + [{"name": c.factor, "low": low, "high": high, "unit": c.unit, "log": log}]
-    generators = generators_for(len(factors))
     design = dict(config.get("design") or {})
-    design.update({"type": "fractional", "generators": generators} if generators else {"type": "full",
-                                                                                       "generators": None})
+    if c.off_value is not None and low == c.off_value and config.get("reuse", True):
+        # the strength's low level is the model without the effect: the previous design, with the same
+        # generators and the new factor crossed with it, has that design as its low face, so the next
+        # iteration runs only the high face (calibration.reuse). 2^(4-1) IV x 2 is a 2^(5-1) with I = ABCD:
+        # the new factor and its interactions are clear; two-factor interactions of the others stay
+        # aliased in pairs, as they were in the previous iteration
+        design.update(_crossed(design))
+    else:
+        generators = generators_for(len(factors))
+        design.update({"type": "fractional", "generators": generators} if generators else {"type": "full",
+                                                                                           "generators": None})
     return {**config, "factors": factors, "design": design}
+
+
+def _crossed(design: dict) -> dict:
+    """The design settings whose design is the previous one crossed with one more two-level factor: the
+    same generators (they name only the previous factors' letters), or a full factorial again."""
+    if design.get("type") == "fractional":
+        return {"type": "fractional", "generators": list(design["generators"])}
+    return {"type": "full", "generators": None}
 
 
 def with_proposed_design(config: dict, last) -> dict:

@@ -157,6 +157,23 @@ def surrogate_check(config, modelled, optimum: dict, confirmation_records: list[
                                        cal.confirm(modelled, confirmation_records, confirmation_seeds)))
 
 
+def confirmation_lack_of_fit(config, design, modelled, optimum: dict, confirmation_records: list[list[dict]],
+                             confirmation_seeds: list[int]) -> float | None:
+    """The lack of fit's p-value of the confirmation batteries at the surfaces' optimum (the report's
+    test, ``localise``), before any polishing: what ``polish_when="surrogate_misses"`` also asks of an
+    iteration that added an effect (None when nothing modelled was confirmed)."""
+    conf = cal.confirm(modelled, confirmation_records, confirmation_seeds)
+    if not conf.mean:
+        return None
+    theta = dict(optimum["parameters"])
+    priors = [p.model_dump() for p in config.priors]
+    res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty,
+                           config.model_discrepancy)
+    loc = localise(res, active_bounds=cal.active_bounds(design, theta), priors=cal.prior_rows(priors, theta),
+                   reachability=optimum.get("reachability", []), seed=config.seed)
+    return loc.lack_of_fit.p_value
+
+
 def active_effects(iteration_parameters: dict) -> set[str]:
     """Names of the effects already in an iteration's model (``iteration_parameters``: its factors, fixed
     parameters and fixed contact effects): every fixed contact effect, and every candidate that says it
@@ -242,7 +259,11 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
             reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
         signatures.append(Signature(c, vector, step, reference))
     att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys])
-    return _json_safe({**att.to_dict(), "lack_of_fit": loc.lack_of_fit.to_dict(),
+    from calibration.replicates import simulator_share
+
+    share = simulator_share({k: conf.sim_sd[k] for k in res.keys if k in conf.sim_sd},
+                            {k: float(res.sd[i]) for i, k in enumerate(res.keys)})
+    return _json_safe({**att.to_dict(), "lack_of_fit": loc.lack_of_fit.to_dict(), "simulator_share": share,
                        "seeds": sorted(set(confirmation_seeds) | {s for _, s, _ in planned}),
                        "batteries": len(planned)})
 

@@ -99,7 +99,21 @@ class Ranked:
                 "explained": self.score.explained, "gamma": self.score.gamma,
                 "strength": self.strength, "fraction_of_switch": self.fraction,
                 "plausible_range": list(candidate.plausible_range), "plausible": self.plausible,
+                "proposed_range": _proposed_range(candidate, self.strength),
                 "significant": bool(self.p_holm < ALPHA), "alias_group": self.alias_group}
+
+
+def _proposed_range(candidate: Candidate, strength: float | None) -> list[float] | None:
+    """The strength range adding this effect would get by default (``calibration.decisions.effect_range``,
+    as ``POST .../iterations {"add_effect"}`` and the automatic mode use it), for a form to start from:
+    a range from "off" keeps the model without the effect inside the next design (its low face)."""
+    from calibration.decisions import effect_range
+
+    try:
+        low, high, _ = effect_range(candidate, strength, strength)
+    except ValueError:  # a switch-type effect with no matched strength
+        return None
+    return [float(low), float(high)]
 
 
 @dataclass

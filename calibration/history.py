@@ -51,6 +51,7 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
             "range_widened": bool(plan.get("widened")),
             # an added effect explains the misfit only when every check holds; else what it leaves
             "explains": _explains(added, base, report),
+            "batteries": batteries(it),
         })
         plan = report.get("automatic") or {}
         last = it
@@ -67,6 +68,33 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
     if entries:
         entries[-1]["effect_added_next"] = None
     return {"iterations": entries, "targets": targets}
+
+
+def batteries(it) -> dict[str, Any]:
+    """The batteries an iteration ran, per phase, the design rows it reused instead, and why each phase
+    ran as many as it did (calibration.reuse, calibration.replicates, calibration.polish)."""
+    from calibration.vocabulary import RunKind
+
+    counts = {kind.value: 0 for kind in RunKind}
+    reused = 0
+    for run in it.runs:
+        if getattr(run, "reused_from", None):
+            reused += 1
+        else:
+            counts[str(getattr(run.kind, "value", run.kind))] += 1
+    why = []
+    design = it.design or {}
+    if reused:
+        why.append(f"design: {(design.get('batteries') or {}).get('run', counts['design'])} run, {reused} reused "
+                   "from earlier iterations")
+    why += [f"diagnosis: {stage['why']}" for stage in (it.report or {}).get("diagnosis_stages") or []]
+    polish = (it.optimum or {}).get("polish") or {}
+    if polish.get("skipped"):
+        why.append(f"polish: skipped ({polish['skipped']})")
+    elif polish:
+        why.append(f"polish: {polish.get('steps', 0)} step(s), Jacobian from the "
+                   f"{polish.get('jacobian', 'batteries')}")
+    return {**counts, "reused": reused, "total": sum(counts.values()), "why": why}
 
 
 def _explains(added: list[str] | None, base, report: dict) -> dict | None:

@@ -154,7 +154,8 @@ class CalibrationLoop:
         for new in t.runs:
             it.runs.append(RunState(id=self.state.next_run_id, kind=new.kind, std_order=new.std_order,
                                     run_order=new.run_order, is_centre=new.is_centre, natural=new.natural,
-                                    coded=new.coded, seed=new.seed))
+                                    coded=new.coded, seed=new.seed, responses=new.responses, job_id=new.job_id,
+                                    reused_from=new.reused_from))
             self.state.next_run_id += 1
         it.phase = t.to
         if t.next_settings is not None:

@@ -25,7 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
-from . import analysis, automatic, polish, suspect
+from . import analysis, attribute, automatic, polish, replicates, reuse, suspect
 from .awaiting import awaited, round_runs, runs_of  # noqa: F401  (awaited: the runner's, through machine)
 from .design import build_design, design_view
 from .errors import LoopFailed, SettingsError
@@ -50,6 +50,10 @@ class NewRun:
     coded: dict[str, float]
     seed: int
     is_centre: bool = False
+    # a battery an earlier iteration ran (calibration.reuse): its responses and job, nothing to run
+    responses: dict[str, Any] | None = None
+    job_id: int | None = None
+    reused_from: str | None = None
 
 
 @dataclass
@@ -119,9 +123,19 @@ def _design(ctx: Context, it) -> Transition:
         design = build_design(s.factors, s.design, seed)
     except SettingsError as exc:
         raise LoopFailed(f"iteration {it.number}: the design cannot be built: {exc.message}") from exc
+    sources = [None] * design.n_runs
+    if s.reuse and it.number > 1:
+        merged = reuse.with_earlier(design, reuse.earlier_runs(ctx.iterations, it.number, s.fixed_parameters, s.factors))
+        design, sources = merged.design, merged.sources
     view = design_view(design)
+    for row, source in zip(view["runs"], sources):
+        row["reused_from"] = source.provenance() if source is not None else None
+    view["batteries"] = {"run": sum(src is None for src in sources), "reused": sum(src is not None for src in sources)}
     runs = [NewRun(RunKind.DESIGN, row["std_order"], row["run_order"], row["natural"], row["coded"], row["seed"],
-                   is_centre=row["point_type"] == "center") for row in view["runs"]]
+                   is_centre=row["point_type"] == "center",
+                   responses=None if src is None else src.responses, job_id=None if src is None else src.job_id,
+                   reused_from=None if src is None else src.source)
+            for row, src in zip(view["runs"], sources)]
     return Transition(Phase.DESIGN, Phase.BATTERIES, {"design": view}, runs)
 
 
@@ -156,7 +170,8 @@ def _polish(ctx: Context, it) -> Transition:
         if s.polish_when == PolishRule.SURROGATE_MISSES:
             check = analysis.surrogate_check(s, modelled, it.optimum, records(confirmations),
                                              [r.seed for r in confirmations])
-            if check.get("confirmed") is not False:  # confirmed, or nothing modelled to polish on
+            if check.get("confirmed") is not False and not _added_effect_misfits(s, it, design, modelled, confirmations):
+                # confirmed, or nothing modelled to polish on
                 return Transition(Phase.POLISH, Phase.REPORT, {"optimum": {**it.optimum, "polish": polish.skipped(check)}})
         state, points = polish.start(s, design, modelled, dict(it.optimum["parameters"]),
                                      [r.id for r in confirmations], records(confirmations),
@@ -171,6 +186,20 @@ def _polish(ctx: Context, it) -> Transition:
     optimum = {**it.optimum, "polish": state, "surrogate_parameters": it.optimum["parameters"],
                "parameters": theta, "coded": {f.name: float(f.to_coded(theta[f.name])) for f in design.factors}}
     return Transition(Phase.POLISH, Phase.REPORT, {"optimum": optimum})
+
+
+def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) -> bool:
+    """Does an iteration whose model has an added effect miss the measurements at the surfaces' optimum?
+    Such an iteration is judged against the one it was built on, and surfaces fitted on more points
+    than they can follow (reused batteries widen their prediction intervals) may pass the surfaces'
+    check with an optimum the batteries refute: the effect would be judged on the surfaces' error,
+    not its own. An iteration without an added effect is not polished for misfit alone: the diagnosis
+    decides what its misfit means."""
+    if not analysis.active_effects(it.parameters):
+        return False
+    p = analysis.confirmation_lack_of_fit(s, design, modelled, it.optimum, records(confirmations),
+                                          [r.seed for r in confirmations])
+    return p is not None and p < analysis.ALPHA
 
 
 def _polish_runs(state: dict, points) -> list[NewRun]:
@@ -206,7 +235,8 @@ def _report(ctx: Context, it) -> Transition:
     # test cannot see, which the diagnosis's directed test then judges (whatever the surfaces' check says);
     # with diagnose_always, after every report
     misfit = report["verdict"] in MISFIT_VERDICTS or report["suspect"]
-    plan = analysis.diagnosis_plan(s, it.optimum, it.parameters, seeds) if (
+    # the diagnosis starts on one seed and runs the others only where they buy power (calibration.replicates)
+    plan = analysis.diagnosis_plan(s, it.optimum, it.parameters, replicates.first_stage(seeds, s.adaptive_replicates)) if (
         s.diagnose and diagnosable and (misfit or s.diagnose_always) and not rejected) else []
     if plan:
         runs = [NewRun(RunKind.DIAGNOSIS, k + 1, k + 1, natural, {}, seed) for k, (_, natural, seed) in enumerate(plan)]
@@ -235,7 +265,24 @@ def _diagnosed(ctx: Context, it) -> Transition:
                            *(responses for name, responses in planned if name == analysis.BASELINE),
                            *suspect.extrapolated_candidates(planned, analysis.BASELINE)])
     suspects = suspect.suspects((it.report or {}).get("targets") or [], reach)
-    return _finish(ctx, it, Phase.DIAGNOSED, analysis.diagnosed_report(it.report or {}, diagnosis, suspects))
+    planned_seeds = list(dict.fromkeys(seed for name, seed in plan if name == analysis.BASELINE))
+    all_seeds = attribute.signature_seeds(seeds)
+    if stored_plan is not None and len(planned_seeds) < len(all_seeds):
+        more, why = replicates.more_seeds(diagnosis, diagnosis.get("simulator_share"))
+        stages = [*((it.report or {}).get("diagnosis_stages") or []),
+                  {"seeds": len(planned_seeds), "batteries": len(plan), "more_seeds": more, "why": why}]
+        if more:
+            rest = [seed for seed in seeds if attribute.signature_seeds([seed])[0] not in planned_seeds]
+            extra = analysis.diagnosis_plan(s, it.optimum, it.parameters, rest)
+            runs = [NewRun(RunKind.DIAGNOSIS, len(plan) + k + 1, len(plan) + k + 1, natural, {}, seed)
+                    for k, (_, natural, seed) in enumerate(extra)]
+            report = {**(it.report or {}), "diagnosis_stages": stages,
+                      "diagnosis_plan": [*stored_plan, *({"effect": name, "seed": seed} for name, _, seed in extra)]}
+            return Transition(Phase.DIAGNOSED, Phase.DIAGNOSIS, {"report": report}, runs)
+        it_report = {**(it.report or {}), "diagnosis_stages": stages}
+    else:
+        it_report = it.report or {}
+    return _finish(ctx, it, Phase.DIAGNOSED, analysis.diagnosed_report(it_report, diagnosis, suspects))
 
 
 def _finish(ctx: Context, it, source: Phase, report: dict, **values: Any) -> Transition:

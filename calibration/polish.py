@@ -5,16 +5,22 @@ anything against an added effect's strength) is biased inside its box, so the su
 not the simulator's, and an added effect that would fit the measurements can look as if it did
 not. The method is cut into rounds a driver can queue and resume (``calibration.machine``):
 
-* round 0, the Jacobian: one point per free factor, a coded step of 0.1 from the optimum (inward
-  at a bound), each point run at every confirmation seed (common random numbers) and averaged over
-  them, as the confirmation is; the targets' rows of J are these forward differences, the priors'
-  rows stay analytic;
-* rounds 1..polish_steps: the bounded Gauss-Newton step minimising |r + J du| in the box, tried at
-  full, half and quarter length side by side; the longest that lowers the batteries' misfit is
-  taken and J is updated by Broyden's rule; no improvement (or a step below 1e-3) ends it.
+* round 0, the Jacobian (``polish_jacobian="batteries"``): one point per free factor, a coded step of
+  0.1 from the optimum (inward at a bound), each point run at every confirmation seed (common random
+  numbers) and averaged over them, as the confirmation is; the targets' rows of J are these forward
+  differences, the priors' rows stay analytic. With ``"surfaces"`` (the default) J starts as the fitted
+  surfaces' slopes at the optimum and the first step is round 1: Broyden's updates correct it along
+  the steps taken, and k x m batteries are saved;
+* rounds 1..: the bounded Gauss-Newton step minimising |r + J du| in the box, tried at full length,
+  then (only if that did not lower the batteries' misfit) at half and at quarter length, one round
+  each; the first that lowers it is taken and J is updated by Broyden's rule; ``polish_steps`` steps
+  taken, no improvement at quarter length, or a step below 1e-3 ends it. One point at a time: the
+  trials used to run side by side, three points per step whether the full step worked or not, and the
+  m seeds of one point already keep m workers busy.
 
 The state is a JSON dict kept in the iteration's optimum, so every round survives a restart. Costs
-(free factors + 3 x steps) x confirmation seeds batteries, all of a round queued at once.
+(free factors + trials) x confirmation seeds batteries (a step costs one trial when its full length
+works, up to three), all of a round queued at once.
 """
 from __future__ import annotations
 
@@ -25,7 +31,7 @@ import numpy as np
 
 from calibration import calibrate as cal
 from calibration.awaiting import ROUND
-from calibration.vocabulary import PolishStage, RunKind
+from calibration.vocabulary import PolishJacobian, PolishStage, RunKind
 
 CODED_STEP = 0.1
 SHRINKS = (1.0, 0.5, 0.25)
@@ -46,13 +52,20 @@ def _point(design, theta: dict) -> tuple[dict, dict]:
 
 
 def _step_points(design, state: dict) -> list[tuple[dict, dict]]:
-    """The trial points of the next Gauss-Newton step from the state's r and J, or [] when the
-    step is negligible."""
+    """The first trial point of the next Gauss-Newton step from the state's r and J (its full length;
+    the direction is kept in the state for the shorter trials), or [] when the step is negligible."""
     current = SimpleNamespace(r=np.array(state["r"]), J=np.array(state["J"]), free=state["free"])
     step = cal.gauss_newton_step(design, current, state["theta"])
     if float(np.max(np.abs(step))) < MIN_STEP:
         return []
-    return [_point(design, cal.move(design, state["theta"], state["free"], s * step)) for s in SHRINKS]
+    state.update(direction=[float(v) for v in step], shrink=0)
+    return [_shrunk(design, state)]
+
+
+def _shrunk(design, state: dict) -> tuple[dict, dict]:
+    """The trial point of the state's step at its current length (``SHRINKS[state["shrink"]]``)."""
+    step = SHRINKS[state["shrink"]] * np.array(state["direction"])
+    return _point(design, cal.move(design, state["theta"], state["free"], step))
 
 
 def seeds_of(state: dict) -> list[int]:
@@ -68,6 +81,15 @@ def start(config, design, modelled, theta: dict, run_ids: list[int], records: li
     state = {"round": 0, "stage": PolishStage.JACOBIAN.value, "theta": dict(theta), "run_ids": list(run_ids), "seeds": list(seeds),
              "chi2_start": res.chi2(), "chi2": res.chi2(), "r": res.r.tolist(), "J": res.J.tolist(),
              "free": list(res.free), "n_targets": len(res.keys), "steps": 0, "batteries": 0, "h": []}
+    if config.polish_jacobian == PolishJacobian.SURFACES:
+        # the surfaces' slopes at the optimum start the Broyden updates: no round of forward differences
+        # (k x m batteries), which on the engine's scatter are as noisy as the slopes they replace
+        state.update(jacobian=PolishJacobian.SURFACES.value)
+        points = _step_points(design, state)
+        if not points:
+            return _done(state), []
+        state.update(stage=PolishStage.STEP.value, round=1)
+        return state, points
     points = []
     for j, name in enumerate(res.free):
         u = float(design.factor(name).to_coded(theta[name]))
@@ -115,6 +137,11 @@ def advance(config, design, modelled, state: dict, round_runs: list, max_steps: 
                 taken = (runs, res_k)
                 break
         if taken is None:
+            if "direction" in state and state["shrink"] + 1 < len(SHRINKS):
+                # the trial did not lower the misfit: the same step, shorter, in a round of its own (one
+                # point at a time: a step that works at full length costs one point, not three)
+                state.update(shrink=state["shrink"] + 1, round=state["round"] + 1)
+                return state, [_shrunk(design, state)]
             return _done(state), []
         runs, res_k = taken
         natural = runs[0].natural

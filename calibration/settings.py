@@ -144,11 +144,26 @@ class LoopSettings(BaseModel):
         "optimum is biased inside the box for saturating responses",
     )
     polish_when: Literal["always", "surrogate_misses"] = Field(
-        "always", description="'always': every iteration polishes; 'surrogate_misses': only an iteration whose "
+        "surrogate_misses", description="'always': every iteration polishes; 'surrogate_misses' (the default): only an iteration whose "
         "confirmation batteries fall outside the response surfaces' prediction intervals (the report's "
         "surrogate_check), as the library loop does. Where the surfaces predict the optimum's batteries a "
         "polishing round buys little; where they miss (typically once an effect's strength is a fifth factor) "
         "the surfaces' optimum is not the simulator's and an effect that fits can look as if it did not",
+    )
+    adaptive_replicates: bool = Field(
+        True, description="the diagnosis runs a baseline and each candidate at one seed first, and at the other "
+        "confirmation seeds only when the decision is close and the simulator's scatter matters "
+        "(calibration.replicates); false runs every seed at once",
+    )
+    reuse: bool = Field(
+        True, description="an iteration after the first reuses the batteries earlier iterations ran at points "
+        "of its own model (calibration.reuse): design points they sit on are not run again, and the rest "
+        "(confirmation, polishing, diagnosis) join the response surfaces' fit; false runs every design point",
+    )
+    polish_jacobian: Literal["surfaces", "batteries"] = Field(
+        "surfaces", description="the polishing's first Jacobian: 'surfaces', the response surfaces' slopes at the "
+        "optimum (no batteries; Broyden's updates correct it along the steps), or 'batteries', forward "
+        "differences on the batteries (one point per factor and seed)",
     )
     automatic: bool = Field(
         False, description="after each iteration, add the effect the diagnosis indicates and run the next "
@@ -190,8 +205,6 @@ class LoopSettings(BaseModel):
             raise ValueError("automatic mode needs diagnose: it adds the effects the diagnosis indicates")
         if self.diagnose_always and not self.diagnose:
             raise ValueError("diagnose_always needs diagnose")
-        if self.polish_when != "always" and self.polish_steps == 0:
-            raise ValueError("polish_when needs polish_steps > 0: with none there is no polishing to decide on")
         overlap = {f.name for f in self.factors} & set(self.fixed_parameters)
         if overlap:
             raise ValueError(f"fixed_parameters: {sorted(overlap)} are factors too")

@@ -28,6 +28,7 @@ class RunState(BaseModel):
     responses: dict[str, dict[str, Any]] | None = None
     job_id: int | None = None
     error: str | None = None
+    reused_from: str | None = None  # a battery of an earlier iteration (calibration.reuse): not run again
 
     @property
     def status(self) -> str:

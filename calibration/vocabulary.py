@@ -39,6 +39,13 @@ class Phase(Word):
     DONE = "done"
 
 
+class PolishJacobian(Word):
+    """Where the polishing's first Jacobian comes from (``calibration.polish``)."""
+
+    SURFACES = "surfaces"
+    BATTERIES = "batteries"
+
+
 class RunKind(Word):
     """Why a battery was run: a design point, a confirmation at the optimum, a polishing step on the
     batteries themselves, or a diagnosis battery (a baseline or a candidate effect switched on)."""

@@ -112,7 +112,7 @@ _LEADING_FIELD = re.compile(r"^(?:Value error, )?([a-z_][a-z0-9_]*)(?:\[(\d+)\])
 
 def _field_of_model_error(loc: list, msg: str, body) -> list:
     """A cross-field rule (a model validator) is reported by pydantic at the whole body; its message
-    starts with the field it refuses ("polish_when needs polish_steps > 0", "constraints[0]: ..."), so
+    starts with the field it refuses ("diagnose_always needs diagnose", "constraints[0]: ..."), so
     the error points there when the body has that field: a client, or the web form, can mark it."""
     if loc != ["body"] or not isinstance(body, dict):
         return loc

@@ -116,9 +116,12 @@ class CampaignRunner:
         still ``t.source`` (else a racing runner won and this one rolls back), then the campaign's next
         configuration (automatic mode) or its completion."""
         for new in t.runs:
+            reused = new.responses is not None  # an earlier iteration's battery (calibration.reuse): not queued
             session.add(CampaignRun(iteration_id=it.id, kind=new.kind.value, std_order=new.std_order,
                                     run_order=new.run_order, is_centre=new.is_centre, coded=new.coded,
-                                    natural=new.natural, seed=new.seed, status=RunStatus.PENDING.value))
+                                    natural=new.natural, seed=new.seed, responses=new.responses, job_id=new.job_id,
+                                    reused_from=new.reused_from,
+                                    status=(RunStatus.SUCCEEDED if reused else RunStatus.PENDING).value))
         values = dict(t.values)
         if t.finished:
             values["finished_at"] = utcnow()

@@ -210,7 +210,8 @@ def campaign_summary(campaign: Campaign) -> dict[str, Any]:
 def run_view(run) -> dict[str, Any]:
     return {"id": run.id, "kind": run.kind, "std_order": run.std_order, "run_order": run.run_order,
             "is_centre": run.is_centre, "coded": run.coded, "natural": run.natural, "seed": run.seed,
-            "job_id": run.job_id, "status": run.status, "responses": run.responses, "error": run.error}
+            "job_id": run.job_id, "status": run.status, "responses": run.responses, "error": run.error,
+            "reused_from": run.reused_from}
 
 
 def iteration_view(it: CampaignIteration, *, with_runs: bool = True) -> dict[str, Any]:

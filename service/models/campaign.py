@@ -98,5 +98,8 @@ class CampaignRun(Base):
     status: Mapped[str] = mapped_column(String(16), default="pending", nullable=False)
     responses: Mapped[dict[str, float] | None] = mapped_column(JSON, nullable=True)
     error: Mapped[str | None] = mapped_column(Text, nullable=True)
+    # "iteration 1 design run 5": a battery an earlier iteration ran, reused (calibration.reuse); its
+    # job_id is that battery's, and nothing is queued for it
+    reused_from: Mapped[str | None] = mapped_column(String(100), nullable=True)
 
     iteration: Mapped[CampaignIteration] = relationship(back_populates="runs")

@@ -62,7 +62,8 @@ def test_adding_the_effect_makes_the_error_fall(rolling):
     assert decision["accepted"] and decision["effect"] in ("rolling_epsd2", "particle_shape")
     before, after = result.first.report["lack_of_fit"], result.final.report["lack_of_fit"]
     assert after["statistic"] < 0.5 * before["statistic"]
-    assert result.stop_reason == "lack of fit passes"
+    # the loop stops because the lack of fit passes (a test failing its own check is said after it)
+    assert result.stop_reason.startswith("lack of fit passes")
     history = result.history()["iterations"]
     assert [h["number"] for h in history][:2] == [1, 2] and history[1]["added_effect"] == [decision["effect"]]
 

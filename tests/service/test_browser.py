@@ -141,6 +141,9 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     history = service.api("GET", f"/campaigns/{campaign_id}/history").json()["iterations"]
     assert [it["effects"] for it in history] == [[], [top]]
     assert abs(history[1]["chi2_per_dof"] - chi2[2]) <= 1e-3 * history[1]["chi2_per_dof"]
+    # the second iteration reused the first's batteries on its design's low face: the row says how many
+    reused = history[1]["batteries"]["reused"]
+    assert reused >= 8 and f"(+{reused} reused)" in page.locator("section.history .batteries").nth(1).inner_text()
     # the added effect's trace, a factor of iteration 2 only, draws that iteration's design range
     factors = service.api("GET", f"/campaigns/{campaign_id}/iterations/2").json()["parameters"]["factors"]
     added = next(f for f in factors if f["name"].startswith("effects."))

@@ -111,7 +111,13 @@ def test_the_design_the_surface_check_proposes_runs_as_the_next_iteration(s2):
     assert run_to_end(client, app, settings, cid)["status"] == "completed"
     second = client.get(f"{API}/campaigns/{cid}/iterations").json()["items"][1]
     design_runs = [r for r in second["runs"] if r["kind"] == "design"]
-    assert len(design_runs) == 8 + 3 + 2 * 3  # 2^3, centre runs, two axial runs per factor
+    # the composite design is the first iteration's 2^3 and centre runs plus two axial runs per factor:
+    # only the axial runs are new (calibration.reuse); the first's confirmation joins the fit as well
+    new = [r for r in design_runs if not r["reused_from"]]
+    assert len(new) == 2 * 3
+    assert len([r for r in design_runs if r["reused_from"]]) == 8 + 3 + 2
+    design_rows = second["design"]["runs"]
+    assert sorted(row["point_type"] for row in design_rows if row["reused_from"] is None) == ["axial"] * 6
     axial = [r for r in design_runs if sum(abs(v) for v in r["coded"].values()) == 1.0]
     assert len(axial) == 6
     terms = client.get(f"{API}/campaigns/{cid}/models").json()["models"]["dst__friction_angle_deg"]["fit"]["terms"]

@@ -43,7 +43,6 @@ def test_create_and_read(s2):
     # cross-field rules point at the field they refuse (service.errors._field_of_model_error)
     ({"automatic": True, "diagnose": False}, ["body", "automatic"]),
     ({"diagnose_always": True, "diagnose": False}, ["body", "diagnose_always"]),
-    ({"polish_when": "surrogate_misses", "polish_steps": 0}, ["body", "polish_when"]),
     ({"name": ""}, ["body", "name"]),
     ({"model_discrepancy": [{"test": "shear", "relative_sd": 0.1}]}, ["body", "model_discrepancy", 0]),
     ({"model_discrepancy": [{"test": "cct", "relative_sd": 2.0}]}, ["body", "model_discrepancy", 0, "relative_sd"]),

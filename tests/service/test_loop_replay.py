@@ -44,5 +44,11 @@ def test_the_notebook_loop_replays_an_automatic_campaign_to_the_same_answers(s2)
     replayed = CalibrationLoop(targets, evaluator, loop_settings).run()
     assert differences(stored, replayed.iterations) == []
     assert fits.FIT_COUNT["surfaces"] == len(stored) * len(targets)
-    # every stored battery was asked for once, and no other
-    assert evaluator.runs == sum(len(it["runs"]) for it in stored)
+    # every stored battery was asked for once, and no other; a battery an iteration reused from an earlier
+    # one (calibration.reuse) is not asked for again, by the service or the notebook loop
+    reused = [r for it in stored for r in it["runs"] if r["reused_from"]]
+    assert reused and all(r["status"] == "succeeded" for r in reused)
+    assert evaluator.runs == sum(len(it["runs"]) for it in stored) - len(reused)
+    # a reused run is the earlier battery itself: its job and seed
+    earlier = {(r["job_id"], r["seed"]) for it in stored[:1] for r in it["runs"]}
+    assert {(r["job_id"], r["seed"]) for r in stored[1]["runs"] if r["reused_from"]} <= earlier

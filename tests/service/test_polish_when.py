@@ -42,17 +42,28 @@ def test_surfaces_that_miss_the_confirmation_are_polished(s2):
     report, runs = _campaign(client, app, settings, factors=[*factors, ROLLING])
     polish_runs = [r for r in runs if r["kind"] == "polish"]
     seeds = {r["seed"] for r in runs if r["kind"] == "confirmation"}
-    # at least the Jacobian round: one point per factor at every confirmation seed
-    assert len(polish_runs) >= 4 * len(seeds)
+    # at least one trial point at every confirmation seed (the Jacobian is the surfaces' slopes: no
+    # round of forward differences), and a whole number of points
+    assert polish_runs and len(polish_runs) % len(seeds) == 0
     assert "skipped" not in report["polish"] and report["polish"]["batteries"] == len(polish_runs)
+
+
+def test_a_jacobian_on_the_batteries_costs_one_point_per_factor_and_seed(s2):
+    client, app, settings = s2
+    factors = campaign_body(0)["factors"]
+    factors[2] = {"name": "friction_pp", "low": 0.05, "high": 1.0}
+    report, runs = _campaign(client, app, settings, factors=[*factors, ROLLING], polish_jacobian="batteries")
+    seeds = {r["seed"] for r in runs if r["kind"] == "confirmation"}
+    first_round = [r for r in runs if r["kind"] == "polish" and r["std_order"] < 1000]
+    assert len(first_round) == 4 * len(seeds)  # round 0: one point per factor at every seed
 
 
 def test_polish_when_is_validated(s2):
     client, _, _ = s2
     material_id = thesis_material_id(client)
-    for body in (campaign_body(material_id, polish_when="sometimes"),
-                 campaign_body(material_id, polish_when="surrogate_misses", polish_steps=0)):
-        response = client.post(f"{API}/campaigns", json=body)
-        assert response.status_code == 422, response.text
-        # the cross-field rule too points at the field it refuses, not at the whole body
-        assert response.json()["detail"][0]["loc"] == ["body", "polish_when"], response.text
+    response = client.post(f"{API}/campaigns", json=campaign_body(material_id, polish_when="sometimes"))
+    assert response.status_code == 422, response.text
+    assert response.json()["detail"][0]["loc"] == ["body", "polish_when"], response.text
+    # the default decides on polishing a campaign that asks for none: nothing to decide, accepted as such
+    response = client.post(f"{API}/campaigns", json=campaign_body(material_id, polish_steps=0))
+    assert response.status_code == 201 and response.json()["config"]["polish_when"] == "surrogate_misses", response.text

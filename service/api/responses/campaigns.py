@@ -81,6 +81,8 @@ class Run(Out):
     status: RunStatus
     responses: dict[str, Response] | None = Field(description="per response name: the battery's value")
     error: str | None
+    reused_from: str | None = Field(None, description="a battery an earlier iteration ran, reused here (not run "
+                                                      "again), e.g. 'iteration 1 design run 5'; null: run for this iteration")
 
 
 class IterationParameters(Out):

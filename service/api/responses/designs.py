@@ -22,14 +22,32 @@ class Aliases(Out):
     chains: list[AliasChain]
 
 
+class ReusedFrom(Out):
+    """Which battery of an earlier iteration a design row reuses (calibration.reuse)."""
+
+    iteration: int
+    kind: str
+    std_order: int
+    seed: int
+    job_id: int | None
+
+
+class DesignBatteries(Out):
+    run: int = Field(description="design rows run for this iteration")
+    reused: int = Field(description="design rows that are batteries of earlier iterations")
+
+
 class DesignRun(Out):
     std_order: int = Field(description="standard order, from 1")
     run_order: int = Field(description="randomised order the runs are queued in")
-    point_type: str = Field(description="'factorial', 'centre' or 'axial'")
+    point_type: str = Field(description="'factorial', 'center', 'axial', or 'other' (an earlier iteration's battery "
+                                        "off the design's points, reused as a further point of the fit)")
     replicate: int
     seed: int | None = Field(description="the run's random seed")
     natural: dict[str, float] = Field(description="per factor: the level in its unit")
     coded: dict[str, float] = Field(description="per factor: the level coded to [-1, 1]")
+    reused_from: ReusedFrom | None = Field(None, description="the earlier iteration's battery this row is (not run "
+                                                             "again); null: run for this design")
 
 
 class DesignView(Out):
@@ -45,3 +63,4 @@ class DesignView(Out):
     runs: list[DesignRun]
     factor_names: list[str]
     notes: list[str]
+    batteries: DesignBatteries | None = Field(None, description="an iteration's design: rows run and rows reused")

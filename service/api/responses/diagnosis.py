@@ -24,6 +24,8 @@ class RankedEffect(Out):
     strength: float | None = Field(description="the strength the data ask for, in its unit")
     fraction_of_switch: float | None = Field(description="a switch-type effect: the fraction of its matched strength")
     plausible_range: list[float] = Field(description="[low, high], in its unit")
+    proposed_range: list[float] | None = Field(None, description="[low, high] adding this effect gets by default "
+                                               "(calibration.decisions.effect_range); null: no matched strength")
     plausible: bool
     significant: bool = Field(description="p_holm below alpha")
     alias_group: int | None = Field(description="the alias group it belongs to, from 1")

@@ -15,6 +15,18 @@ from service.api.responses.common import (
 from service.api.responses.report import Decision, Explanation
 
 
+class IterationBatteries(Out):
+    """What an iteration ran (calibration.history.batteries)."""
+
+    design: int = Field(description="design batteries run for this iteration")
+    confirmation: int
+    polish: int
+    diagnosis: int
+    reused: int = Field(description="design rows that are earlier iterations' batteries (not run again)")
+    total: int = Field(description="batteries run for this iteration, every phase")
+    why: list[str] = Field(default_factory=list, description="why each phase ran as many as it did")
+
+
 class HistoryEntry(Out):
     number: int = Field(description="iteration number")
     effects: list[str] = Field(description="candidate effects in the iteration's model")
@@ -37,6 +49,7 @@ class HistoryEntry(Out):
     range_widened: bool = Field(description="the iteration redid its base on a wider strength range")
     effect_added_next: list[str] | None = Field(description="what the next iteration added")
     explains: Explanation | None = Field(None, description="how much of the misfit the added effect explains")
+    batteries: IterationBatteries | None = Field(None, description="batteries run per phase, design rows reused, and why")
 
 
 class HistoryTarget(Out):

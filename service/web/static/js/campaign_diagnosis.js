@@ -42,11 +42,16 @@ function strengthBar(r) {
 }
 
 // A bound as the input shows it: 1e8, not 100000000 (which the box cut to "1000000(").
-const typed = (v) => (Number.isFinite(v) && v !== 0 && (Math.abs(v) >= 1e5 || Math.abs(v) < 1e-3)
-  ? v.toExponential().replace("e+", "e") : v ?? "");
+// Three significant digits: a proposed range is twice an estimate (0.5393671226083385 overflowed the box).
+const typed = (v) => {
+  if (!Number.isFinite(v)) return v ?? "";
+  const short = Number(v.toPrecision(3));
+  return short !== 0 && (Math.abs(short) >= 1e5 || Math.abs(short) < 1e-3) ? short.toExponential().replace("e+", "e") : short;
+};
 
 function addEffectForm(campaignId, r, nextNumber, enabled, onAdded) {
-  const [lo, hi] = (r.plausible_range || [null, null]).map(typed);
+  // the range the service proposes (from "off", so the next design keeps this model as its low face)
+  const [lo, hi] = (r.proposed_range || r.plausible_range || [null, null]).map(typed);
   const form = h("form", { className: "add-effect", "data-effect": r.effect, novalidate: true },
     h("div", { className: "form-errors" }),
     h("label", {}, "strength low", numberInput({ name: "low", value: lo, "data-loc": "strength_range" })),

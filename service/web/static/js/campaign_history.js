@@ -66,12 +66,21 @@ function parameterTraces(history, iterations, priors) {
   })));
 }
 
+// What an iteration ran (calibration.history.batteries): its total, the reused design rows, and why
+// each phase ran as many as it did in the cell's tooltip.
+function batteriesCell(b) {
+  if (!b) return "–";
+  const phases = `design ${b.design}, confirmation ${b.confirmation}, polish ${b.polish}, diagnosis ${b.diagnosis}`;
+  return h("span", { className: "batteries", title: [phases, ...(b.why || [])].join("\n") },
+    `${b.total}${b.reused ? ` (+${b.reused} reused)` : ""}`);
+}
+
 export function historySection(history, iterations, priors) {
   const its = history.iterations;
   if (!its.length) return "";
   // the table takes the card's width (eight columns do not fit beside the chart); the chart sits under it
   return h("section", { className: "card history" }, h("h3", {}, "Across iterations"),
-    h("div", {}, h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (omnibus · directed → Holm)", "Verdict", "Next", "Automatic", "Added effect"],
+    h("div", {}, h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (omnibus · directed → Holm)", "Verdict", "Next", "Automatic", "Added effect", "Batteries"],
         its.map((it) => [String(it.number), (it.effects.length ? it.effects.join(", ") : "none") + (it.range_widened ? " (range widened)" : ""),
           h("span", { className: "chi2dof", "data-iteration": String(it.number) }, fmt(it.chi2_per_dof, 4)),
           it.noise_band ? `${fmt(Math.max(0, it.noise_band[0]), 2)} – ${fmt(it.noise_band[1], 2)}` : "–",
@@ -80,7 +89,8 @@ export function historySection(history, iterations, priors) {
           // automatic mode: whether the effect this iteration added was kept (calibration.decisions)
           it.decision ? h("span", { className: it.decision.accepted ? "good" : "bad" }, `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`) : "–",
           // an added effect explains the misfit only when every check holds; otherwise what it leaves
-          it.explains ? h("span", { className: `explains ${it.explains.explains === "explains" ? "good" : "bad"}`, title: it.explains.explains_message }, it.explains.explains) : "–"]))),
+          it.explains ? h("span", { className: `explains ${it.explains.explains === "explains" ? "good" : "bad"}`, title: it.explains.explains_message }, it.explains.explains) : "–",
+          batteriesCell(it.batteries)]))),
       h("div", { className: "panels" }, errorChart(its))),
     h("h4", {}, "Parameters: optimum ±2 sd against the design box (dashed) and priors"),
     h("div", { className: "panels small" }, parameterTraces(history, iterations, priors)));
