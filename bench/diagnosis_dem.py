@@ -88,6 +88,7 @@ REDUCED_PARAMETERS = {"particle_radius_m": 0.035}
 MEASURING_SEEDS = (910001, 910002, 910003)
 # one effect tried, and when it is rejected the diagnosis's next candidate
 MAX_ITERATIONS = 3
+TRUTH_FLOOR_FACTOR = 1.1  # issue 33: the RMS after adding an effect within 1.1 x the truth's own
 DENSITY_PRIOR_BIAS = 0.02
 PRIOR_STREAM = 20261124  # the priors' scatter: a stream of its own, so the measurements do not change
 
@@ -454,6 +455,13 @@ def criteria(outs: list[dict]) -> dict[str, Any]:
     res["error_halved_chi2_le_2"] = sum(o.get("rms_ratio") is not None and o["rms_ratio"] <= 0.5
                                         and o["chi2_per_dof_after"] is not None and o["chi2_per_dof_after"] <= 2.0
                                         for o in effects)
+    # issue 33's criterion: after an effect was added, the weighted RMS within 1.1 x the truth's own at the
+    # same seeds (--truth-floor), with chi2/dof <= 2; rows without the truth floor are not counted
+    floored = [o for o in outs if o.get("added") and o.get("rms_truth") is not None]
+    res["within_truth_floor"] = sum(o.get("rms_after") is not None and o["rms_after"] <= TRUTH_FLOOR_FACTOR * o["rms_truth"]
+                                    and o["chi2_per_dof_after"] is not None and o["chi2_per_dof_after"] <= 2.0
+                                    for o in floored)
+    res["n_truth_floor"] = len(floored)
     dens = [o for o in effects if o["effect"] in ("rolling_epsd2", "particle_shape")]
     res["density_within_5pc"] = sum(o["density_error"] is not None and abs(o["density_error"]) <= 0.05 for o in dens)
     res["n_effects"], res["n_null"], res["n_density"] = len(effects), len(null), len(dens)
@@ -679,6 +687,9 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
     if floors:
         print("  the truth's own weighted RMS over the RMS before, about the smallest ratio a calibration of the "
               "right model can be expected to reach (--truth-floor): " + ", ".join(floors))
+    if res["n_truth_floor"]:
+        print(f"weighted RMS after adding within {TRUTH_FLOOR_FACTOR} x the truth's own, chi2/dof <= 2: "
+              f"{res['within_truth_floor']}/{res['n_truth_floor']} (target all)")
     print(f"particle density within 5 %: {res['density_within_5pc']}/{res['n_density']} rolling and shape "
           f"(target all)")
     for o in outs:

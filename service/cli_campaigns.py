@@ -102,7 +102,7 @@ def _factor(text: str) -> dict:
 def campaign_create(args) -> int:
     body = _read_json(args.file) if args.file else {}
     for key in ("name", "material_id", "evaluator", "fidelity", "seed", "max_iterations", "confirmation_seeds",
-                "polish_steps", "polish_when"):
+                "polish_steps", "polish_when", "polish_jacobian"):
         value = getattr(args, key)
         if value is not None:
             body[key] = value
@@ -110,6 +110,10 @@ def campaign_create(args) -> int:
         body["automatic"] = True
     if args.diagnose_always:
         body["diagnose_always"] = True
+    if args.no_reuse:
+        body["reuse"] = False
+    if args.all_seeds:
+        body["adaptive_replicates"] = False
     if args.factor:
         body["factors"] = [_factor(f) for f in args.factor]
     if args.centre_runs is not None or args.generators:
@@ -401,8 +405,15 @@ def register(subparsers) -> None:
     create.add_argument("--polish-steps", type=int,
                         help="Gauss-Newton steps on the batteries after the confirmation (default 3; 0: none)")
     create.add_argument("--polish-when", choices=["always", "surrogate_misses"],
-                        help="polish every iteration (default), or only one whose confirmation the response "
-                             "surfaces did not predict")
+                        help="polish every iteration, or (default) only one whose confirmation the response "
+                             "surfaces did not predict or whose added effect misses there")
+    create.add_argument("--polish-jacobian", choices=["surfaces", "batteries"],
+                        help="the polishing's first Jacobian: the surfaces' slopes (default) or forward differences "
+                             "on the batteries (one point per factor and seed)")
+    create.add_argument("--no-reuse", action="store_true",
+                        help="run every design point of a later iteration, even where an earlier one ran it")
+    create.add_argument("--all-seeds", action="store_true",
+                        help="run the diagnosis at every confirmation seed at once, not one seed first")
     create.add_argument("--start", action="store_true", help="start it right away")
     list_parser = _leaf(csub, "list", campaign_list, "list campaigns, newest first (a page; the total below)")
     page_options(list_parser)

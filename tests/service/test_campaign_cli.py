@@ -86,8 +86,10 @@ def test_campaign_and_schedule_commands(server, capsys, tmp_path):
     assert campaign["config"]["confirmation_seeds"] == 3 and campaign["config"]["polish_steps"] == 0
     code, out, _ = run(capsys, "campaign", "create", "--url", url, "--name", "cli polish", "--material", "1",
                        "--evaluator", "analytic", "--fidelity", "thesis", "--factor", "friction_pp:0.3:1.0",
-                       "--polish-when", "surrogate_misses", "--json")
-    assert code == 0 and json.loads(out)["config"]["polish_when"] == "surrogate_misses"
+                       "--polish-when", "always", "--polish-jacobian", "batteries", "--no-reuse", "--all-seeds", "--json")
+    config = json.loads(out)["config"]
+    assert code == 0 and (config["polish_when"], config["polish_jacobian"]) == ("always", "batteries")
+    assert config["reuse"] is False and config["adaptive_replicates"] is False
     code, _, err = run(capsys, "campaign", "start", str(cid), "--url", url)
     assert code == 2 and "HTTP 409" in err
     assert run(capsys, "campaign", "pause", str(cid), "--url", url)[0] == 0
