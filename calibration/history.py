@@ -73,7 +73,7 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
 def batteries(it) -> dict[str, Any]:
     """The batteries an iteration ran, per phase, the design rows it reused instead, and why each phase
     ran as many as it did (calibration.reuse, calibration.replicates, calibration.polish)."""
-    from calibration.vocabulary import RunKind
+    from calibration.vocabulary import PolishJacobian, RunKind
 
     counts = {kind.value: 0 for kind in RunKind}
     reused = 0
@@ -85,15 +85,15 @@ def batteries(it) -> dict[str, Any]:
     why = []
     design = it.design or {}
     if reused:
-        why.append(f"design: {(design.get('batteries') or {}).get('run', counts['design'])} run, {reused} reused "
-                   "from earlier iterations")
-    why += [f"diagnosis: {stage['why']}" for stage in (it.report or {}).get("diagnosis_stages") or []]
+        why.append(f"{RunKind.DESIGN.value}: {(design.get('batteries') or {}).get('run', counts['design'])} run, "
+                   f"{reused} reused from earlier iterations")
+    why += [f"{RunKind.DIAGNOSIS.value}: {stage['why']}" for stage in (it.report or {}).get("diagnosis_stages") or []]
     polish = (it.optimum or {}).get("polish") or {}
     if polish.get("skipped"):
-        why.append(f"polish: skipped ({polish['skipped']})")
+        why.append(f"{RunKind.POLISH.value}: skipped ({polish['skipped']})")
     elif polish:
-        why.append(f"polish: {polish.get('steps', 0)} step(s), Jacobian from the "
-                   f"{polish.get('jacobian', 'batteries')}")
+        why.append(f"{RunKind.POLISH.value}: {polish.get('steps', 0)} step(s), Jacobian from the "
+                   f"{polish.get('jacobian', PolishJacobian.BATTERIES.value)}")
     return {**counts, "reused": reused, "total": sum(counts.values()), "why": why}
 
 

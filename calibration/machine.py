@@ -6,8 +6,10 @@ confirmation (``confirmation_seeds`` batteries at the optimum) -> polish (Gauss-
 batteries, ``calibration.polish``, at the same seeds, when ``polish_when`` says so) -> report -> done;
 when the report finds misfit (lack of fit, or a target out of reach) or a conflict (a parameter pinned
 at a bound, a prior pulled off), or with ``diagnose_always``: report -> diagnosis (a baseline at the
-optimum and each candidate effect, at seeds of their own) -> diagnosed -> done, the ranking stored in the
-report and its verdict judged again on the omnibus and the candidates' directed test together. In
+optimum and each candidate effect, at seeds of their own; one seed first, ``calibration.replicates``) ->
+diagnosed (-> diagnosis again for the other seeds when one did not decide) -> done, the ranking stored in
+the report and its verdict judged again on the omnibus and the candidates' directed test together. An
+iteration after the first starts its design from the batteries earlier ones ran (``calibration.reuse``). In
 automatic mode (``calibration.automatic``) a done iteration either configures the next one, with the
 indicated effect as a factor, or records why the loop stopped.
 
@@ -189,7 +191,8 @@ def _polish(ctx: Context, it) -> Transition:
 
 
 def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) -> bool:
-    """Does an iteration whose model has an added effect miss the measurements at the surfaces' optimum?
+    """Does an iteration whose model has an added effect miss the measurements at the surfaces' optimum (a
+    target out of their reach, a parameter pinned at a bound, or the confirmation's lack of fit failing)?
     Such an iteration is judged against the one it was built on, and surfaces fitted on more points
     than they can follow (reused batteries widen their prediction intervals) may pass the surfaces'
     check with an optimum the batteries refute: the effect would be judged on the surfaces' error,
@@ -197,6 +200,10 @@ def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) 
     decides what its misfit means."""
     if not analysis.active_effects(it.parameters):
         return False
+    if any(not row.get("reachable", True) for row in it.optimum.get("reachability") or []):
+        return True  # a target the surfaces say no factor values reach: the report would say "out of reach"
+    if it.optimum.get("active_bounds"):
+        return True  # pinned at a bound, where a two-level surface of a saturating response is most biased
     p = analysis.confirmation_lack_of_fit(s, design, modelled, it.optimum, records(confirmations),
                                           [r.seed for r in confirmations])
     return p is not None and p < analysis.ALPHA
@@ -267,8 +274,11 @@ def _diagnosed(ctx: Context, it) -> Transition:
     suspects = suspect.suspects((it.report or {}).get("targets") or [], reach)
     planned_seeds = list(dict.fromkeys(seed for name, seed in plan if name == analysis.BASELINE))
     all_seeds = attribute.signature_seeds(seeds)
-    if stored_plan is not None and len(planned_seeds) < len(all_seeds):
-        more, why = replicates.more_seeds(diagnosis, diagnosis.get("simulator_share"))
+    if stored_plan is not None:
+        if len(planned_seeds) < len(all_seeds):
+            more, why = replicates.more_seeds(diagnosis, diagnosis.get("simulator_share"))
+        else:
+            more, why = False, f"every seed run ({len(planned_seeds)})"
         stages = [*((it.report or {}).get("diagnosis_stages") or []),
                   {"seeds": len(planned_seeds), "batteries": len(plan), "more_seeds": more, "why": why}]
         if more:

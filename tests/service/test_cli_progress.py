@@ -33,7 +33,7 @@ def _status(capsys, url, cid) -> str:
 
 def test_status_shows_each_phase_s_own_runs_and_watch_ends_with_the_campaign(server, capsys):  # noqa: F811
     url, app, settings = server
-    cid = _create(capsys, url, "--start")
+    cid = _create(capsys, url, "--polish-when", "always", "--start")  # every phase shown, polishing included
     runner = CampaignRunner(app.state.session_factory, settings)
     runner.tick()  # the design: 2^3 + 3 centre runs queued
     assert "phase batteries: design runs [" + "." * 24 + "] 0/11" in _status(capsys, url, cid)

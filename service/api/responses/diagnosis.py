@@ -72,6 +72,9 @@ class DiagnosisAdequacy(Out):
 class Diagnosis(Out):
     """As stored in the report's ``diagnosis``."""
 
+    simulator_share: float | None = Field(None, description="median over targets of 2 s_sim^2 over the residual's "
+                                          "variance: a one-seed signature's noise (calibration.replicates)")
+
     verdict: DiagnosisVerdict = Field(description="effect indicated, inconclusive, no physical match, suspect "
                                                   "measurement or no misfit")
     attribution_verdict: DiagnosisVerdict | None = Field(

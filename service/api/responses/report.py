@@ -47,6 +47,8 @@ class TargetRow(Out):
     confirmation_in_interval: bool | None = None
     reachability: float | None = Field(None, description="smallest |standardised misfit| in the design box")
     reachable: bool | None = Field(None, description="reachability below the report's reachable_limit")
+    reached_by: str | None = Field(None, description="set when the surfaces called the target out of reach but the "
+                                                     "batteries at the polished optimum reached it")
 
 
 class TestShare(Out):
@@ -262,6 +264,16 @@ class DiagnosisBattery(Out):
     seed: int
 
 
+class DiagnosisStage(Out):
+    """One stage of the diagnosis (calibration.replicates): how many seeds it had run, and whether the
+    other seeds then ran, with the reason."""
+
+    seeds: int
+    batteries: int
+    more_seeds: bool
+    why: str
+
+
 class Report(Out):
     """As stored on the iteration (GET /campaigns/{id}/iterations' ``report``)."""
 
@@ -292,6 +304,8 @@ class Report(Out):
                           "by a failing fit, parameters that trade named")
     diagnosis_plan: list[DiagnosisBattery] | None = Field(
         None, description="the diagnosis batteries in standard order: which effect each ran and its seed")
+    diagnosis_stages: list[DiagnosisStage] | None = Field(
+        None, description="one seed first, the others only where they buy power (calibration.replicates)")
     adequacy: Adequacy | None = None
     automatic: Automatic | None = None
     warnings: list[str] | None = Field(

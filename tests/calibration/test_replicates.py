@@ -1,0 +1,88 @@
+"""Issue 34, item 2: the diagnosis runs one seed first and the others only where they buy power.
+
+The rule's numbers are its definition (calibration.replicates): a signature is a difference of two battery
+means, variance 2 s^2 / m, read against residuals of variance v; one seed suffices below 2 s^2 / v = 1/4.
+"""
+from __future__ import annotations
+
+import pytest
+
+from calibration import machine, replicates
+from calibration.conditions import standin_conditions
+from calibration.evaluators import StandinEvaluator
+from calibration.localise import ALPHA
+from calibration.loop import CalibrationLoop
+from calibration.testbed import OPTIONS, loop_settings, make_case
+from calibration.vocabulary import RunKind
+
+
+def _diagnosis(p_leader, verdict="effect indicated", groups=(), indicated=True, p_rest=0.9):
+    return {"verdict": verdict, "indicated": ["rolling_epsd2"] if indicated else [],
+            "ranking": [{"effect": "rolling_epsd2", "p_holm": p_leader, "alias_group": 1 if groups else None},
+                        {"effect": "particle_shape", "p_holm": p_rest, "alias_group": 1 if groups else None}],
+            "alias_groups": list(groups)}
+
+
+def test_the_signature_noise_share_is_two_simulator_variances_over_the_residual_s():
+    assert replicates.simulator_share({"a": 1.0, "b": 2.0, "c": 1.0}, {"a": 2.0, "b": 2.0, "c": 1.0}) == pytest.approx(2.0)
+    assert replicates.simulator_share({"a": 1.0}, {"a": 2.0}) == pytest.approx(0.5)  # 2 x 1 / 4
+    assert replicates.simulator_share({}, {"a": 1.0}) is None
+
+
+@pytest.mark.parametrize("diagnosis, decided", [
+    (_diagnosis(ALPHA / 40), True),                                   # claimed far below alpha / 20
+    (_diagnosis(ALPHA / 10), False),                                  # claimed, but not decisively
+    (_diagnosis(0.3, verdict="inconclusive", indicated=False), False),
+    (_diagnosis(0.6, verdict="inconclusive", indicated=False, p_rest=0.7), True),  # every candidate futile
+    ({"verdict": "no misfit", "ranking": []}, True),
+    # a rival the evidence has not separated (separation_z below its bound): another seed can separate them
+    (_diagnosis(ALPHA / 40, groups=[{"group": 1, "effects": ["rolling_epsd2", "particle_shape"],
+                                     "separators": [{"effects": ["rolling_epsd2", "particle_shape"], "separation_z": 1.2}]}]),
+     False),
+    # collinear signatures (|cos| > 0.9, no separation_z): physics more seeds cannot separate
+    (_diagnosis(ALPHA / 40, groups=[{"group": 1, "effects": ["rolling_epsd2", "particle_shape"],
+                                     "separators": [{"effects": ["rolling_epsd2", "particle_shape"], "separation_z": None}]}]),
+     True),
+])
+def test_when_one_seed_decides(diagnosis, decided):
+    assert (replicates.decided(diagnosis) is not None) is decided
+
+
+def test_a_close_decision_adds_seeds_only_where_the_simulator_s_scatter_matters():
+    close = _diagnosis(ALPHA / 10)
+    assert replicates.more_seeds(close, 1.0)[0] is True
+    assert replicates.more_seeds(close, None)[0] is True
+    more, why = replicates.more_seeds(close, 0.2)
+    assert more is False and "measurements' scatter dominates" in why
+    assert replicates.more_seeds(_diagnosis(ALPHA / 40), 1.0)[0] is False
+
+
+def test_the_loop_runs_the_other_seeds_when_the_first_does_not_decide(monkeypatch):
+    """Plumbing: forced to find the decision close, the diagnosis adds the second seed's baseline and
+    candidates after the first's, and the ranking is made on both."""
+    monkeypatch.setattr(replicates, "more_seeds", lambda diagnosis, share: (True, "forced close"))
+    case = make_case(7, "single", effects={"rolling_epsd2": 0.3})
+    settings = loop_settings(case, diagnose_always=False, automatic=False)
+    result = CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)), settings).run()
+    it = result.first
+    runs = sorted((r for r in it.runs if r.kind == RunKind.DIAGNOSIS), key=lambda r: r.std_order)
+    per_seed = len(runs) // 2
+    assert [r.std_order for r in runs] == list(range(1, len(runs) + 1))
+    assert len({r.seed for r in runs[:per_seed]}) == 1 and len({r.seed for r in runs[per_seed:]}) == 1
+    stages = it.report["diagnosis_stages"]
+    assert [s["seeds"] for s in stages] == [1, 2] and stages[0]["more_seeds"] and not stages[1]["more_seeds"]
+    assert it.report["diagnosis"]["batteries"] == len(runs)
+    assert len(it.report["diagnosis_plan"]) == len(runs)
+
+
+def test_one_seed_first_halves_a_decided_diagnosis():
+    case = make_case(7, "single", effects={"rolling_epsd2": 0.3})  # lambda in the hundreds: decided at once
+    counts = {}
+    for adaptive in (True, False):
+        settings = loop_settings(case, diagnose_always=False, automatic=False, adaptive_replicates=adaptive)
+        it = CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)), settings).run().first
+        counts[adaptive] = sum(r.kind == RunKind.DIAGNOSIS for r in it.runs)
+        seeds = settings.confirmation_seeds
+        assert it.report["diagnosis"]["ranking"][0]["effect"] in ("rolling_epsd2", "particle_shape")
+    assert counts[False] == seeds * counts[True]  # a baseline and each candidate, per seed
+    assert machine.replicates is replicates
