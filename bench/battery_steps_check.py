@@ -9,9 +9,10 @@ CCT's last unloading, one DST speed at every normal stress); "new" is the screen
 Fewer steps per battery). Same micro parameters (the defaults) and the same seeds for both. For each
 quantity the table gives the mean +- sample standard deviation over the seeds, old and new, and the
 difference of the means in standard errors, (new - old) / sqrt(sd_old^2 / n + sd_new^2 / n): the
-seed-to-seed scatter is what a change must stay within (|difference| <= 2 standard errors). The fill and
-the CCT are the same to the bit (same seed, the new stop rules drop only records no reducer reads), so
-their rows show 0.0; the DST rows carry the speed change.
+seed-to-seed scatter is what a change must stay within (|difference| <= 2 standard errors); "same bits"
+says where every seed gave the very same float. The fill, the CCT and the lightest DST load are the same to
+the bit (same seed; the new stop rules drop only records no reducer reads, and the lightest load keeps its
+speed); the other DST rows carry the speed change.
 """
 from __future__ import annotations
 
@@ -65,11 +66,37 @@ def difference_in_standard_errors(old: list[float], new: list[float]) -> float:
     return (mn - mo) / se
 
 
+def comparable(values: dict) -> dict:
+    """The CCT's E' per equal stress window is keyed by the window's mid stress, a fifth of each run's own
+    peak: rename those by window number (1 = lowest) so that seeds and settings line up."""
+    prefix = "cct confined_modulus_pa [normal_stress_pa="
+    windows = sorted((float(k[len(prefix):-1]), k) for k in values if k.startswith(prefix))
+    out = {k: v for k, v in values.items() if not k.startswith(prefix)}
+    for rank, (_, k) in enumerate(windows, 1):
+        out[f"cct confined_modulus_pa [window {rank} of {len(windows)}]"] = values[k]
+    return out
+
+
+def print_markdown(runs: dict) -> None:
+    """The table as docs/lab.md shows it."""
+    old = [comparable(r["values"]) for r in runs["old"]]
+    new = [comparable(r["values"]) for r in runs["new"]]
+    print(f"| quantity | old mean +- sd | new mean +- sd | difference / SE | same bits |\n|---|---|---|---|---|")
+    for k in [k for k in old[0] if all(k in v for v in old + new)]:
+        o, n = [v[k] for v in old], [v[k] for v in new]
+        (mo, so), (mn, sn) = _mean_sd(o), _mean_sd(n)
+        same = "every seed" if o == n else "no"
+        print(f"| {k} | {mo:.4g} +- {so:.2g} | {mn:.4g} +- {sn:.2g} | "
+              f"{difference_in_standard_errors(o, n):+.2f} | {same} |")
+
+
 def print_table(runs: dict) -> bool:
-    old, new = runs["old"], runs["new"]
+    old = [dict(r, values=comparable(r["values"])) for r in runs["old"]]
+    new = [dict(r, values=comparable(r["values"])) for r in runs["new"]]
     names = [k for k in old[0]["values"] if all(k in r["values"] for r in old + new)]
+    missing = sorted({k for r in old + new for k in r["values"]} - set(names))
     width = max(len(k) for k in names)
-    print(f"\n{'quantity':<{width}} {'old mean +- sd':>24} {'new mean +- sd':>24} {'diff/SE':>8}")
+    print(f"\n{'quantity':<{width}} {'old mean +- sd':>24} {'new mean +- sd':>24} {'diff/SE':>8}  same bits")
     ok = True
     for k in names:
         o = [r["values"][k] for r in old]
@@ -78,7 +105,10 @@ def print_table(runs: dict) -> bool:
         z = difference_in_standard_errors(o, n)
         flag = "" if abs(z) <= Z_LIMIT else "  <-- beyond 2 SE"
         ok &= abs(z) <= Z_LIMIT
-        print(f"{k:<{width}} {mo:>12.5g} +- {so:<9.3g} {mn:>12.5g} +- {sn:<9.3g} {z:8.2f}{flag}")
+        same = "every seed" if o == n else "no"
+        print(f"{k:<{width}} {mo:>12.5g} +- {so:<9.3g} {mn:>12.5g} +- {sn:<9.3g} {z:8.2f}  {same}{flag}")
+    if missing:
+        print(f"not in every run (left out): {', '.join(missing)}")
     print()
     print(f"{'seed':>6} {'steps old':>10} {'steps new':>10} {'new/old':>8} {'wall old s':>11} {'wall new s':>11} "
           f"{'max I old':>10} {'max I new':>10}")
@@ -102,9 +132,13 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     ap.add_argument("--out", default=None, help="save the runs as JSON")
     ap.add_argument("--from-json", default=None, help="print the table of a saved run, no simulation")
+    ap.add_argument("--markdown", action="store_true", help="with --from-json: the table as markdown")
     args = ap.parse_args(argv)
     if args.from_json:
         runs = json.load(open(args.from_json))
+        if args.markdown:
+            print_markdown(runs)
+            return 0
         return 0 if print_table(runs) else 1
     if len(args.seeds) < 2:
         ap.error("give at least two seeds: the scatter needs them")

@@ -125,6 +125,11 @@ def battery(args) -> int:
     print(f"battery: {ctx.steps} steps, {ctx.simulated_time_s:.3f} s simulated, {wall:.1f} s wall, {rate:.3e} "
           f"body-steps/s; largest inertial number {result.provenance.max_inertial_number:.2e} "
           f"(speed factor {ctx.speed_factor:g}); load average {os.getloadavg()[0]:.2f}")
+    for name, curve in result.curves.items():
+        if name.startswith("dst_") and "inertial_number" in curve:
+            i = sorted(curve["inertial_number"])
+            print(f"{name} shearing: inertial number median {i[len(i) // 2]:.2e}, max {i[-1]:.2e} over "
+                  f"{curve['shear_displacement_m'][-1] * 1000:.1f} mm of travel")
     for w in result.provenance.warnings:
         print(f"warning: {w}")
     tail = f"screening_battery_wall_s={wall:.1f} battery_steps={ctx.steps}"
