@@ -3,6 +3,7 @@
     python3 bench/battery_steps_check.py                       # seeds 1 2 3, one thread, ~6 batteries
     python3 bench/battery_steps_check.py --seeds 1 2 3 4 5 --out /tmp/check.json
     python3 bench/battery_steps_check.py --from-json /tmp/check.json   # reprint a saved run's table
+    python3 bench/battery_steps_check.py --from-json a.json b.json --markdown   # two runs' seeds together
 
 "old" is the battery as it ran before issue 34 (``OLD_OPTIONS``: the shear to the full shear distance, the
 CCT's last unloading, one DST speed at every normal stress); "new" is the screening default (docs/lab.md,
@@ -131,11 +132,16 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     ap.add_argument("--out", default=None, help="save the runs as JSON")
-    ap.add_argument("--from-json", default=None, help="print the table of a saved run, no simulation")
+    ap.add_argument("--from-json", nargs="+", default=None,
+                    help="print the table of saved runs (several files: their seeds together), no simulation")
     ap.add_argument("--markdown", action="store_true", help="with --from-json: the table as markdown")
     args = ap.parse_args(argv)
     if args.from_json:
-        runs = json.load(open(args.from_json))
+        runs = {"old": [], "new": []}
+        for path in args.from_json:
+            saved = json.load(open(path))
+            runs["old"] += saved["old"]
+            runs["new"] += saved["new"]
         if args.markdown:
             print_markdown(runs)
             return 0

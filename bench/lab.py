@@ -8,7 +8,8 @@
                                           # then the 5,000-sphere pour of bench/engine_vs_liggghts.py at
                                           # one thread; last line: screening_battery_wall_s=X ...
                                           # battery_efficiency=Y (battery body-steps/s over the pour's)
-    python3 bench/lab.py --battery --options '{"speed_factor": 40}'   # a battery with other options
+    python3 bench/lab.py --battery --no-pour --options '{"stop_after_reduced": false, "dst_speed_by_stress": false}'
+                                          # the battery as it ran before issue 34 (docs/lab.md)
 
 Each test runs as the service runs it (a CCT job includes its fill, a DST job its fill and
 precompression). Particle-steps count bodies (a clump is one particle); sphere-steps count its
