@@ -149,6 +149,11 @@ def main(argv=None) -> int:
     if len(args.seeds) < 2:
         ap.error("give at least two seeds: the scatter needs them")
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")  # a screening battery runs on one thread anyway
+    from engine.lab.battery import run_job
+    from engine.lab.spec import JobSpec
+
+    # compile (or load) the kernels first, so that the first battery's wall time is not the compiler's
+    run_job(JobSpec(test="fill", parameters={"particle_radius_m": 0.05}))
     runs: dict[str, list] = {"old": [], "new": [], "old_options": OLD_OPTIONS, "new_options": NEW_OPTIONS}
     for seed in args.seeds:
         for label, options in (("old", OLD_OPTIONS), ("new", NEW_OPTIONS)):
