@@ -17,6 +17,15 @@ class QuasiStaticError(ValueError):
 
 
 @dataclass
+class StageTally:
+    """Steps, body-steps, simulated and wall seconds spent in one named phase of a job."""
+    steps: int = 0
+    particle_steps: int = 0
+    simulated_time_s: float = 0.0
+    wall_time_s: float = 0.0
+
+
+@dataclass
 class RunContext:
     spec: JobSpec
     preset: Fidelity
@@ -29,6 +38,11 @@ class RunContext:
     max_inertial_number: float | None = None
     warnings: list[str] = field(default_factory=list)
     started: float = field(default_factory=time.perf_counter)
+    # per phase (the name each procedure reports its progress under, in order of first report): what ran
+    # since the previous report. Every stage loop reports after each chunk it advances, so this is the
+    # per-stage breakdown with no timer in the kernels (bench/lab.py --battery prints it)
+    stages: dict[str, StageTally] = field(default_factory=dict)
+    _tally_mark: tuple[float, int, int, float] | None = None
     # progress of the whole job is split among phases: [lo, hi) of the current phase
     _span: tuple[float, float] = (0.0, 1.0)
     _last_progress: float = -1.0
@@ -51,6 +65,25 @@ class RunContext:
     @property
     def shear_speed_m_s(self) -> float:
         return self.preset.lab_shear_speed_m_s * self.speed_factor
+
+    @property
+    def stop_after_reduced(self) -> bool:
+        o = self.spec.options.stop_after_reduced
+        return bool(o) if o is not None else self.preset.stop_after_reduced
+
+    def dst_speed_scale(self, normal_stress_pa: float) -> float:
+        """What the DST's reload and shear speeds at one normal stress are multiplied by
+        (``options.dst_speed_by_stress``; 1 when off).
+
+        The shear's inertial number I = (v / h_band) d / sqrt(sigma / rho_p) falls as 1 / sqrt(sigma) at a
+        fixed speed; scaled by sqrt(sigma / sigma_0) above the fidelity's lowest DST stress sigma_0 it stays
+        at the lowest load's, the speed factor's choice, at every load. Below sigma_0 the speed is unscaled.
+        """
+        o = self.spec.options.dst_speed_by_stress
+        by_stress = bool(o) if o is not None else self.preset.dst_speed_by_stress
+        if not by_stress:
+            return 1.0
+        return math.sqrt(max(normal_stress_pa / min(self.preset.dst_normal_stresses_pa), 1.0))
 
     @property
     def cct_max_stress_pa(self) -> float:
@@ -140,6 +173,7 @@ class RunContext:
         self._span = (lo, hi)
 
     def report(self, fraction_of_phase: float, phase: str) -> None:
+        self._tally(phase)
         if self.should_cancel is not None and self.should_cancel():
             raise Cancelled(f"cancelled during {phase}")
         if self.progress is None:
@@ -149,6 +183,17 @@ class RunContext:
         if f - self._last_progress >= 0.01 or f >= 1.0:
             self._last_progress = f
             self.progress(f, phase)
+
+    def _tally(self, phase: str) -> None:
+        """Charge what ran since the previous report (steps, wall time) to ``phase``."""
+        now = time.perf_counter()
+        mark = self._tally_mark or (self.started, 0, 0, 0.0)
+        stage = self.stages.setdefault(phase, StageTally())
+        stage.wall_time_s += now - mark[0]
+        stage.steps += self.steps - mark[1]
+        stage.particle_steps += self.particle_steps - mark[2]
+        stage.simulated_time_s += self.simulated_time_s - mark[3]
+        self._tally_mark = (now, self.steps, self.particle_steps, self.simulated_time_s)
 
     def count(self, steps: int, n_bodies: int, dt_s: float, n_spheres: int = 0) -> None:
         self.steps += steps

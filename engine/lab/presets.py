@@ -102,6 +102,11 @@ class Fidelity:
     shear_distance_m: float
     default_speed_factor: float
     lid_start_gap_m: float = 0.030
+    # what a battery runs by default beyond the apparatus (options.stop_after_reduced, options.dst_speed_by_stress):
+    # on at screening, where the loop runs its batteries (docs/lab.md, fewer steps per battery); off at thesis
+    # fidelity, whose runs are the thesis-comparison tables
+    stop_after_reduced: bool = False
+    dst_speed_by_stress: bool = False
     residual_window: tuple[float, float] = (0.08, 0.10)
     fill_margin: float = 1.15  # particles inserted / particles expected below the level
     expected_solid_fraction: float = 0.58
@@ -165,7 +170,8 @@ def particles_of(shapes: tuple[ShapeFraction, ...]) -> Particles:
 
 
 def lab_setup(name: str, rig: Rig, shapes: tuple[ShapeFraction, ...], *, default_speed_factor: float,
-              aor_shapes: tuple[ShapeFraction, ...] | None = None) -> Fidelity:
+              aor_shapes: tuple[ShapeFraction, ...] | None = None, stop_after_reduced: bool = False,
+              dst_speed_by_stress: bool = False) -> Fidelity:
     """The set-up the procedures read: the rig record's apparatus, the particles, and the simulation's own
     settings (speed factor and the fill's margins, which are not part of any apparatus)."""
     box, fill, aor, anchor = rig.shear_box, rig.fill, rig.angle_of_repose, rig.anchor
@@ -189,6 +195,8 @@ def lab_setup(name: str, rig: Rig, shapes: tuple[ShapeFraction, ...], *, default
         lab_shear_speed_m_s=box.shear_speed_m_s,
         shear_distance_m=box.shear_distance_m,
         default_speed_factor=default_speed_factor,
+        stop_after_reduced=stop_after_reduced,
+        dst_speed_by_stress=dst_speed_by_stress,
         lid_start_gap_m=box.lid_start_gap_m,
         rain_drop_height_m=fill.drop_height_m,
         aor=AorGeometry(bucket_bottom_radius_m=0.5 * aor.bucket_bottom_diameter_m,
@@ -223,7 +231,8 @@ THESIS = lab_setup("thesis", bundled_rig(FIDELITY_RIGS["thesis"]), shape_fractio
 # instead of draining through the gap under the rim, and the pile comes out flatter. docs/lab.md.
 SCREENING = lab_setup("screening", bundled_rig(FIDELITY_RIGS["screening"]),
                       (ShapeFraction("sphere", 0.020, 0.020, 1.0),), default_speed_factor=40.0,
-                      aor_shapes=(ShapeFraction("pyramid", 0.010, 0.010, 1.0),))
+                      aor_shapes=(ShapeFraction("pyramid", 0.010, 0.010, 1.0),),
+                      stop_after_reduced=True, dst_speed_by_stress=True)
 
 FIDELITIES = {"thesis": THESIS, "screening": SCREENING}
 

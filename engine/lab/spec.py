@@ -148,6 +148,18 @@ class TestOptions(BaseModel):
     )
     shear_distance_m: float | None = Field(None, gt=0, le=_MAX_LAB_LENGTH_M,
                                            description="DST shear travel; unset: the fidelity's")
+    stop_after_reduced: bool | None = Field(
+        None, description="stop each stage once what the reducers read is recorded: the DST shear at the end of the "
+        "residual window plus half the smoothing span (at most shear_distance_m), the CCT after its last loading "
+        "branch (no reducer reads the last unloading); the reduced values are the same to the bit. Unset: the "
+        "fidelity's default (screening true, thesis false; docs/lab.md)",
+    )
+    dst_speed_by_stress: bool | None = Field(
+        None, description="DST: reload and shear each normal stress s above the fidelity's lowest DST stress s0 at "
+        "the speed factor's speed times sqrt(s / s0), which keeps the shear's inertial number at the lowest load's "
+        "instead of letting it fall as 1/sqrt(s). Unset: the fidelity's default (screening true, thesis false; "
+        "docs/lab.md)",
+    )
     residual_window_strain: STRICT_PAIR = Field(
         (0.08, 0.10), strict=False, description="DST shear-strain window for residual stresses and dilatancy"
     )

@@ -49,7 +49,7 @@ TEST = LabTest(
         Quantity("bulk_stiffness_n_per_m", "N/m", POSITIVE),
     ),
     options=("cct_max_stress_pa", "cct_cycles", "cct_window_stresses_pa", "speed_factor", "max_inertial_number",
-             "inertial_number_action"),
+             "inertial_number_action", "stop_after_reduced"),
     procedure="engine.lab.procedures.cct:run_cct",
     reducer="engine.lab.reducers.cct:reduce_cct",
     cost=_cost,

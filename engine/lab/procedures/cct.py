@@ -30,6 +30,8 @@ def run_cct(ctx: RunContext, fill: FillOutcome) -> CctOutcome:
     for cycle in range(2, ctx.cct_cycles + 1):
         load_to(ctx, sim, ctx.cct_max_stress_pa, ctx.lid_speed_m_s, record, cycle, f"cct: cycle {cycle} loading",
                 height, LID_MAX_TRAVEL_FRACTION * height)
+        if cycle == ctx.cct_cycles and ctx.stop_after_reduced:
+            break  # the reducer reads loading branches only, and nothing starts from the CCT's last state
         unload(ctx, sim, ctx.lid_speed_m_s, record, cycle, f"cct: cycle {cycle} unloading", LID_MAX_TRAVEL_FRACTION * height)
     z = np.asarray(record.lid_z_m)
     stress = np.asarray(record.normal_stress_pa)

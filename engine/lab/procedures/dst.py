@@ -16,7 +16,8 @@ from engine.lab import sim as labsim
 from engine.lab.context import RunContext
 from engine.lab.geometry import BOTTOM_HALF
 from engine.lab.procedures.lid import LidRecord, load_to
-from engine.lab.reducers.dst import DstReduction, MohrCoulombFit, mohr_coulomb_fit, reduce_dst
+from engine.lab.reducers.dst import (DstReduction, MohrCoulombFit, mohr_coulomb_fit, reduce_dst,
+                                     samples_needed_past_window)
 from engine.lab.stops import DST_STABILISE_MAX_S, LID_MAX_TRAVEL_FRACTION
 
 SAMPLES_PER_RUN = 800  # shear samples over the shear distance (the 8-10 % window gets ~150)
@@ -65,15 +66,23 @@ def run_one(ctx: RunContext, precompressed: dict, packing_height_m: float, targe
     tag = f"dst {target_pa / 1000:.1f} kPa"
     sim = labsim.restore(precompressed)
     area = ctx.preset.container_area_m2
-    load_to(ctx, sim, target_pa, ctx.lid_speed_m_s, LidRecord(), 0, f"{tag}: reloading", packing_height_m,
+    scale = ctx.dst_speed_scale(target_pa)
+    lid_speed = ctx.lid_speed_m_s * scale
+    load_to(ctx, sim, target_pa, lid_speed, LidRecord(), 0, f"{tag}: reloading", packing_height_m,
             LID_MAX_TRAVEL_FRACTION * packing_height_m)
-    v = ctx.shear_speed_m_s
+    v = ctx.shear_speed_m_s * scale
     sim.set_wall_servo("lid", ServoSpec(axis=(0.0, 0.0, -1.0), target_stress_pa=target_pa, area_m2=area,
-                                        max_speed_m_s=max(v, ctx.lid_speed_m_s), gain_fraction=SERVO_GAIN))
+                                        max_speed_m_s=max(v, lid_speed), gain_fraction=SERVO_GAIN))
     _stabilise(ctx, sim, target_pa, f"{tag}: stabilising")
 
+    opts = ctx.spec.options
     distance = ctx.shear_distance_m
+    # samples a fixed fraction of the shear distance apart, whatever stops the travel (so stopping early
+    # leaves the record before the stop as it was)
     chunk = max(1, int(distance / SAMPLES_PER_RUN / (v * sim.timestep_s)))
+    # the reducer reads the residual window and the smoothing's reach past it: once that is recorded, stop
+    diameter, window_end_strain = ctx.preset.container_diameter_m, opts.residual_window_strain[1]
+    samples_past_window = samples_needed_past_window(opts.moving_average_span) if ctx.stop_after_reduced else None
     x0 = float(sim.wall_position("floor")[0])
     z0 = float(sim.wall_position("lid")[2])
     rho = ctx.spec.parameters.particle_density_kg_m3
@@ -99,7 +108,10 @@ def run_one(ctx: RunContext, precompressed: dict, packing_height_m: float, targe
         ctx.report(disp / distance, f"{tag}: shearing")
         if disp >= distance:
             break
-    opts = ctx.spec.options
+        if samples_past_window is not None and disp / diameter > window_end_strain:
+            samples_past_window -= 1
+            if samples_past_window <= 0:
+                break
     red = reduce_dst(cols["shear_displacement_m"], cols["shear_force_n"], cols["normal_force_n"],
                      cols["lid_rise_m"], area, ctx.preset.container_diameter_m,
                      window=tuple(opts.residual_window_strain), span=opts.moving_average_span)

@@ -41,6 +41,14 @@ def _window_mask(shear_strain: np.ndarray, window: tuple[float, float]) -> np.nd
     return mask
 
 
+def samples_needed_past_window(span: int) -> int:
+    """Samples a shear record needs beyond the residual window's upper strain before ``reduce_dst`` reads
+    nothing more from it: the moving average of the window's last sample reaches ``span // 2`` samples
+    ahead, and at least one sample past the window shows where the window ends. A record stopped there
+    reduces to the same values, to the bit, as one that goes on (``options.stop_after_reduced``)."""
+    return max(span // 2, 1)
+
+
 def window_mean(shear_strain: np.ndarray, values: np.ndarray, window: tuple[float, float]) -> float:
     shear_strain = np.asarray(shear_strain, dtype=float)
     return float(np.mean(np.asarray(values, dtype=float)[_window_mask(shear_strain, window)]))
