@@ -7,7 +7,8 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from engine.lab.errors import SpecFieldError
-from engine.lab.presets import Fidelity, fidelity
+from engine.lab.presets import Fidelity
+from engine.lab.resolution import particles_field, setup_for, setup_notes
 from engine.lab.result import Cancelled
 from engine.lab.spec import JobSpec
 
@@ -35,8 +36,7 @@ class RunContext:
 
     @classmethod
     def from_spec(cls, spec: JobSpec, progress=None, should_cancel=None) -> "RunContext":
-        p = spec.parameters
-        return cls(spec, fidelity(spec.fidelity, p.particle_radius_m, p.clump_aspect_ratio), progress, should_cancel)
+        return cls(spec, setup_for(spec), progress, should_cancel)
 
     # ----------------------------------------------------------------- options with preset defaults
     @property
@@ -120,10 +120,13 @@ class RunContext:
         try:
             warnings = self.preset.rig_warnings()
         except SpecFieldError as exc:
-            field = "parameters.particle_radius_m" if self.spec.parameters.particle_radius_m is not None else "fidelity"
+            field = ("parameters.particle_radius_m" if self.spec.parameters.particle_radius_m is not None
+                     else particles_field(self.spec))
             raise SpecFieldError(field, f"rig {self.preset.rig_name!r}, {exc.field}: {exc.message}") from None
         for warning in warnings:
             self.warn(f"rig {self.preset.rig_name!r}, {warning}")
+        for note in setup_notes(self.spec):  # the coarse factor chosen, a particle target the standards capped
+            self.warn(note)
         limit = self.preset.rig.shear_box.max_normal_force_n if self.preset.rig is not None else None
         if limit is None:
             return

@@ -8,12 +8,13 @@ from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
 
 def _cost(ctx, planned: frozenset[str]) -> StageCost:
     from engine.lab.cost import packing_spheres
+    from engine.lab.resolution import particles_field
 
     preset = ctx.preset
     solids_m3 = preset.container_area_m2 * preset.packing_height_m * preset.expected_solid_fraction
     return StageCost(RAIN_SETTLE_MAX_S + LEVEL_SETTLE_MAX_S, "options.speed_factor",
                      packing_spheres(solids_m3, preset.fill_margin, preset.shapes),
-                     "parameters.particle_radius_m" if ctx.spec.fidelity == "screening" else "fidelity")
+                     particles_field(ctx.spec))
 
 
 def _run(bench: Bench, lo: float, hi: float) -> Run:
