@@ -19,6 +19,7 @@ from sqlalchemy.orm import Session
 
 from calibration import evaluator_registry
 from engine.lab.result import LabResult
+from engine.lab.resolution import label
 from engine.lab.spec import JobSpec
 from service.config import Settings, get_settings
 from service.errors import Conflict, Invalid, NotFound, TooMany
@@ -73,7 +74,7 @@ def submit_job_ex(
             return _replay(existing, spec_json, evaluator), False
     check_limits(spec, cfg)
     values = dict(
-        status=JobStatus.QUEUED, evaluator=evaluator, test=spec.test, fidelity=spec.fidelity, spec=spec_json,
+        status=JobStatus.QUEUED, evaluator=evaluator, test=spec.test, fidelity=label(spec.resolution, spec.fidelity), spec=spec_json,
         seed=spec.seed, priority=priority, attempts=0, max_attempts=max_attempts or cfg.max_attempts,
         cancel_requested=False, progress_fraction=0.0, idempotency_key=idempotency_key,
         client_id=client_id, owner=owner, campaign_id=campaign_id, created_at=utcnow(),

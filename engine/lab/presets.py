@@ -48,7 +48,7 @@ class Preset:
             raise ValueError(f"preset {name!r}: bundled particles are built as measured")
         aor = None if self.aor_particles is None else shape_fractions(self.aor_particles)
         return lab_setup(name, bundled_rig(self.rig_name), shape_fractions(self.particles),
-                         default_speed_factor=self.default_speed_factor, aor_shapes=aor)
+                         default_speed_factor=self.default_speed_factor, aor_shapes=aor, particles=self.particles)
 
 
 def _spheres(shape: str, radius_m: float) -> Particles:
@@ -96,9 +96,9 @@ def fidelity(name: str, particle_radius_m: float | None = None, clump_aspect_rat
             raise SpecFieldError("parameters.particle_radius_m", "particle_radius_m applies to the screening fidelity only")
         half = 0.5 * particle_radius_m
         preset = replace(preset, shapes=(ShapeFraction("sphere", particle_radius_m, particle_radius_m, 1.0),),
-                         aor_shapes=(ShapeFraction("pyramid", half, half, 1.0),))
+                         aor_shapes=(ShapeFraction("pyramid", half, half, 1.0),), particles=None)
     if clump_aspect_ratio != 1.0:
         from engine.lab.shape import elongated_shapes
 
-        preset = replace(preset, shapes=elongated_shapes(clump_aspect_ratio, preset.shapes))
+        preset = replace(preset, shapes=elongated_shapes(clump_aspect_ratio, preset.shapes), particles=None)
     return preset

@@ -57,6 +57,12 @@ class Quantity:
     conditions: tuple[str, ...] = ()
     description: str = ""
     typical: Typical | None = None
+    # the rig sections whose dimensions set the value (a bulk mass is the mass of that container's packing):
+    # compared with a measurement only when the job's rig has the same sections (engine.lab.resolution)
+    apparatus: tuple[str, ...] = ()
+    # the value scales with the particles' size (a particle count): compared only when the job builds the
+    # measured material's particles as they are
+    per_particle: bool = False
 
 
 @dataclass(frozen=True)

@@ -185,8 +185,9 @@ def material_setup(rig: Rig, particles: Particles, resolution: ResolutionIn) -> 
     and the notes on the chosen factor."""
     chosen = parsed(resolution)
     factor, notes = scale_factor(rig, particles, chosen)
-    shapes = shape_fractions(coarse_grained(particles, factor))
-    setup = lab_setup(chosen.mode, rig, shapes, default_speed_factor=DEFAULT_SPEED_FACTOR, scale_factor=factor)
+    built = coarse_grained(particles, factor)
+    setup = lab_setup(chosen.mode, rig, shape_fractions(built), default_speed_factor=DEFAULT_SPEED_FACTOR,
+                      scale_factor=factor, particles=built)
     return setup, notes
 
 
@@ -202,7 +203,7 @@ def setup_for(spec) -> Fidelity:
         return fidelity(spec.fidelity, p.particle_radius_m, p.clump_aspect_ratio)
     setup, _ = material_setup(spec.rig, spec.particles, spec.resolution)
     if p.clump_aspect_ratio != 1.0:
-        setup = replace(setup, shapes=elongated_shapes(p.clump_aspect_ratio, setup.shapes))
+        setup = replace(setup, shapes=elongated_shapes(p.clump_aspect_ratio, setup.shapes), particles=None)
     return setup
 
 
@@ -225,3 +226,23 @@ def particles_field(spec) -> str:
             return "parameters.particle_radius_m"
         return "resolution" if spec.resolution is not None else "fidelity"
     return "resolution"
+
+
+def incomparable(quantity, measured_rig: Rig | None, measured_particles: Particles | None,
+                 setup: Fidelity) -> str | None:
+    """Why a measured ``quantity`` (``engine.lab.registry.Quantity``) cannot be compared with what ``setup``
+    simulates, or None. A value the apparatus sets (``Quantity.apparatus``) needs the job's rig to have the
+    same sections as the rig it was measured in; a value that scales with the particles' size
+    (``Quantity.per_particle``) needs the material's own particles as they are. Unknown (a material without a
+    rig or particles): compared, as before rigs were data."""
+    if measured_rig is not None and quantity.apparatus:
+        differ = [name for name in quantity.apparatus if getattr(measured_rig, name) != getattr(setup.rig, name)]
+        if differ:
+            return (f"{quantity.name} is set by the apparatus ({' and '.join(differ)}): measured in rig "
+                    f"{measured_rig.name!r}, simulated in rig {setup.rig_name!r}, where they differ; run at "
+                    "resolution 'as_measured' or 'coarse' to simulate in the measurement's rig")
+    if measured_particles is not None and quantity.per_particle and setup.particles != measured_particles:
+        why = (f"coarse-grained x {setup.scale_factor:.4g}" if setup.scale_factor != 1.0
+               else "not the material's particles")
+        return f"{quantity.name} scales with the particles' size and the simulated particles are {why}"
+    return None

@@ -90,6 +90,8 @@ class Fidelity:
     aor_shapes: tuple[ShapeFraction, ...] | None = None
     # the resolution's size factor: particle sizes over the material's (1: as measured; engine.lab.resolution)
     scale_factor: float = 1.0
+    # the description ``shapes`` were built from (None: shapes set otherwise, e.g. a screening radius)
+    particles: Particles | None = None
 
     def rig_warnings(self) -> list[str]:
         """The rig checked against the shear-box particles (``engine.lab.rigs.check_for_particles``): raises
@@ -228,7 +230,8 @@ def particles_of(shapes: tuple[ShapeFraction, ...]) -> Particles:
 
 
 def lab_setup(name: str, rig: Rig, shapes: tuple[ShapeFraction, ...], *, default_speed_factor: float,
-              aor_shapes: tuple[ShapeFraction, ...] | None = None, scale_factor: float = 1.0) -> Fidelity:
+              aor_shapes: tuple[ShapeFraction, ...] | None = None, scale_factor: float = 1.0,
+              particles: Particles | None = None) -> Fidelity:
     """The set-up the procedures read: the rig record's apparatus, the particles, and the simulation's own
     settings (speed factor and the fill's margins, which are not part of any apparatus). A battery needs
     every section of the record: one missing is refused here, naming ``rig``."""
@@ -236,4 +239,4 @@ def lab_setup(name: str, rig: Rig, shapes: tuple[ShapeFraction, ...], *, default
     if missing:
         raise SpecFieldError("rig", f"rig {rig.name!r} has no {', '.join(missing)}: a battery needs every section")
     return Fidelity(name=name, rig=rig, shapes=shapes, default_speed_factor=default_speed_factor,
-                    aor_shapes=aor_shapes, scale_factor=scale_factor)
+                    aor_shapes=aor_shapes, scale_factor=scale_factor, particles=particles)

@@ -279,3 +279,8 @@ class JobSpec(BaseModel):
 
 def _label(resolution) -> str:
     return resolution if isinstance(resolution, str) else resolution.mode
+
+
+# Fixed micro parameters kept as the dict that was sent, validated as MicroParameters (campaigns), documented
+# with MicroParameters' JSON schema for the same reason as TestOptionsDict.
+MicroParametersDict = Annotated[dict[str, Any], WithJsonSchema(MicroParameters.model_json_schema())]

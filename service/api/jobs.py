@@ -5,13 +5,16 @@ from typing import Any
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
 from fastapi import Path as PathParam
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, ValidationError
 
 from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from engine.lab.bounds import ID_MAX, MAX_SEED
 from engine.lab.plausibility import options_warnings, parameter_warnings
 from engine.lab.registry import BATTERY, JobTestName
+from engine.lab.resolution import ResolutionIn
+from engine.lab.rigs import Rig
 from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, TestOptions, WholeNumber
+from engine.particles.description import Particles
 from service import queue
 from service.api.jsonsafe import json_safe
 from service.api.openapi import errors
@@ -19,7 +22,7 @@ from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, JobLimit, Offs
 from service.api.responses.common import typed
 from service.api.responses.jobs import Curve, CurveIndex, JobList, JobOut, JobResult, Progress
 from service.db import DbSession
-from service.errors import Conflict, NotFound
+from service.errors import Conflict, Invalid, NotFound
 from service.models.job import Job
 from service.ownership import Caller, caller, owner_of
 from service.security import client_id
@@ -45,10 +48,19 @@ class JobSubmit(BaseModel):
                                         description="resubmitting the same key returns the same job")
     campaign_id: WholeNumber | None = Field(None, ge=1, le=ID_MAX)
     max_attempts: WholeNumber | None = Field(None, ge=1, le=20, description="claims before a lost job fails")
+    resolution: ResolutionIn | None = Field(None, description=JobSpec.model_fields["resolution"].description)
+    rig: Rig | None = Field(None, description=JobSpec.model_fields["rig"].description)
+    particles: Particles | None = Field(None, description=JobSpec.model_fields["particles"].description)
 
     def spec(self) -> JobSpec:
-        return JobSpec(test=self.test, fidelity=self.fidelity, seed=self.seed,
-                       parameters=self.parameters, options=self.options)
+        """The job spec; its own cross-field checks (a resolution without its rig) are 422s naming the field."""
+        try:
+            return JobSpec.model_validate({
+                "test": self.test, "fidelity": self.fidelity, "seed": self.seed, "parameters": self.parameters,
+                "options": self.options, "resolution": self.resolution, "rig": self.rig, "particles": self.particles})
+        except ValidationError as exc:
+            first = exc.errors(include_url=False)[0]
+            raise Invalid(str(first["msg"]).removeprefix("Value error, "), ".".join(str(p) for p in first["loc"])) from None
 
 
 def job_out(job: Job) -> JobOut:

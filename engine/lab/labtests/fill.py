@@ -43,9 +43,10 @@ TEST = LabTest(
         Quantity("voids_ratio", "1", POSITIVE,
                  typical=Typical(0.25, 4.0, "the voids ratios of granular packings",
                                  "Scott & Kilgour 1969; Onoda & Liniger 1990")),
-        Quantity("packing_height_m", "m", POSITIVE),
-        Quantity("bulk_mass_kg", "kg", POSITIVE),
-        Quantity("particle_count", "1", Bound(1.0, float(SQLITE_INT_MAX), low_open=False, why="a count of particles")),
+        Quantity("packing_height_m", "m", POSITIVE, apparatus=("shear_box", "fill")),
+        Quantity("bulk_mass_kg", "kg", POSITIVE, apparatus=("shear_box", "fill")),
+        Quantity("particle_count", "1", Bound(1.0, float(SQLITE_INT_MAX), low_open=False, why="a count of particles"),
+                 apparatus=("shear_box", "fill"), per_particle=True),
     ),
     options=("fill_drop_height_m", "fill_friction_pp", "shear_distance_m"),  # the ring is as wide as the shear
     procedure="engine.lab.procedures.fill:run_fill",
