@@ -1,0 +1,87 @@
+"""Campaigns and jobs at a resolution through the API (issue 29 item 3), on the analytic stand-in: a campaign at
+a material resolution runs in its material's rig with its particles; the old fidelity names keep their presets,
+and what the preset's rig cannot be compared with is left out, named, never compared silently."""
+from __future__ import annotations
+
+import math
+
+import pytest
+from conftest_s2 import API, campaign_body, run_to_end, s2, thesis_material_id  # noqa: F401
+
+THESIS_RIG = "thesis-590mm-shear-box"
+MEASURED_IN_THE_BOX = [{"test": "fill", "quantity": "bulk_density_kg_m3"},
+                       {"test": "fill", "quantity": "bulk_mass_kg"},
+                       {"test": "dst", "quantity": "friction_angle_deg"}]
+
+
+def _loc(response) -> list:
+    return response.json()["detail"][0]["loc"]
+
+
+def test_a_coarse_campaign_runs_in_its_materials_rig_and_compares_its_bulk_mass(s2):
+    """The thesis aggregate coarse-grained in its own 590 mm box: the campaign copies the material's rig and
+    particles, every job carries them, and the bulk mass is a target whose confirmed value is the bulk density
+    times that box's packing, pi (0.295 m)^2 x 0.330 m (nothing left out)."""
+    client, app, settings = s2
+    body = campaign_body(thesis_material_id(client), targets=MEASURED_IN_THE_BOX,
+                         resolution={"mode": "coarse", "scale_factor": 1.3}, design={"type": "full", "centre_runs": 2})
+    created = client.post(f"{API}/campaigns", json=body)
+    assert created.status_code == 201, created.text
+    campaign = created.json()
+    assert campaign["fidelity"] == "coarse" and campaign["config"]["rig"]["name"] == THESIS_RIG
+    assert campaign["config"]["particles"]["shapes"][0]["shape"] == "pyramid"
+    assert not any("left out" in w for w in campaign["warnings"])
+    client.post(f"{API}/campaigns/{campaign['id']}/start")
+    assert run_to_end(client, app, settings, campaign["id"])["status"] == "completed"
+    report = client.get(f"{API}/campaigns/{campaign['id']}/report").json()
+    assert report["left_out_targets"] == []
+    rows = {r["quantity"]: r for r in report["targets"]}
+    assert rows["bulk_mass_kg"]["status"] == "modelled"
+    assert rows["bulk_mass_kg"]["confirmed"] / rows["bulk_density_kg_m3"]["confirmed"] == \
+        pytest.approx(math.pi * 0.295 ** 2 * 0.330, rel=1e-9)
+    job = client.get(f"{API}/jobs", params={"campaign_id": campaign["id"], "limit": 1}).json()["items"][0]
+    spec = client.get(f"{API}/jobs/{job['id']}").json()["spec"]
+    assert spec["resolution"]["scale_factor"] == 1.3 and spec["rig"]["name"] == THESIS_RIG
+
+
+def test_the_old_screening_preset_leaves_the_other_boxs_bulk_mass_out_naming_it(s2):
+    """fidelity "screening" (stored campaigns, old clients) still runs the 400 mm box; its bulk mass is of
+    another container than the 590 mm box's measurement, so it is left out with the reason, not compared."""
+    client, app, settings = s2
+    body = campaign_body(thesis_material_id(client), fidelity="screening", targets=MEASURED_IN_THE_BOX,
+                         design={"type": "full", "centre_runs": 2})
+    campaign = client.post(f"{API}/campaigns", json=body).json()
+    assert campaign["fidelity"] == "screening" and campaign["config"]["rig"] is None
+    assert any(w.startswith("fill/bulk_mass_kg left out of the targets") and "appendix-a-400mm-shear-box" in w
+               for w in campaign["warnings"])
+    client.post(f"{API}/campaigns/{campaign['id']}/start")
+    assert run_to_end(client, app, settings, campaign["id"])["status"] == "completed"
+    report = client.get(f"{API}/campaigns/{campaign['id']}/report").json()
+    assert [(t["test"], t["quantity"]) for t in report["left_out_targets"]] == [("fill", "bulk_mass_kg")]
+    assert "bulk_mass_kg" not in {r["quantity"] for r in report["targets"]}
+
+
+def test_bad_resolutions_are_422s_naming_the_field(s2):
+    client, _, _ = s2
+    material_id = thesis_material_id(client)
+    for resolution in ("fine", {"mode": "coarse", "scale_factor": 0.5}, {"mode": "coarse", "speed": 2}):
+        refused = client.post(f"{API}/campaigns", json=campaign_body(material_id, resolution=resolution))
+        assert refused.status_code == 422 and _loc(refused)[:2] == ["body", "resolution"], refused.text
+        refused = client.post(f"{API}/jobs", json={"evaluator": "analytic", "resolution": resolution})
+        assert refused.status_code == 422 and _loc(refused)[:2] == ["body", "resolution"], refused.text
+    # a job at a material resolution needs its rig and particles
+    refused = client.post(f"{API}/jobs", json={"evaluator": "analytic", "resolution": "coarse"})
+    assert refused.status_code == 422 and _loc(refused) == ["body", "rig"], refused.text
+    # a material without a rig cannot run "in the rig it was measured in"
+    bare = client.post(f"{API}/materials", json={"name": "no rig", "measurements": [
+        {"test": "fill", "quantity": "bulk_density_kg_m3", "values": [1400.0, 1390.0]}]}).json()
+    refused = client.post(f"{API}/campaigns", json=campaign_body(bare["id"], resolution="as_measured", targets=None))
+    assert refused.status_code == 422 and _loc(refused) == ["body", "resolution"] and "no rig" in refused.text
+    assert client.get(f"{API}/campaigns").json()["items"] == []
+
+
+def test_a_job_alias_round_trips_and_keeps_its_preset(s2):
+    client, app, settings = s2
+    job = client.post(f"{API}/jobs", json={"evaluator": "analytic", "test": "fill", "resolution": "thesis"})
+    assert job.status_code == 201, job.text
+    assert job.json()["fidelity"] == "thesis" and job.json()["spec"]["fidelity"] == "thesis"
