@@ -11,6 +11,7 @@ from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from engine.lab.bounds import ID_MAX, MAX_SEED
 from engine.lab.plausibility import options_warnings, parameter_warnings
 from engine.lab.registry import BATTERY, JobTestName
+from engine.lab.cost import estimate_view
 from engine.lab.resolution import ResolutionIn
 from engine.lab.rigs import Rig
 from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, TestOptions, WholeNumber
@@ -19,7 +20,7 @@ from service import queue
 from service.api.jsonsafe import json_safe
 from service.api.openapi import errors
 from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, JobLimit, Offset
-from service.api.responses.common import typed
+from service.api.responses.common import CostEstimate, typed
 from service.api.responses.jobs import Curve, CurveIndex, JobList, JobOut, JobResult, Progress
 from service.db import DbSession
 from service.errors import Conflict, Invalid, NotFound
@@ -111,7 +112,9 @@ def submit(body: JobSubmit, request: Request, response: Response, session: DbSes
     if not created:
         response.status_code = status.HTTP_200_OK
     response.headers["Location"] = str(request.url_for("get_job", job_id=job.id))
-    return job_out(job)
+    out = job_out(job)
+    out.estimate = CostEstimate(**estimate_view(JobSpec.model_validate(job.spec)))
+    return out
 
 
 @router.get("", response_model=JobList, summary="List jobs, newest first (by id), filtered; a page and the total")

@@ -154,3 +154,12 @@ def test_a_screening_radius_is_refused_at_a_material_resolution():
     with pytest.raises(ValidationError):
         LoopSettings.model_validate({"resolution": "coarse", "factors": [
             {"name": "particle_radius_m", "low": 0.01, "high": 0.02}]})
+
+
+def test_the_bundled_material_as_measured_is_the_thesis_preset():
+    """The thesis tables' set-up is the bundled material's particles as measured in its own rig: the same
+    apparatus and the same shapes, so either way the same batteries."""
+    setup, notes = material_setup(bundled_rig(THESIS_RIG), thesis_particles(), "as_measured")
+    assert notes == [] and setup.rig == presets.THESIS.rig and setup.scale_factor == 1.0
+    assert [(s.shape, s.radius_min_m, s.radius_max_m, s.volume_fraction) for s in setup.shapes] == \
+        [(s.shape, s.radius_min_m, s.radius_max_m, s.volume_fraction) for s in presets.THESIS.shapes]

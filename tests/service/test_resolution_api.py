@@ -85,3 +85,39 @@ def test_a_job_alias_round_trips_and_keeps_its_preset(s2):
     job = client.post(f"{API}/jobs", json={"evaluator": "analytic", "test": "fill", "resolution": "thesis"})
     assert job.status_code == 201, job.text
     assert job.json()["fidelity"] == "thesis" and job.json()["spec"]["fidelity"] == "thesis"
+
+
+def test_creation_shows_the_cost_in_the_rig_and_resolution_and_refuses_over_the_limit_naming_it(db_url):
+    """The estimate is the cost model's: as measured, the thesis aggregate fills the 590 mm box with the thesis
+    preset's packing; at sizes x 2 an eighth of it (1/s^3). Over DEMCAL_MAX_PARTICLES the refusal names
+    ``resolution``, the field that lowers the count."""
+    from conftest_s2 import running_app, s2_settings
+
+    from engine.lab.cost import estimated_particles
+    from engine.lab.rigs import bundled_rig, rig_json
+    from engine.lab.spec import JobSpec
+
+    thesis_count = estimated_particles(JobSpec(fidelity="thesis"))
+    settings = s2_settings(db_url).model_copy(update={"max_particles": thesis_count - 1})
+    with running_app(settings) as (client, _):
+        material_id = thesis_material_id(client)
+        coarse = client.post(f"{API}/campaigns", json=campaign_body(
+            material_id, resolution={"mode": "coarse", "scale_factor": 2.0}, design={"type": "full", "centre_runs": 1}))
+        assert coarse.status_code == 201, coarse.text
+        estimate = coarse.json()["estimate"]
+        assert estimate["rig"] == THESIS_RIG and estimate["resolution"] == "coarse" and estimate["scale_factor"] == 2.0
+        assert estimate["particles"] == pytest.approx(thesis_count / 8, abs=1) and estimate["batteries"] == 2 ** 3 + 1
+        refused = client.post(f"{API}/campaigns", json=campaign_body(material_id, resolution="as_measured"))
+        assert refused.status_code == 422 and _loc(refused) == ["body", "resolution"], refused.text
+        assert f"about {thesis_count} particles" in refused.text
+        record = rig_json(bundled_rig(THESIS_RIG))
+        particles = client.get(f"{API}/materials/{material_id}").json()["particles"]
+        job = client.post(f"{API}/jobs", json={"evaluator": "analytic", "test": "fill", "rig": record,
+                                               "particles": particles, "resolution": {"mode": "coarse",
+                                                                                      "scale_factor": 2.0}})
+        assert job.status_code == 201, job.text
+        assert job.json()["estimate"]["particles"] == estimate["particles"] and job.json()["fidelity"] == "coarse"
+        assert job.json()["estimate"]["stages_s"].keys() == {"fill"}
+        refused = client.post(f"{API}/jobs", json={"evaluator": "analytic", "test": "fill", "rig": record,
+                                                   "particles": particles, "resolution": "as_measured"})
+        assert refused.status_code == 422 and _loc(refused) == ["body", "resolution"], refused.text

@@ -6,7 +6,7 @@ from typing import Any
 
 from pydantic import BaseModel, Field, field_serializer
 
-from service.api.responses.common import CONDITION, Condition, Out, Page
+from service.api.responses.common import CONDITION, Condition, CostEstimate, Out, Page
 from service.vocabulary import JobStatus
 
 
@@ -46,6 +46,8 @@ class JobOut(BaseModel):
                                 description="micro parameters and test options outside their typical ranges, each "
                                             "with the unit slip it probably is (engine.lab.plausibility); the job "
                                             "runs all the same")
+    estimate: CostEstimate | None = Field(None, description="at creation (POST): particles and simulated time "
+                                                         "in the rig and resolution the job runs at")
 
     @field_serializer("created_at", "started_at", "finished_at", "heartbeat_at", "lease_expires_at")
     def _utc(self, value: datetime | None) -> str | None:
