@@ -42,6 +42,9 @@ def test_a_coarse_campaign_runs_in_its_materials_rig_and_compares_its_bulk_mass(
     job = client.get(f"{API}/jobs", params={"campaign_id": campaign["id"], "limit": 1}).json()["items"][0]
     spec = client.get(f"{API}/jobs/{job['id']}").json()["spec"]
     assert spec["resolution"]["scale_factor"] == 1.3 and spec["rig"]["name"] == THESIS_RIG
+    # the material card states preset set-ups only: refused, not written with the 400 mm box's particles
+    card = client.get(f"{API}/campaigns/{campaign['id']}/material-card")
+    assert card.status_code == 409 and "resolution 'coarse'" in card.text
 
 
 def test_the_old_screening_preset_leaves_the_other_boxs_bulk_mass_out_naming_it(s2):
