@@ -17,7 +17,7 @@ import time
 
 import engine
 from calibration import standin
-from engine.lab.resolution import setup_for
+from engine.lab.resolution import label, setup_for
 from engine.lab.result import BulkProperty, Cancelled, LabResult, Provenance
 from engine.lab.spec import JobSpec
 
@@ -82,7 +82,8 @@ def run_analytic(spec: JobSpec, progress=None, should_cancel=None) -> LabResult:
     return LabResult(
         test=spec.test, properties=props, curves=curves,
         provenance=Provenance(
-            parameters=spec.parameters.model_dump(), seed=spec.seed, fidelity=spec.fidelity,
+            parameters=spec.parameters.model_dump(), seed=spec.seed, fidelity=label(spec.resolution, spec.fidelity),
+            rig=preset.rig_name, scale_factor=preset.scale_factor,
             engine_version=f"analytic-{engine.__version__}", wall_time_s=time.perf_counter() - started,
         ),
     )

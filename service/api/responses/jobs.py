@@ -77,8 +77,10 @@ class ResultProvenance(Out):
 
     parameters: dict[str, Any] = Field(description="the micro-parameters run (engine.lab.spec.MicroParameters)")
     seed: int
-    fidelity: str
+    fidelity: str = Field(description="the preset's name, or the resolution (as_measured, coarse)")
     engine_version: str
+    rig: str | None = Field(None, description="the rig the job ran in (null: stored before rigs were data)")
+    scale_factor: float = Field(1.0, description="particle sizes over the material's (a coarse resolution's factor)")
     steps: int = 0
     simulated_time_s: float | None = 0.0
     wall_time_s: float | None = 0.0
