@@ -99,7 +99,7 @@ def simulated_setup(config: CampaignCreate):
         raise Invalid(exc.message, exc.field) from None
 
 
-def with_material_world(session: Session, body: CampaignCreate) -> CampaignCreate:
+def with_material_world(session: Session, body: CampaignCreate, field_prefix: str = "") -> CampaignCreate:
     """A campaign at a material resolution ("as_measured", "coarse") runs in its material's rig with its
     particles, copied into the configuration (the runs replay as queued if the material changes later); a 422
     naming ``resolution`` when the material has neither and the request did not send them."""
@@ -116,14 +116,16 @@ def with_material_world(session: Session, body: CampaignCreate) -> CampaignCreat
                       f"builds the material's particles in the rig its measurements were made in, and material "
                       f"{material.id} ({material.name!r}) has no {' and no '.join(missing)}: give the material "
                       f"{' and '.join(missing)} (PUT /api/v1/materials/{material.id}), send them with the campaign, "
-                      "or choose a preset resolution ('thesis', 'screening')", "resolution")
+                      "or choose a preset resolution ('thesis', 'screening')", f"{field_prefix}resolution")
     return CampaignCreate.model_validate({**body.model_dump(mode="json"),
                                           "rig": rig_json(body.rig or rig),
                                           "particles": (body.particles or particles).model_dump(mode="json", exclude_none=True)})
 
 
 def check_limits_with_targets(session: Session, config: CampaignCreate, field_prefix: str = "") -> None:
-    """``check_campaign_limits`` with the options the material's measurements derive, as queued later."""
+    """``check_campaign_limits`` with the options the material's measurements derive, as queued later (in the
+    material's rig, with its particles, at a material resolution)."""
+    config = with_material_world(session, config, field_prefix)
     check_campaign_limits(config, _settings(session), field_prefix,
                           [t.key for t in campaign_targets(session, config)])
 

@@ -81,6 +81,13 @@ def test_bad_resolutions_are_422s_naming_the_field(s2):
     refused = client.post(f"{API}/campaigns", json=campaign_body(bare["id"], resolution="as_measured", targets=None))
     assert refused.status_code == 422 and _loc(refused) == ["body", "resolution"] and "no rig" in refused.text
     assert client.get(f"{API}/campaigns").json()["items"] == []
+    # a schedule's template is checked the same way (its firings take the material's rig when they fire)
+    refused = client.post(f"{API}/schedules", json={"name": "nightly", "cron": "@daily", "template": campaign_body(
+        bare["id"], resolution="as_measured", targets=None)})
+    assert refused.status_code == 422 and _loc(refused) == ["body", "template", "resolution"], refused.text
+    accepted = client.post(f"{API}/schedules", json={"name": "nightly", "cron": "@daily", "template": campaign_body(
+        material_id, resolution={"mode": "coarse", "scale_factor": 1.3})})
+    assert accepted.status_code == 201, accepted.text
 
 
 def test_a_job_alias_round_trips_and_keeps_its_preset(s2):
