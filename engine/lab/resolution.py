@@ -30,7 +30,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from engine.lab.errors import SpecFieldError
 from engine.lab.rigs import MIN_DIAMETER_PER_PARTICLE, MIN_THICKNESS_PER_PARTICLE, Rig
 from engine.lab.setup import Fidelity, lab_setup, shape_fractions
-from engine.lab.whole_number import WholeNumber
+from engine.lab.whole_number import bounded_whole_number
 from engine.particles.description import Particles
 
 AS_MEASURED = "as_measured"
@@ -49,6 +49,8 @@ DEFAULT_SPEED_FACTOR = 10.0
 _MODEL = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True, frozen=True)
 
 
+ParticleCount = bounded_whole_number(1, 10**9)
+
 class Resolution(BaseModel):
     """``as_measured``, or ``coarse`` with a size factor or a particle-count target (neither: the default target)."""
 
@@ -57,8 +59,8 @@ class Resolution(BaseModel):
     scale_factor: float | None = Field(
         None, ge=1.0, le=MAX_SCALE_FACTOR,
         description="coarse only: particle sizes over the material's (2: twice the size, 1/8 of the particles)")
-    target_particles: WholeNumber | None = Field(
-        None, ge=1, le=10**9,
+    target_particles: ParticleCount | None = Field(
+        None,
         description="coarse only: demcal proposes the factor that gives about this many particles in the shear "
                     "box (as the cost model counts them), within the direct-shear standards' sizes")
 

@@ -19,7 +19,7 @@ from engine.lab.registry import BATTERY, JobTestName
 from engine.lab.resolution import PRESET_NAMES, ResolutionIn, is_preset
 from engine.lab.rigs import Rig
 from engine.particles.description import Particles
-from engine.lab.whole_number import WholeNumber  # noqa: F401  (re-exported: the API's models import it here)
+from engine.lab.whole_number import WholeNumber, bounded_whole_number  # noqa: F401  (WholeNumber re-exported)
 
 # Every model here refuses NaN and infinities (``allow_inf_nan=False``): JSON cannot carry them back,
 # so a stored infinity would come back as null and a job "succeed" with a null result.
@@ -48,6 +48,8 @@ _MAX_EFFECTS = 16
 
 Fidelity = Literal["screening", "thesis"]
 
+
+CycleCount = bounded_whole_number(1, _MAX_CCT_CYCLES)
 
 class MicroParameters(BaseModel):
     """DEM micro parameters, SI. Defaults: the thesis's calibrated set (Table 4.9).
@@ -126,8 +128,8 @@ class TestOptions(BaseModel):
         description="DST normal stresses, Pa: at least two distinct levels (a Mohr-Coulomb line needs two)",
     )
     cct_max_stress_pa: Annotated[float | None, NORMAL_STRESS_TYPICAL] = Field(None, gt=0, le=STIFFEST_SOLID_PA)
-    cct_cycles: WholeNumber | None = Field(None, ge=1, le=_MAX_CCT_CYCLES,
-                                   description="load-unload cycles; each counts in the simulated-time limit")
+    cct_cycles: CycleCount | None = Field(
+        None, description="load-unload cycles; each counts in the simulated-time limit")
     cct_window_stresses_pa: list[float] | None = Field(
         None, max_length=_MAX_CCT_WINDOW_STRESSES,
         description="CCT: report the tangent confined modulus E' = d(sigma)/d(strain) at exactly these normal "

@@ -1,7 +1,7 @@
 """DEM job endpoints: submit, list, status/progress, result and curves, cancel, retry."""
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
 from fastapi import Path as PathParam
@@ -15,6 +15,7 @@ from engine.lab.cost import estimate_view
 from engine.lab.resolution import ResolutionIn
 from engine.lab.rigs import Rig
 from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, TestOptions, WholeNumber
+from engine.lab.whole_number import bounded_whole_number
 from engine.particles.description import Particles
 from service import queue
 from service.api.jsonsafe import json_safe
@@ -33,6 +34,9 @@ from service.workers.errors import scrub
 router = APIRouter(prefix="/jobs", tags=["jobs"])
 
 
+CampaignId = bounded_whole_number(1, ID_MAX)
+AttemptCount = bounded_whole_number(1, 20)
+
 class JobSubmit(BaseModel):
     """A single test or a battery: the job spec plus how to queue it."""
 
@@ -47,8 +51,10 @@ class JobSubmit(BaseModel):
     priority: WholeNumber = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="higher runs first")
     idempotency_key: str | None = Field(None, min_length=1, max_length=200,
                                         description="resubmitting the same key returns the same job")
-    campaign_id: WholeNumber | None = Field(None, ge=1, le=ID_MAX)
-    max_attempts: WholeNumber | None = Field(None, ge=1, le=20, description="claims before a lost job fails")
+    # the bounds inside the union: on a nullable WholeNumber (a BeforeValidator) pydantic published them as
+    # "ge"/"le", which JSON Schema ignores, so schema-valid clients sent 2037 replicates and were refused
+    campaign_id: CampaignId | None = None
+    max_attempts: AttemptCount | None = Field(None, description="claims before a lost job fails")
     resolution: ResolutionIn | None = Field(None, description=JobSpec.model_fields["resolution"].description)
     rig: Rig | None = Field(None, description=JobSpec.model_fields["rig"].description)
     particles: Particles | None = Field(None, description=JobSpec.model_fields["particles"].description)
