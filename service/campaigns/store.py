@@ -19,7 +19,7 @@ from calibration.keys import select as select_targets
 from calibration.records import Measured
 from calibration.vocabulary import AGAINST_ADDING
 from engine.lab.plausibility import settings_warnings
-from engine.lab.resolution import label
+from engine.lab.resolution import is_preset, label
 from engine.lab.rigs import rig_json
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.config import Settings, get_settings
@@ -89,9 +89,8 @@ def simulated_setup(config: CampaignCreate):
     """The lab set-up the campaign's runs are built in (at the centre of its factor box: the rig and particles
     are the same at every run but for a varied screening radius)."""
     from calibration.conditions import run_spec
-    from engine.lab.resolution import setup_for
-
     from engine.lab.errors import SpecFieldError
+    from engine.lab.resolution import setup_for
 
     try:
         return setup_for(run_spec(config, {f.name: 0.5 * (f.low + f.high) for f in config.factors}, 0))
@@ -103,8 +102,6 @@ def with_material_world(session: Session, body: CampaignCreate, field_prefix: st
     """A campaign at a material resolution ("as_measured", "coarse") runs in its material's rig with its
     particles, copied into the configuration (the runs replay as queued if the material changes later); a 422
     naming ``resolution`` when the material has neither and the request did not send them."""
-    from engine.lab.resolution import is_preset
-
     if is_preset(body.resolution) or (body.rig is not None and body.particles is not None):
         return body
     material = get_material(session, body.material_id)
@@ -286,22 +283,31 @@ def campaign_summary(campaign: Campaign) -> dict[str, Any]:
         "created_at": _iso(campaign.created_at), "started_at": _iso(campaign.started_at),
         "finished_at": _iso(campaign.finished_at), "config": campaign.config,
         "stop_reason": (((current.report or {}).get("automatic") or {}).get("stop_reason") if current else None),
-        "warnings": settings_warnings(campaign.config or {}) + left_out_warnings(campaign),
+        "warnings": settings_warnings(campaign.config or {}) + resolution_warnings(campaign),
     }
 
 
-def left_out_warnings(campaign: Campaign) -> list[str]:
-    """The campaign's targets left out at its rig and resolution (``split_targets``), as warnings."""
+def resolution_warnings(campaign: Campaign) -> list[str]:
+    """What the campaign's rig and resolution say before and after it runs: the coarse factor chosen (or a
+    particle target the direct-shear standards capped), a rig too small for the particles it runs (the
+    standards' sizes), and the targets left out (``split_targets``)."""
     from sqlalchemy.orm import object_session
+
+    from calibration.conditions import run_spec
+    from engine.lab.resolution import setup_notes
 
     session = object_session(campaign)
     if session is None or not campaign.config:
         return []
     try:
-        _, left_out = split_targets(session, CampaignCreate.model_validate(campaign.config))
-    except ValueError:  # a stored configuration this version no longer reads: the runner reports its error
+        config = CampaignCreate.model_validate(campaign.config)
+        setup = simulated_setup(config)
+        notes = setup_notes(run_spec(config, {f.name: 0.5 * (f.low + f.high) for f in config.factors}, 0))
+        rig = [f"rig {setup.rig_name!r}, {w}" for w in setup.rig_warnings()] if not is_preset(config.resolution) else []
+        _, left_out = split_targets(session, config)
+    except (ValueError, Invalid):  # a stored configuration this version no longer reads: the runner reports it
         return []
-    return [f"{t['test']}/{t['quantity']} left out of the targets: {t['reason']}" for t in left_out]
+    return notes + rig + [f"{t['test']}/{t['quantity']} left out of the targets: {t['reason']}" for t in left_out]
 
 
 def run_view(run) -> dict[str, Any]:

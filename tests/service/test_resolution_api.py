@@ -31,6 +31,7 @@ def test_a_coarse_campaign_runs_in_its_materials_rig_and_compares_its_bulk_mass(
     assert campaign["fidelity"] == "coarse" and campaign["config"]["rig"]["name"] == THESIS_RIG
     assert campaign["config"]["particles"]["shapes"][0]["shape"] == "pyramid"
     assert not any("left out" in w for w in campaign["warnings"])
+    assert not any("container_diameter_m" in w for w in campaign["warnings"])  # x 1.3: within the standards
     client.post(f"{API}/campaigns/{campaign['id']}/start")
     assert run_to_end(client, app, settings, campaign["id"])["status"] == "completed"
     report = client.get(f"{API}/campaigns/{campaign['id']}/report").json()
@@ -117,6 +118,9 @@ def test_creation_shows_the_cost_in_the_rig_and_resolution_and_refuses_over_the_
         estimate = coarse.json()["estimate"]
         assert estimate["rig"] == THESIS_RIG and estimate["resolution"] == "coarse" and estimate["scale_factor"] == 2.0
         assert estimate["particles"] == pytest.approx(thesis_count / 8, abs=1) and estimate["batteries"] == 2 ** 3 + 1
+        # x 2 puts 84 mm grains in the 590 mm box (7.0 across): accepted, with the standards' warning
+        assert any("shear_box.container_diameter_m" in w and "7.0 largest particles" in w
+                   for w in coarse.json()["warnings"]), coarse.json()["warnings"]
         refused = client.post(f"{API}/campaigns", json=campaign_body(material_id, resolution="as_measured"))
         assert refused.status_code == 422 and _loc(refused) == ["body", "resolution"], refused.text
         assert f"about {thesis_count} particles" in refused.text
