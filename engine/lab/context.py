@@ -8,7 +8,7 @@ from typing import Callable
 
 from engine.lab.errors import SpecFieldError
 from engine.lab.presets import Fidelity
-from engine.lab.resolution import particles_field, setup_for, setup_notes
+from engine.lab.resolution import is_preset, particles_field, setup_for, setup_notes
 from engine.lab.result import Cancelled
 from engine.lab.spec import JobSpec
 
@@ -120,8 +120,10 @@ class RunContext:
         try:
             warnings = self.preset.rig_warnings()
         except SpecFieldError as exc:
+            # the field that sets the particles' sizes: the screening radius, the preset, or (a material's own
+            # particles, which coarse-graining only makes larger) the particles
             field = ("parameters.particle_radius_m" if self.spec.parameters.particle_radius_m is not None
-                     else particles_field(self.spec))
+                     else particles_field(self.spec) if is_preset(self.spec.resolution) else "particles")
             raise SpecFieldError(field, f"rig {self.preset.rig_name!r}, {exc.field}: {exc.message}") from None
         for warning in warnings:
             self.warn(f"rig {self.preset.rig_name!r}, {warning}")

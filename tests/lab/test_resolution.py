@@ -163,3 +163,14 @@ def test_the_bundled_material_as_measured_is_the_thesis_preset():
     assert notes == [] and setup.rig == presets.THESIS.rig and setup.scale_factor == 1.0
     assert [(s.shape, s.radius_min_m, s.radius_max_m, s.volume_fraction) for s in setup.shapes] == \
         [(s.shape, s.radius_min_m, s.radius_max_m, s.volume_fraction) for s in presets.THESIS.shapes]
+
+
+def test_particles_that_fall_through_the_gap_are_refused_naming_particles():
+    """0.4 mm spheres pass the thesis box's 1 mm gap: refused before any simulation, naming ``particles``."""
+    from engine.lab.context import RunContext
+
+    sand = Particles.model_validate({"size": {"form": "constant", "radius_m": 0.0002},
+                                     "shapes": [{"shape": "sphere", "volume_fraction": 1.0}]})
+    with pytest.raises(SpecFieldError) as err:
+        RunContext.from_spec(_material_spec("as_measured", sand)).check_rig()
+    assert err.value.field == "particles" and "shear_box.gap_m" in err.value.message
