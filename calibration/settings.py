@@ -13,8 +13,8 @@ from doe.factors import DoeError
 from engine.lab.registry import BATTERY, JobTestName
 from engine.lab.resolution import PRESET_NAMES, ResolutionIn, is_preset
 from engine.lab.rigs import Rig
-from engine.particles.description import Particles
 from engine.lab.spec import STRICT_INPUT, MicroParameters, MicroParametersDict, TestOptions, TestOptionsDict, WholeNumber
+from engine.particles.description import Particles
 
 # Every schema here refuses NaN and infinities: stored, they come back as null and the campaign fails later
 # with an empty reason.

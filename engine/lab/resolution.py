@@ -23,7 +23,7 @@ replay with the same numbers.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal, Union
+from typing import Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 

@@ -18,8 +18,8 @@ from engine.lab.bounds import (CONTACT_STIFFNESS_TYPICAL, DENSEST_SOLID_KG_M3, F
 from engine.lab.registry import BATTERY, JobTestName
 from engine.lab.resolution import PRESET_NAMES, ResolutionIn, is_preset
 from engine.lab.rigs import Rig
-from engine.particles.description import Particles
 from engine.lab.whole_number import WholeNumber, bounded_whole_number  # noqa: F401  (WholeNumber re-exported)
+from engine.particles.description import Particles
 
 # Every model here refuses NaN and infinities (``allow_inf_nan=False``): JSON cannot carry them back,
 # so a stored infinity would come back as null and a job "succeed" with a null result.

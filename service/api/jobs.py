@@ -1,7 +1,7 @@
 """DEM job endpoints: submit, list, status/progress, result and curves, cancel, retry."""
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Any
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
 from fastapi import Path as PathParam
@@ -10,8 +10,8 @@ from pydantic import BaseModel, Field, ValidationError
 from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from engine.lab.bounds import ID_MAX, MAX_SEED
 from engine.lab.plausibility import options_warnings, parameter_warnings
-from engine.lab.registry import BATTERY, JobTestName
 from engine.lab.cost import estimate_view
+from engine.lab.registry import BATTERY, JobTestName
 from engine.lab.resolution import ResolutionIn
 from engine.lab.rigs import Rig
 from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, TestOptions, WholeNumber
@@ -36,6 +36,7 @@ router = APIRouter(prefix="/jobs", tags=["jobs"])
 
 CampaignId = bounded_whole_number(1, ID_MAX)
 AttemptCount = bounded_whole_number(1, 20)
+
 
 class JobSubmit(BaseModel):
     """A single test or a battery: the job spec plus how to queue it."""

@@ -9,7 +9,7 @@ from pydantic import BaseModel, Field, ValidationInfo, field_validator
 from service.api.responses.common import Page
 
 from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree
-from engine.lab.spec import STRICT_INPUT, WholeNumber
+from engine.lab.spec import STRICT_INPUT
 from engine.lab.whole_number import bounded_whole_number
 from engine.lab.registry import known_quantity, known_test, quantity
 from service.errors import Invalid
