@@ -46,7 +46,10 @@ def _update(session: Session, job_id: int, where: list, values: dict[str, Any]) 
 
 
 def _spec_json(spec: JobSpec) -> dict[str, Any]:
-    return spec.model_dump(mode="json")
+    """The spec as stored. A preset job leaves out the unset resolution, rig and particles, so that it is
+    stored as before they existed and an idempotent resubmission of a job stored then still matches it."""
+    dumped = spec.model_dump(mode="json")
+    return {k: v for k, v in dumped.items() if not (k in ("resolution", "rig", "particles") and v is None)}
 
 
 # -- submission and reads (API side) -----------------------------------------------------------

@@ -135,3 +135,19 @@ def test_creation_shows_the_cost_in_the_rig_and_resolution_and_refuses_over_the_
         refused = client.post(f"{API}/jobs", json={"evaluator": "analytic", "test": "fill", "rig": record,
                                                    "particles": particles, "resolution": "as_measured"})
         assert refused.status_code == 422 and _loc(refused) == ["body", "resolution"], refused.text
+
+
+def test_a_preset_job_is_stored_as_before_resolutions_existed(s2):
+    """A job stored by an older version has no resolution, rig or particles; resubmitting it with its idempotency
+    key must find it the same job, so a preset job's stored spec leaves the unset fields out."""
+    client, app, _ = s2
+    from service.models.job import Job
+
+    body = {"evaluator": "analytic", "test": "fill", "fidelity": "thesis", "idempotency_key": "before"}
+    first = client.post(f"{API}/jobs", json=body).json()
+    assert not {"resolution", "rig", "particles"} & set(first["spec"])
+    with app.state.session_factory() as session:  # as an older version stored it
+        job = session.get(Job, first["id"])
+        assert set(job.spec) == {"test", "fidelity", "seed", "parameters", "options"}
+    again = client.post(f"{API}/jobs", json=body)
+    assert again.status_code == 200 and again.json()["id"] == first["id"]
