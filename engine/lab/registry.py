@@ -117,6 +117,8 @@ class LabTest:
     progress_weight: float = 1.0  # share of the progress bar, roughly the test's cost at screening fidelity
     check: Callable[[RunContext], None] | None = None
     description: str = ""
+    # the rig sections (engine.lab.rigs) the test runs in: a job whose rig lacks one is refused naming ``rig``
+    apparatus: tuple[str, ...] = ("shear_box",)
 
     def quantity(self, name: str) -> Quantity:
         for q in self.quantities:

@@ -189,7 +189,7 @@ class Fidelity:
 def _section(rig: Rig, name: str):
     section = getattr(rig, name)
     if section is None:
-        raise SpecFieldError("rig", f"rig {rig.name!r} has no {name} section: a battery needs every section")
+        raise SpecFieldError("rig", f"rig {rig.name!r} has no {name} section")
     return section
 
 
@@ -233,10 +233,8 @@ def lab_setup(name: str, rig: Rig, shapes: tuple[ShapeFraction, ...], *, default
               aor_shapes: tuple[ShapeFraction, ...] | None = None, scale_factor: float = 1.0,
               particles: Particles | None = None) -> Fidelity:
     """The set-up the procedures read: the rig record's apparatus, the particles, and the simulation's own
-    settings (speed factor and the fill's margins, which are not part of any apparatus). A battery needs
-    every section of the record: one missing is refused here, naming ``rig``."""
-    missing = [k for k in ("shear_box", "fill", "angle_of_repose", "anchor") if getattr(rig, k) is None]
-    if missing:
-        raise SpecFieldError("rig", f"rig {rig.name!r} has no {', '.join(missing)}: a battery needs every section")
+    settings (speed factor and the fill's margins, which are not part of any apparatus). A rig may hold only
+    the sections of the tests its laboratory runs: each test's (``LabTest.apparatus``) is checked when a job
+    plans it (``RunContext.validate``), and a section read that the record lacks raises naming ``rig``."""
     return Fidelity(name=name, rig=rig, shapes=shapes, default_speed_factor=default_speed_factor,
                     aor_shapes=aor_shapes, scale_factor=scale_factor, particles=particles)

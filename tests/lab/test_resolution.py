@@ -174,3 +174,34 @@ def test_particles_that_fall_through_the_gap_are_refused_naming_particles():
     with pytest.raises(SpecFieldError) as err:
         RunContext.from_spec(_material_spec("as_measured", sand)).check_rig()
     assert err.value.field == "particles" and "shear_box.gap_m" in err.value.message
+
+
+def _box_only_rig():
+    """A 300 mm direct-shear laboratory (issue 29's "material of your own"): shear box and fill, nothing else."""
+    from engine.lab.rigs import Rig
+
+    record = rig_json(bundled_rig(THESIS_RIG))
+    record.update(name="lab-300mm-shear-box", angle_of_repose=None, anchor=None)
+    record["shear_box"].update(container_diameter_m=0.300, bottom_half_height_m=0.100, top_half_height_m=0.100,
+                               shear_distance_m=0.040)
+    record["fill"].update(level_height_m=0.200, drop_height_m=0.0)
+    return Rig.model_validate({k: v for k, v in record.items() if v is not None})
+
+
+def test_a_rig_with_only_a_shear_box_runs_the_tests_it_has():
+    """A laboratory that only shears: the battery (fill, CCT, DST) runs in its 300 mm box, pi 0.15^2 x 0.2 m^3;
+    asking for the angle of repose is refused naming ``rig``, the section it lacks named."""
+    from engine.lab.context import RunContext
+
+    rig = _box_only_rig()
+    spec = JobSpec.model_validate({"test": "battery", "resolution": "as_measured", "rig": rig_json(rig),
+                                   "particles": GRAVEL.model_dump(mode="json", exclude_none=True)})
+    ctx = RunContext.from_spec(spec)
+    ctx.validate()
+    assert ctx.preset.container_area_m2 * ctx.preset.packing_height_m == pytest.approx(math.pi * 0.15 ** 2 * 0.2)
+    # 16 mm grains: 18.8 across and 12.5 thick, within the standards
+    assert ctx.preset.rig_warnings() == []
+    with pytest.raises(SpecFieldError) as err:
+        RunContext.from_spec(spec.model_copy(update={"options": spec.options.model_copy(
+            update={"include_aor": True})})).validate()
+    assert err.value.field == "rig" and "angle_of_repose" in err.value.message

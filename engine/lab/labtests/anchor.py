@@ -41,6 +41,7 @@ TEST = LabTest(
     cost=_cost,
     run=_run,
     battery="include_anchor",
+    apparatus=("anchor",),
     progress_weight=0.35,
     description="A tube with a foot plate in a bin filled to height L accelerates to the pull speed and is pulled "
                 "while its force is recorded.",
