@@ -23,6 +23,7 @@ replay with the same numbers.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
@@ -37,7 +38,7 @@ AS_MEASURED = "as_measured"
 COARSE = "coarse"
 PRESET_NAMES = ("thesis", "screening")  # the old fidelity values, aliases of engine.lab.presets
 # A coarse resolution without a factor or target aims at about the Appendix A screening packing's size
-# (Table A.7: 836 spheres after levelling; the cost model counts the fill's ~1,000 with its 15 % margin).
+# (Table A.7: 836 spheres after levelling; the cost model counts its fill as 926, with the 15 % margin).
 DEFAULT_TARGET_PARTICLES = 1000
 # 100 x the material's sizes: a 1 mm grain as a 100 mm sphere. Beyond, no rig a lab builds holds ten of them.
 MAX_SCALE_FACTOR = 100.0
@@ -47,9 +48,8 @@ MAX_SCALE_FACTOR = 100.0
 DEFAULT_SPEED_FACTOR = 10.0
 
 _MODEL = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True, frozen=True)
-
-
 ParticleCount = bounded_whole_number(1, 10**9)
+
 
 class Resolution(BaseModel):
     """``as_measured``, or ``coarse`` with a size factor or a particle-count target (neither: the default target)."""
@@ -196,9 +196,8 @@ def material_setup(rig: Rig, particles: Particles, resolution: ResolutionIn) -> 
 def setup_for(spec) -> Fidelity:
     """The lab set-up a job spec runs in: its preset (an old fidelity name) or its material's particles at its
     resolution in its rig. ``parameters.clump_aspect_ratio`` makes the mix's spheres two-sphere clumps in both."""
-    from engine.lab.presets import fidelity
+    from engine.lab.presets import fidelity  # the presets import this module
     from engine.lab.shape import elongated_shapes
-    from dataclasses import replace
 
     p = spec.parameters
     if is_preset(spec.resolution):
