@@ -55,7 +55,8 @@ def _change(session: Session, campaign_id: int, who: Caller, action: str):
 
 @router.get("/{campaign_id}", summary="Status: state, iteration, phase, run counts", **typed(CampaignSummary))
 def status(campaign_id: CampaignId, session: DbSession) -> dict:
-    return campaign_summary(get_campaign(session, campaign_id))
+    campaign = get_campaign(session, campaign_id)
+    return {**campaign_summary(campaign), "estimate": campaign_estimate(session, campaign)}
 
 
 @router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)", responses=_STATE,

@@ -336,17 +336,21 @@ def _iso(value) -> str | None:
     return value.isoformat() + "Z" if value is not None else None
 
 
-def campaign_estimate(session: Session, campaign: Campaign) -> dict[str, Any]:
+def campaign_estimate(session: Session, campaign: Campaign) -> dict[str, Any] | None:
     """Each battery's cost in the campaign's rig and resolution (at the centre of its factor box, with the
-    options its targets derive) and the batteries of its first design, shown when it is created."""
+    options its targets derive) and the batteries of its first design, shown when it is created and read."""
     from calibration.conditions import run_spec
     from engine.lab.cost import estimate_view
     from service.limits import design_runs
 
-    config = CampaignCreate.model_validate(campaign.config)
-    keys = [t.key for t in campaign_targets(session, config)]
-    spec = run_spec(config, {f.name: 0.5 * (f.low + f.high) for f in config.factors}, 0, keys)
+    try:
+        config = CampaignCreate.model_validate(campaign.config)
+        keys = [t.key for t in campaign_targets(session, config)]
+        spec = run_spec(config, {f.name: 0.5 * (f.low + f.high) for f in config.factors}, 0, keys)
+        view = estimate_view(spec)
+    except (ValueError, Invalid):  # SpecFieldError is one: a stored configuration this version no longer reads
+        return None
     design = config.design
-    return {**estimate_view(spec), "batteries": design_runs(len(config.factors), len(design.generators or ()),
+    return {**view, "batteries": design_runs(len(config.factors), len(design.generators or ()),
                                                             design.replicates, design.centre_runs,
                                                             design.axial != "none")}

@@ -19,5 +19,8 @@ def test_the_campaign_form_runs_a_coarse_resolution_in_the_materials_rig(page, s
     page.wait_for_url(re.compile(r"#/campaigns/\d+$"))
     expect_text(page, "h2", "browser coarse")
     assert "coarse" in page.locator("main table").first.inner_text()
+    # the cost where it runs (the count itself is checked against the cost model in test_resolution_api)
+    expect_text(page, "p.campaign-estimate", r"about [\d,]+ particles.*in rig thesis-590mm-shear-box at resolution "
+                                             r"coarse \(sizes x 2\)")
     # 84 mm grains in the 590 mm box: 7.0 across, accepted with the direct-shear standards' warning
     expect_text(page, "ul.campaign-warnings", "7.0 largest particles")

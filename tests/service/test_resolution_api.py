@@ -118,6 +118,7 @@ def test_creation_shows_the_cost_in_the_rig_and_resolution_and_refuses_over_the_
         estimate = coarse.json()["estimate"]
         assert estimate["rig"] == THESIS_RIG and estimate["resolution"] == "coarse" and estimate["scale_factor"] == 2.0
         assert estimate["particles"] == pytest.approx(thesis_count / 8, abs=1) and estimate["batteries"] == 2 ** 3 + 1
+        assert client.get(f"{API}/campaigns/{coarse.json()['id']}").json()["estimate"] == estimate  # and when read
         # x 2 puts 84 mm grains in the 590 mm box (7.0 across): accepted, with the standards' warning
         assert any("shear_box.container_diameter_m" in w and "7.0 largest particles" in w
                    for w in coarse.json()["warnings"]), coarse.json()["warnings"]
