@@ -36,13 +36,16 @@ def battery_options(keys: Iterable[ResponseKey], base: dict[str, Any] | None = N
     return out
 
 
-def job_spec(test: str, fidelity: str, seed: int, parameters: Mapping[str, Any], options: Mapping[str, Any]) -> "JobSpec":
+def job_spec(test: str, fidelity: str, seed: int, parameters: Mapping[str, Any], options: Mapping[str, Any],
+             lab: Mapping[str, Any] | None = None) -> "JobSpec":
     """The job one battery is: the one place a run's ``JobSpec`` is built (a queued job, a notebook's
-    batch, the cost check), so all three run and cost the same thing."""
+    batch, the cost check), so all three run and cost the same thing. ``lab``: where it runs beyond the
+    fidelity (``LoopSettings.lab``: a resolution with its rig and particles)."""
     from engine.lab.spec import JobSpec, MicroParameters, TestOptions
 
+    where = {k: v for k, v in (lab or {}).items() if k != "fidelity"}
     return JobSpec(test=test, fidelity=fidelity, seed=int(seed), parameters=MicroParameters.model_validate(dict(parameters)),
-                   options=TestOptions.model_validate(dict(options)))
+                   options=TestOptions.model_validate(dict(options)), **where)
 
 
 def run_spec(settings: "LoopSettings", natural: Mapping[str, float], seed: int, keys: Iterable[ResponseKey] = ()) -> "JobSpec":
@@ -52,7 +55,7 @@ def run_spec(settings: "LoopSettings", natural: Mapping[str, float], seed: int, 
     from . import parameters as factor_paths
 
     return job_spec(settings.test, settings.fidelity, seed, factor_paths.apply(settings.fixed_parameters, dict(natural)),
-                    battery_options(keys, settings.options))
+                    battery_options(keys, settings.options), settings.lab())
 
 
 def standin_conditions(options: dict[str, Any], cct_max_stress_pa: float = 65.6e3):

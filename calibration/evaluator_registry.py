@@ -78,11 +78,12 @@ class Backend:
             raise UncoveredTest(f"evaluator {self.name!r} does not run test {test!r}; it runs {list(self.tests)}")
 
     def batch(self, *, fidelity: str = "screening", test: str = "battery",
-              options: Mapping[str, Any] | None = None) -> LabEvaluator:
-        """This backend as a batch evaluator in this process (``options``: TestOptions fields)."""
+              options: Mapping[str, Any] | None = None, lab: Mapping[str, Any] | None = None) -> LabEvaluator:
+        """This backend as a batch evaluator in this process (``options``: TestOptions fields; ``lab``:
+        ``LoopSettings.lab``, a resolution with its rig and particles)."""
         from .evaluators import LabEvaluator
 
-        return LabEvaluator(fidelity=fidelity, test=test, options=dict(options or {}), backend=self)
+        return LabEvaluator(fidelity=fidelity, test=test, options=dict(options or {}), backend=self, lab=dict(lab or {}))
 
 
 REGISTRY: dict[str, Backend] = {}

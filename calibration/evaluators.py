@@ -48,13 +48,14 @@ class LabEvaluator:
     options: dict[str, Any] = field(default_factory=dict)
     backend: Backend = DEM
     runs: int = 0
+    lab: dict[str, Any] = field(default_factory=dict)  # LoopSettings.lab: a resolution, its rig and particles
 
     def __call__(self, requests: Sequence[RunRequest]) -> list[list[dict]]:
         from .conditions import job_spec
 
         out = []
         for parameters, seed in requests:
-            spec = job_spec(self.test, self.fidelity, seed, parameters, self.options)
+            spec = job_spec(self.test, self.fidelity, seed, parameters, self.options, self.lab)
             result = self.backend.run(spec)
             out.append([p.model_dump() for p in result.properties])
             self.runs += 1

@@ -88,7 +88,8 @@ class CalibrationLoop:
         loop_settings = settings if isinstance(settings, LoopSettings) else LoopSettings.model_validate(settings)
         measured = [t if isinstance(t, Measured) else Measured.from_record(t) for t in targets]
         evaluator = get(backend).batch(fidelity=loop_settings.fidelity, test=loop_settings.test,
-                                       options=battery_options([t.key for t in measured], loop_settings.options))
+                                       options=battery_options([t.key for t in measured], loop_settings.options),
+                                       lab=loop_settings.lab())
         return cls(measured, evaluator, loop_settings, evaluator_name=backend, **kwargs)
 
     # -- driving ---------------------------------------------------------------------------

@@ -4,14 +4,17 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field, field_validator, model_validator
+from pydantic import BaseModel, Field, ValidationInfo, field_validator, model_validator
 
 from calibration import parameters as factor_paths
 from calibration.discrepancy import Discrepancy
 from doe.constraints import MAX_CONSTRAINT_CHARS, parse_constraint
 from doe.factors import DoeError
 from engine.lab.registry import BATTERY, JobTestName
+from engine.lab.resolution import PRESET_NAMES, ResolutionIn, is_preset
+from engine.lab.rigs import Rig
 from engine.lab.spec import STRICT_INPUT, MicroParameters, MicroParametersDict, TestOptions, TestOptionsDict, WholeNumber
+from engine.particles.description import Particles
 
 # Every schema here refuses NaN and infinities: stored, they come back as null and the campaign fails later
 # with an empty reason.
@@ -97,6 +100,15 @@ class LoopSettings(BaseModel):
     model_config = _FINITE
 
     fidelity: Literal["screening", "thesis"] = "screening"
+    resolution: ResolutionIn | None = Field(
+        None, description="'as_measured' or 'coarse' (or {mode, scale_factor | target_particles}): the material's "
+        "particles, as described or coarse-grained, in the rig its measurements were made in, so that every "
+        "quantity is simulated in that apparatus (engine.lab.resolution); 'thesis' or 'screening': the preset of "
+        "that name, the same as fidelity; unset: fidelity's preset")
+    rig: Rig | None = Field(None, description="with resolution as_measured or coarse: the apparatus; a campaign "
+                                              "takes its material's")
+    particles: Particles | None = Field(None, description="with resolution as_measured or coarse: the particles; "
+                                                          "a campaign takes its material's")
     test: JobTestName = Field(
         BATTERY, description="what each run simulates: the fill -> CCT -> DST battery, or one test alone"
     )
@@ -189,9 +201,34 @@ class LoopSettings(BaseModel):
 
     @field_validator("fixed_parameters")
     @classmethod
-    def _fixed(cls, fixed: dict[str, Any]) -> dict[str, Any]:
+    def _fixed(cls, fixed: dict[str, Any], info: ValidationInfo) -> dict[str, Any]:
         MicroParameters.model_validate(fixed)  # raises with the field named
+        if "particle_radius_m" in fixed and not is_preset(info.data.get("resolution")):
+            raise ValueError("particle_radius_m sets the screening preset's spheres; at a material resolution the "
+                             "sizes are the particles' (times the coarse factor)")
         return fixed
+
+    @field_validator("rig", "particles")
+    @classmethod
+    def _with_material_resolution(cls, value, info: ValidationInfo):
+        if value is not None and "resolution" in info.data and is_preset(info.data["resolution"]):
+            raise ValueError(f"a preset (fidelity, or resolution 'thesis'/'screening') brings its own "
+                             f"{info.field_name}; send resolution 'as_measured' or 'coarse' to run this {info.field_name}")
+        return value
+
+    @field_validator("resolution")
+    @classmethod
+    def _one_preset(cls, resolution: ResolutionIn | None, info: ValidationInfo) -> ResolutionIn | None:
+        fidelity = info.data.get("fidelity")
+        if resolution in PRESET_NAMES and fidelity not in (None, "screening", resolution):
+            raise ValueError(f"resolution {resolution!r} and fidelity {fidelity!r} name different presets; send one")
+        return resolution
+
+    def lab(self) -> dict[str, Any]:
+        """Where each battery runs, as JobSpec fields: the preset, or the resolution with the rig and particles."""
+        if is_preset(self.resolution):
+            return {"fidelity": self.fidelity}
+        return {"fidelity": self.fidelity, "resolution": self.resolution, "rig": self.rig, "particles": self.particles}
 
     @field_validator("options")
     @classmethod
@@ -201,6 +238,11 @@ class LoopSettings(BaseModel):
 
     @model_validator(mode="after")
     def _no_overlap(self) -> "LoopSettings":
+        if self.resolution in PRESET_NAMES:
+            self.fidelity = self.resolution  # the alias names the preset every reader of fidelity sees
+        if not is_preset(self.resolution) and any(f.name == "particle_radius_m" for f in self.factors):
+            raise ValueError("factor particle_radius_m varies the screening preset's spheres; at a material "
+                             "resolution the sizes are the particles' (vary resolution.scale_factor between iterations)")
         if self.automatic and not self.diagnose:
             raise ValueError("automatic mode needs diagnose: it adds the effects the diagnosis indicates")
         if self.diagnose_always and not self.diagnose:

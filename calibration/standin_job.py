@@ -17,7 +17,7 @@ import time
 
 import engine
 from calibration import standin
-from engine.lab import presets
+from engine.lab.resolution import label, setup_for
 from engine.lab.result import BulkProperty, Cancelled, LabResult, Provenance
 from engine.lab.spec import JobSpec
 
@@ -25,11 +25,11 @@ from engine.lab.spec import JobSpec
 def dst_normal_stresses_pa(spec: JobSpec) -> list[float]:
     if spec.options.dst_normal_stresses_pa:
         return list(spec.options.dst_normal_stresses_pa)
-    return list(presets.fidelity(spec.fidelity).dst_normal_stresses_pa)
+    return list(setup_for(spec).dst_normal_stresses_pa)
 
 
 def conditions(spec: JobSpec) -> standin.Conditions:
-    preset = presets.fidelity(spec.fidelity, spec.parameters.particle_radius_m)
+    preset = setup_for(spec)
     o = spec.options
     windows = getattr(o, "cct_window_stresses_pa", None) or ()
     return standin.Conditions(
@@ -57,7 +57,7 @@ def _wait(duration_s: float, progress, should_cancel) -> None:
 def run_analytic(spec: JobSpec, progress=None, should_cancel=None) -> LabResult:
     started = time.perf_counter()
     _wait(float(os.environ.get("DEMCAL_ANALYTIC_DURATION_S", "0") or 0.0), progress, should_cancel)
-    preset = presets.fidelity(spec.fidelity, spec.parameters.particle_radius_m)
+    preset = setup_for(spec)  # the rig the job runs in: its container sets the bulk mass and height
     parameters = spec.parameters.model_dump()
     records = standin.battery(parameters, spec.seed, conditions(spec))
     density = next(r["value"] for r in records if r["quantity"] == "bulk_density_kg_m3")
@@ -82,7 +82,8 @@ def run_analytic(spec: JobSpec, progress=None, should_cancel=None) -> LabResult:
     return LabResult(
         test=spec.test, properties=props, curves=curves,
         provenance=Provenance(
-            parameters=spec.parameters.model_dump(), seed=spec.seed, fidelity=spec.fidelity,
+            parameters=spec.parameters.model_dump(), seed=spec.seed, fidelity=label(spec.resolution, spec.fidelity),
+            rig=preset.rig_name, scale_factor=preset.scale_factor,
             engine_version=f"analytic-{engine.__version__}", wall_time_s=time.perf_counter() - started,
         ),
     )

@@ -22,6 +22,7 @@ from service.cli_http import pairs as _pairs
 from service.cli_http import read_json as _read_json
 from service.cli_http import page_footer, page_options, page_params
 from service.cli_http import table as _table
+from service.cli_resolution import estimate_line, resolution_body, resolution_options
 from service.vocabulary import CampaignStatus, RunStatus
 
 
@@ -122,10 +123,14 @@ def campaign_create(args) -> int:
             design["centre_runs"] = args.centre_runs
         if args.generators:
             design.update(type="fractional", generators=args.generators)
+    resolution = resolution_body(args)
+    if resolution is not None:
+        body["resolution"] = resolution
     c = _call(args, "POST", "/campaigns", body)
+    estimate = estimate_line(c.get("estimate"))
     if args.start:
         c = _call(args, "POST", f"/campaigns/{c['id']}/start")
-    return _emit(args, c, f"campaign {c['id']} {c['status']}")
+    return _emit(args, c, f"campaign {c['id']} {c['status']}" + (f"\n{estimate}" if estimate else ""))
 
 
 # What each phase that waits for batteries waits for, by name; the count is the phase's own (the loop's
@@ -389,6 +394,7 @@ def register(subparsers) -> None:
     create.add_argument("--material", dest="material_id", type=int)
     create.add_argument("--evaluator", choices=evaluator_names())
     create.add_argument("--fidelity", choices=["screening", "thesis"])
+    resolution_options(create)
     create.add_argument("--factor", action="append", help="NAME:LOW:HIGH in SI (repeatable)")
     create.add_argument("--centre-runs", type=int)
     create.add_argument("--generators", nargs="+", help="e.g. D=ABC (makes the design fractional)")

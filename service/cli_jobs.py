@@ -9,6 +9,7 @@ from calibration.evaluator_registry import names as evaluator_names
 from engine.lab.registry import job_test_names
 from service.cli_http import (CliError, call, emit, fmt, leaf, page_footer, page_options, page_params, pairs, read_json,
                               table, watch, watch_options)
+from service.cli_resolution import estimate_line, resolution_body, resolution_options
 from service.vocabulary import JobStatus
 
 
@@ -29,8 +30,12 @@ def job_submit(args) -> int:
         body.setdefault("parameters", {}).update(pairs(args.param, "--param"))
     if args.idempotency_key:
         body["idempotency_key"] = args.idempotency_key
+    resolution = resolution_body(args)
+    if resolution is not None:
+        body["resolution"] = resolution
     j = call(args, "POST", "/jobs", body)
-    return emit(args, j, _status_line(j))
+    estimate = estimate_line(j.get("estimate"))
+    return emit(args, j, _status_line(j) + (f"\n{estimate.replace('each battery', 'cost')}" if estimate else ""))
 
 
 def job_list(args) -> int:
@@ -80,6 +85,7 @@ def register(subparsers) -> None:
     submit.add_argument("--file", help="JSON body, '-' for stdin")
     submit.add_argument("--test", choices=job_test_names())
     submit.add_argument("--fidelity", choices=["screening", "thesis"])
+    resolution_options(submit)
     submit.add_argument("--seed", type=int)
     submit.add_argument("--evaluator", choices=evaluator_names())
     submit.add_argument("--priority", type=int)

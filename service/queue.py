@@ -19,6 +19,7 @@ from sqlalchemy.orm import Session
 
 from calibration import evaluator_registry
 from engine.lab.result import LabResult
+from engine.lab.resolution import label
 from engine.lab.spec import JobSpec
 from service.config import Settings, get_settings
 from service.errors import Conflict, Invalid, NotFound, TooMany
@@ -45,7 +46,10 @@ def _update(session: Session, job_id: int, where: list, values: dict[str, Any]) 
 
 
 def _spec_json(spec: JobSpec) -> dict[str, Any]:
-    return spec.model_dump(mode="json")
+    """The spec as stored. A preset job leaves out the unset resolution, rig and particles, so that it is
+    stored as before they existed and an idempotent resubmission of a job stored then still matches it."""
+    dumped = spec.model_dump(mode="json")
+    return {k: v for k, v in dumped.items() if not (k in ("resolution", "rig", "particles") and v is None)}
 
 
 # -- submission and reads (API side) -----------------------------------------------------------
@@ -73,7 +77,7 @@ def submit_job_ex(
             return _replay(existing, spec_json, evaluator), False
     check_limits(spec, cfg)
     values = dict(
-        status=JobStatus.QUEUED, evaluator=evaluator, test=spec.test, fidelity=spec.fidelity, spec=spec_json,
+        status=JobStatus.QUEUED, evaluator=evaluator, test=spec.test, fidelity=label(spec.resolution, spec.fidelity), spec=spec_json,
         seed=spec.seed, priority=priority, attempts=0, max_attempts=max_attempts or cfg.max_attempts,
         cancel_requested=False, progress_fraction=0.0, idempotency_key=idempotency_key,
         client_id=client_id, owner=owner, campaign_id=campaign_id, created_at=utcnow(),

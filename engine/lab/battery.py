@@ -9,6 +9,7 @@ from __future__ import annotations
 import engine
 from engine.lab.context import RunContext
 from engine.lab.registry import Bench, plan
+from engine.lab.resolution import label
 from engine.lab.result import BulkProperty, LabResult, Provenance
 from engine.lab.spec import JobSpec
 
@@ -48,8 +49,8 @@ def run_in_context(ctx: RunContext) -> LabResult:
         properties=props,
         curves=curves,
         provenance=Provenance(
-            parameters=spec.parameters.model_dump(), seed=spec.seed, fidelity=spec.fidelity,
-            engine_version=engine.__version__, steps=ctx.steps, simulated_time_s=ctx.simulated_time_s,
+            parameters=spec.parameters.model_dump(), seed=spec.seed, fidelity=label(spec.resolution, spec.fidelity),
+            rig=ctx.preset.rig_name, scale_factor=ctx.preset.scale_factor, engine_version=engine.__version__, steps=ctx.steps, simulated_time_s=ctx.simulated_time_s,
             wall_time_s=ctx.wall_time_s, max_inertial_number=ctx.max_inertial_number, warnings=ctx.warnings,
         ),
     )

@@ -7,7 +7,8 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from engine.lab.errors import SpecFieldError
-from engine.lab.presets import Fidelity, fidelity
+from engine.lab.presets import Fidelity
+from engine.lab.resolution import is_preset, particles_field, setup_for, setup_notes
 from engine.lab.result import Cancelled
 from engine.lab.spec import JobSpec
 
@@ -49,8 +50,7 @@ class RunContext:
 
     @classmethod
     def from_spec(cls, spec: JobSpec, progress=None, should_cancel=None) -> "RunContext":
-        p = spec.parameters
-        return cls(spec, fidelity(spec.fidelity, p.particle_radius_m, p.clump_aspect_ratio), progress, should_cancel)
+        return cls(spec, setup_for(spec), progress, should_cancel)
 
     # ----------------------------------------------------------------- options with preset defaults
     @property
@@ -121,28 +121,35 @@ class RunContext:
         field): the checks every test shares, then each planned test's own (``LabTest.check``)."""
         from engine.lab.registry import plan
 
-        self.dst_normal_stresses_pa  # noqa: B018  (raises on a non-positive stress)
-        o = self.spec.options
-        lo, hi = o.residual_window_strain
-        if not 0 <= lo < hi:
-            raise SpecFieldError("options.residual_window_strain", "need 0 <= lower < upper")
-        if hi * self.preset.container_diameter_m > self.shear_distance_m:
-            raise SpecFieldError(
-                "options.shear_distance_m",
-                f"{self.shear_distance_m * 1000:.1f} mm does not reach the residual window's "
-                f"upper strain {hi:.3f} (= {hi * self.preset.container_diameter_m * 1000:.1f} mm)")
-        if o.moving_average_span % 2 == 0:
-            raise SpecFieldError("options.moving_average_span", "must be odd")
-        if self.cct_max_stress_pa <= 0:
-            raise SpecFieldError("options.cct_max_stress_pa", "must be positive")
-        windows = o.cct_window_stresses_pa
-        if windows and max(windows) >= self.cct_max_stress_pa:
-            raise SpecFieldError(
-                "options.cct_window_stresses_pa",
-                f"every stress must be below the CCT maximum stress "
-                f"({self.cct_max_stress_pa:.6g} Pa; options.cct_max_stress_pa), got {max(windows):.6g} Pa")
+        steps = plan(self.spec)
+        for test, _ in steps:  # the rig sections each test runs in (a rig may hold only some)
+            missing = [name for name in test.apparatus if getattr(self.preset.rig, name) is None]
+            if missing:
+                raise SpecFieldError("rig", f"rig {self.preset.rig_name!r} has no {missing[0]} section, which the "
+                                            f"{test.name} test runs in; add it, or run the tests it has")
+        if self.preset.rig.shear_box is not None:  # the shear box's options, checked where there is one
+            self.dst_normal_stresses_pa  # noqa: B018  (raises on a non-positive stress)
+            o = self.spec.options
+            lo, hi = o.residual_window_strain
+            if not 0 <= lo < hi:
+                raise SpecFieldError("options.residual_window_strain", "need 0 <= lower < upper")
+            if hi * self.preset.container_diameter_m > self.shear_distance_m:
+                raise SpecFieldError(
+                    "options.shear_distance_m",
+                    f"{self.shear_distance_m * 1000:.1f} mm does not reach the residual window's "
+                    f"upper strain {hi:.3f} (= {hi * self.preset.container_diameter_m * 1000:.1f} mm)")
+            if o.moving_average_span % 2 == 0:
+                raise SpecFieldError("options.moving_average_span", "must be odd")
+            if self.cct_max_stress_pa <= 0:
+                raise SpecFieldError("options.cct_max_stress_pa", "must be positive")
+            windows = o.cct_window_stresses_pa
+            if windows and max(windows) >= self.cct_max_stress_pa:
+                raise SpecFieldError(
+                    "options.cct_window_stresses_pa",
+                    f"every stress must be below the CCT maximum stress "
+                    f"({self.cct_max_stress_pa:.6g} Pa; options.cct_max_stress_pa), got {max(windows):.6g} Pa")
         self.check_rig()
-        for test, _ in plan(self.spec):
+        for test, _ in steps:
             if test.check is not None:
                 test.check(self)
 
@@ -153,11 +160,17 @@ class RunContext:
         try:
             warnings = self.preset.rig_warnings()
         except SpecFieldError as exc:
-            field = "parameters.particle_radius_m" if self.spec.parameters.particle_radius_m is not None else "fidelity"
+            # the field that sets the particles' sizes: the screening radius, the preset, or (a material's own
+            # particles, which coarse-graining only makes larger) the particles
+            field = ("parameters.particle_radius_m" if self.spec.parameters.particle_radius_m is not None
+                     else particles_field(self.spec) if is_preset(self.spec.resolution) else "particles")
             raise SpecFieldError(field, f"rig {self.preset.rig_name!r}, {exc.field}: {exc.message}") from None
         for warning in warnings:
             self.warn(f"rig {self.preset.rig_name!r}, {warning}")
-        limit = self.preset.rig.shear_box.max_normal_force_n if self.preset.rig is not None else None
+        for note in setup_notes(self.spec):  # the coarse factor chosen, a particle target the standards capped
+            self.warn(note)
+        box = self.preset.rig.shear_box
+        limit = box.max_normal_force_n if box is not None else None
         if limit is None:
             return
         area = self.preset.container_area_m2

@@ -112,3 +112,15 @@ def estimated_particles(spec: JobSpec) -> int:
 
 def estimated_simulated_time_s(spec: JobSpec) -> float:
     return estimate(spec).simulated_time_s
+
+
+def estimate_view(spec: JobSpec) -> dict:
+    """What a job will cost where it runs, as shown when it is created: the rig, the resolution and its size
+    factor, the particles of the largest packing and the simulated time (ceilings, per test)."""
+    from engine.lab.resolution import label, setup_for
+
+    setup, cost = setup_for(spec), estimate(spec)
+    return {"rig": setup.rig_name, "resolution": label(spec.resolution, spec.fidelity),
+            "scale_factor": setup.scale_factor, "particles": cost.particles,
+            "particles_stage": cost.particles_stage if cost.stages else None,
+            "simulated_time_s": cost.simulated_time_s, "stages_s": cost.stages_s}

@@ -57,6 +57,12 @@ class Quantity:
     conditions: tuple[str, ...] = ()
     description: str = ""
     typical: Typical | None = None
+    # the rig sections whose dimensions set the value (a bulk mass is the mass of that container's packing):
+    # compared with a measurement only when the job's rig has the same sections (engine.lab.resolution)
+    apparatus: tuple[str, ...] = ()
+    # the value scales with the particles' size (a particle count): compared only when the job builds the
+    # measured material's particles as they are
+    per_particle: bool = False
 
 
 @dataclass(frozen=True)
@@ -111,6 +117,8 @@ class LabTest:
     progress_weight: float = 1.0  # share of the progress bar, roughly the test's cost at screening fidelity
     check: Callable[[RunContext], None] | None = None
     description: str = ""
+    # the rig sections (engine.lab.rigs) the test runs in: a job whose rig lacks one is refused naming ``rig``
+    apparatus: tuple[str, ...] = ("shear_box",)
 
     def quantity(self, name: str) -> Quantity:
         for q in self.quantities:

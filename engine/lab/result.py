@@ -31,8 +31,10 @@ class BulkProperty(BaseModel):
 class Provenance(BaseModel):
     parameters: dict[str, Any]
     seed: int
-    fidelity: str
+    fidelity: str  # the preset's name, or the resolution ("as_measured", "coarse"): engine.lab.resolution.label
     engine_version: str
+    rig: str | None = None  # the rig the job ran in (None: results stored before rigs were data)
+    scale_factor: float = 1.0  # particle sizes over the material's (a coarse resolution's factor)
     steps: int = 0
     simulated_time_s: float = 0.0
     wall_time_s: float = 0.0

@@ -33,7 +33,7 @@ from typing import Annotated
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from engine.lab.errors import SpecFieldError
-from engine.lab.spec import WholeNumber
+from engine.lab.whole_number import WholeNumber
 from engine.particles.description import Particles
 
 _MODEL = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True, frozen=True)

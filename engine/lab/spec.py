@@ -8,13 +8,18 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, WithJsonSchema, field_validator
+from pydantic import (BaseModel, ConfigDict, Field, Strict, ValidationInfo, WithJsonSchema, field_validator,
+                      model_validator)
 
 from engine.lab.bounds import (CONTACT_STIFFNESS_TYPICAL, DENSEST_SOLID_KG_M3, FRICTION_COEFFICIENT_TYPICAL,
                                MAX_CONTACT_STIFFNESS_N_PER_M, MAX_FRICTION_COEFFICIENT, MAX_PARTICLE_RADIUS_M,
                                MAX_SEED, MIN_PARTICLE_RADIUS_M, NORMAL_STRESS_TYPICAL, PARTICLE_DENSITY_TYPICAL,
                                STIFFEST_SOLID_PA, check_finite_tree)
 from engine.lab.registry import BATTERY, JobTestName
+from engine.lab.resolution import PRESET_NAMES, ResolutionIn, is_preset
+from engine.lab.rigs import Rig
+from engine.lab.whole_number import WholeNumber, bounded_whole_number  # noqa: F401  (WholeNumber re-exported)
+from engine.particles.description import Particles
 
 # Every model here refuses NaN and infinities (``allow_inf_nan=False``): JSON cannot carry them back,
 # so a stored infinity would come back as null and a job "succeed" with a null result.
@@ -27,16 +32,7 @@ _FINITE = STRICT_INPUT
 STRICT_PAIR = tuple[Annotated[float, Strict()], Annotated[float, Strict()]]
 
 
-def _whole_float_to_int(value: Any) -> Any:
-    """2.0 -> 2; anything else (2.5, true, "2") left for the strict check to refuse."""
-    return int(value) if type(value) is float and value.is_integer() else value
-
-
-# An integer field of an input model. JSON has one number type and JSON Schema's "integer" admits 2.0,
-# which is what a client computing a seed or a count in floating point sends; strict mode alone refused
-# it ("Input should be a valid integer") while the published schema allowed it. Booleans, strings and
-# fractions are still refused.
-WholeNumber = Annotated[int, BeforeValidator(_whole_float_to_int)]
+# WholeNumber (engine.lab.whole_number): an integer field that takes 2.0 as 2, refuses true and 2.5.
 # Speeds, lengths and counts of a laboratory test: ceilings well above any lab set-up, so that the
 # cost model (engine.lab.cost) rather than an overflow decides what is too big.
 _MAX_LAB_LENGTH_M = 100.0
@@ -52,6 +48,8 @@ _MAX_EFFECTS = 16
 
 Fidelity = Literal["screening", "thesis"]
 
+
+CycleCount = bounded_whole_number(1, _MAX_CCT_CYCLES)
 
 class MicroParameters(BaseModel):
     """DEM micro parameters, SI. Defaults: the thesis's calibrated set (Table 4.9).
@@ -130,8 +128,8 @@ class TestOptions(BaseModel):
         description="DST normal stresses, Pa: at least two distinct levels (a Mohr-Coulomb line needs two)",
     )
     cct_max_stress_pa: Annotated[float | None, NORMAL_STRESS_TYPICAL] = Field(None, gt=0, le=STIFFEST_SOLID_PA)
-    cct_cycles: WholeNumber | None = Field(None, ge=1, le=_MAX_CCT_CYCLES,
-                                   description="load-unload cycles; each counts in the simulated-time limit")
+    cct_cycles: CycleCount | None = Field(
+        None, description="load-unload cycles; each counts in the simulated-time limit")
     cct_window_stresses_pa: list[float] | None = Field(
         None, max_length=_MAX_CCT_WINDOW_STRESSES,
         description="CCT: report the tangent confined modulus E' = d(sigma)/d(strain) at exactly these normal "
@@ -233,6 +231,11 @@ TestOptionsDict = Annotated[dict[str, Any], WithJsonSchema(TestOptions.model_jso
 
 
 class JobSpec(BaseModel):
+    """One job. Where it runs: a preset (``fidelity``, or its alias ``resolution`` "thesis"/"screening": a bundled
+    rig with bundled particles), or a material's ``particles`` in the ``rig`` its measurements were made in, at
+    ``resolution`` "as_measured" or "coarse" (``engine.lab.resolution``). The rig and particles ride in the spec,
+    so a stored job replays without the database."""
+
     model_config = _FINITE
 
     test: JobTestName = BATTERY
@@ -240,6 +243,56 @@ class JobSpec(BaseModel):
     seed: WholeNumber = Field(0, ge=0, le=MAX_SEED)
     parameters: MicroParameters = Field(default_factory=MicroParameters)
     options: TestOptions = Field(default_factory=TestOptions)
+    resolution: ResolutionIn | None = Field(
+        None, validate_default=True,
+        description="'as_measured' or 'coarse' (or {mode, scale_factor | target_particles}): the particles, as "
+                    "described or coarse-grained, in the rig; 'thesis' or 'screening': the preset of that name "
+                    "(the same as fidelity); unset: the fidelity's preset")
+    rig: Rig | None = Field(None, validate_default=True,
+                            description="the apparatus (engine.lab.rigs); with resolution as_measured or coarse only")
+    particles: Particles | None = Field(
+        None, validate_default=True,
+        description="the material's particles (engine.particles.description); with resolution as_measured or coarse only")
+
+    @field_validator("resolution")
+    @classmethod
+    def _preset_alias(cls, resolution: ResolutionIn | None, info: ValidationInfo) -> ResolutionIn | None:
+        """A preset name is the fidelity of that name; naming two different presets is refused."""
+        parameters = info.data.get("parameters")
+        if not is_preset(resolution) and parameters is not None and parameters.particle_radius_m is not None:
+            raise ValueError("parameters.particle_radius_m sets the screening preset's spheres; at resolution "
+                             f"{_label(resolution)!r} the sizes are the particles' (times the coarse factor): unset it")
+        if resolution in PRESET_NAMES and info.data.get("fidelity") not in (None, resolution) \
+                and info.data.get("fidelity") != "screening":  # "screening" is the default, not a choice
+            raise ValueError(f"resolution {resolution!r} and fidelity {info.data.get('fidelity')!r} name different "
+                             "presets; send one")
+        return resolution
+
+    @field_validator("rig", "particles")
+    @classmethod
+    def _with_material_resolution(cls, value, info: ValidationInfo):
+        if "resolution" not in info.data:  # the resolution itself was refused: that error says it
+            return value
+        preset = is_preset(info.data["resolution"])
+        if preset and value is not None:
+            raise ValueError(f"a preset (fidelity, or resolution 'thesis'/'screening') brings its own {info.field_name}; "
+                             f"send resolution 'as_measured' or 'coarse' to run this {info.field_name}")
+        if not preset and value is None:
+            raise ValueError(f"resolution {_label(info.data['resolution'])!r} builds a material's particles in its "
+                             f"rig: send {info.field_name}")
+        return value
+
+    @model_validator(mode="after")
+    def _alias_sets_the_preset(self) -> "JobSpec":
+        # the alias sets the preset: every reader of spec.fidelity (the presets, the stand-in, stored columns)
+        # then sees the preset the resolution names
+        if self.resolution in PRESET_NAMES:
+            self.fidelity = self.resolution
+        return self
+
+
+def _label(resolution) -> str:
+    return resolution if isinstance(resolution, str) else resolution.mode
 
 
 # Fixed micro parameters kept as the dict that was sent, validated as MicroParameters (campaigns), documented

@@ -5,8 +5,8 @@ from fastapi import APIRouter, Depends, Query
 from sqlalchemy.orm import Session
 
 from service.campaigns.schemas import CampaignCreate, IterationIn
-from service.campaigns.store import (campaign_summary, create_campaign, get_campaign, iteration, iteration_view,
-                                     list_campaigns, next_iteration, transition)
+from service.campaigns.store import (campaign_estimate, campaign_summary, create_campaign, get_campaign, iteration,
+                                     iteration_view, list_campaigns, next_iteration, transition)
 from service.api.openapi import errors
 from service.api.params import CampaignId, CampaignLimit, IterationLimit, IterationNumber, Offset
 from engine.lab.bounds import ID_MAX
@@ -36,7 +36,8 @@ _NOT_YET = errors(409, c409="the iteration has not produced this yet")
 def create(body: CampaignCreate, session: DbSession,
            client: str = Depends(client_id), owner: str | None = Depends(owner_of)) -> dict:
     campaign = create_campaign(session, body, client_id=client, commit=False, owner=owner)
-    return built_then_committed(session, lambda: campaign_summary(campaign), CampaignSummary)
+    return built_then_committed(session, lambda: {**campaign_summary(campaign),
+                                                  "estimate": campaign_estimate(session, campaign)}, CampaignSummary)
 
 
 @router.get("", summary="List campaigns, newest (highest id) first; a page and the total", **typed(CampaignList))
@@ -54,7 +55,8 @@ def _change(session: Session, campaign_id: int, who: Caller, action: str):
 
 @router.get("/{campaign_id}", summary="Status: state, iteration, phase, run counts", **typed(CampaignSummary))
 def status(campaign_id: CampaignId, session: DbSession) -> dict:
-    return campaign_summary(get_campaign(session, campaign_id))
+    campaign = get_campaign(session, campaign_id)
+    return {**campaign_summary(campaign), "estimate": campaign_estimate(session, campaign)}
 
 
 @router.post("/{campaign_id}/start", summary="draft -> running (409 otherwise)", responses=_STATE,

@@ -5,21 +5,26 @@ from typing import Any
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response, status
 from fastapi import Path as PathParam
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, ValidationError
 
 from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from engine.lab.bounds import ID_MAX, MAX_SEED
 from engine.lab.plausibility import options_warnings, parameter_warnings
+from engine.lab.cost import estimate_view
 from engine.lab.registry import BATTERY, JobTestName
+from engine.lab.resolution import ResolutionIn
+from engine.lab.rigs import Rig
 from engine.lab.spec import STRICT_INPUT, Fidelity, JobSpec, MicroParameters, TestOptions, WholeNumber
+from engine.lab.whole_number import bounded_whole_number
+from engine.particles.description import Particles
 from service import queue
 from service.api.jsonsafe import json_safe
 from service.api.openapi import errors
 from service.api.params import PRIORITY_MAX, PRIORITY_MIN, JobId, JobLimit, Offset
-from service.api.responses.common import typed
+from service.api.responses.common import CostEstimate, typed
 from service.api.responses.jobs import Curve, CurveIndex, JobList, JobOut, JobResult, Progress
 from service.db import DbSession
-from service.errors import Conflict, NotFound
+from service.errors import Conflict, Invalid, NotFound
 from service.models.job import Job
 from service.ownership import Caller, caller, owner_of
 from service.security import client_id
@@ -27,6 +32,10 @@ from service.vocabulary import JobOrigin, JobStatus
 from service.workers.errors import scrub
 
 router = APIRouter(prefix="/jobs", tags=["jobs"])
+
+
+CampaignId = bounded_whole_number(1, ID_MAX)
+AttemptCount = bounded_whole_number(1, 20)
 
 
 class JobSubmit(BaseModel):
@@ -43,12 +52,23 @@ class JobSubmit(BaseModel):
     priority: WholeNumber = Field(0, ge=PRIORITY_MIN, le=PRIORITY_MAX, description="higher runs first")
     idempotency_key: str | None = Field(None, min_length=1, max_length=200,
                                         description="resubmitting the same key returns the same job")
-    campaign_id: WholeNumber | None = Field(None, ge=1, le=ID_MAX)
-    max_attempts: WholeNumber | None = Field(None, ge=1, le=20, description="claims before a lost job fails")
+    # the bounds inside the union: on a nullable WholeNumber (a BeforeValidator) pydantic published them as
+    # "ge"/"le", which JSON Schema ignores, so schema-valid clients sent 2037 replicates and were refused
+    campaign_id: CampaignId | None = None
+    max_attempts: AttemptCount | None = Field(None, description="claims before a lost job fails")
+    resolution: ResolutionIn | None = Field(None, description=JobSpec.model_fields["resolution"].description)
+    rig: Rig | None = Field(None, description=JobSpec.model_fields["rig"].description)
+    particles: Particles | None = Field(None, description=JobSpec.model_fields["particles"].description)
 
     def spec(self) -> JobSpec:
-        return JobSpec(test=self.test, fidelity=self.fidelity, seed=self.seed,
-                       parameters=self.parameters, options=self.options)
+        """The job spec; its own cross-field checks (a resolution without its rig) are 422s naming the field."""
+        try:
+            return JobSpec.model_validate({
+                "test": self.test, "fidelity": self.fidelity, "seed": self.seed, "parameters": self.parameters,
+                "options": self.options, "resolution": self.resolution, "rig": self.rig, "particles": self.particles})
+        except ValidationError as exc:
+            first = exc.errors(include_url=False)[0]
+            raise Invalid(str(first["msg"]).removeprefix("Value error, "), ".".join(str(p) for p in first["loc"])) from None
 
 
 def job_out(job: Job) -> JobOut:
@@ -99,7 +119,9 @@ def submit(body: JobSubmit, request: Request, response: Response, session: DbSes
     if not created:
         response.status_code = status.HTTP_200_OK
     response.headers["Location"] = str(request.url_for("get_job", job_id=job.id))
-    return job_out(job)
+    out = job_out(job)
+    out.estimate = CostEstimate(**estimate_view(JobSpec.model_validate(job.spec)))
+    return out
 
 
 @router.get("", response_model=JobList, summary="List jobs, newest first (by id), filtered; a page and the total")

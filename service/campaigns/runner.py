@@ -123,6 +123,11 @@ class CampaignRunner:
                                     reused_from=new.reused_from,
                                     status=(RunStatus.SUCCEEDED if reused else RunStatus.PENDING).value))
         values = dict(t.values)
+        if isinstance(values.get("report"), dict):  # the targets left out at this rig and resolution, named
+            from service.campaigns.store import split_targets
+
+            config = CampaignCreate.model_validate(campaign.config)
+            values["report"] = {**values["report"], "left_out_targets": split_targets(session, config)[1]}
         if t.finished:
             values["finished_at"] = utcnow()
         if t.next_settings is not None:

@@ -19,6 +19,8 @@ from calibration.keys import select as select_targets
 from calibration.records import Measured
 from calibration.vocabulary import AGAINST_ADDING
 from engine.lab.plausibility import settings_warnings
+from engine.lab.resolution import is_preset, label
+from engine.lab.rigs import rig_json
 from service.campaigns.schemas import CampaignCreate, IterationIn
 from service.config import Settings, get_settings
 from service.errors import Conflict, Invalid, NotFound, from_settings_error
@@ -40,14 +42,87 @@ def _settings(session: Session) -> Settings:
 
 def campaign_targets(session: Session, config: CampaignCreate) -> list[Measured]:
     """The measurements a campaign calibrates against: its material's, those ``config.targets`` names
-    (all when None), as the loop's records."""
+    (all when None), as the loop's records, less those its runs cannot be compared with (``split_targets``)."""
+    return split_targets(session, config)[0]
+
+
+def split_targets(session: Session, config: CampaignCreate) -> tuple[list[Measured], list[dict[str, Any]]]:
+    """The campaign's targets, and those left out with the reason: a quantity the apparatus sets (a bulk mass)
+    measured in a rig other than the one the runs simulate, or one that scales with the particles' size (a
+    particle count) at a resolution that changes them (``engine.lab.resolution.incomparable``). Never compared
+    silently: the campaign's summary and every report name them."""
+    from engine.lab.registry import get as get_test
+    from engine.lab.resolution import incomparable
+
     material = get_material(session, config.material_id)
     wanted = [t.model_dump() for t in config.targets] if config.targets is not None else None
-    return [Measured.from_record(m) for m in select_targets(material.measurements if material else [], wanted)]
+    chosen = [Measured.from_record(m) for m in select_targets(material.measurements if material else [], wanted)]
+    measured_rig, measured_particles = material_world(material)
+    if measured_rig is None and measured_particles is None:
+        return chosen, []
+    setup = simulated_setup(config)
+    kept, left_out = [], []
+    for target in chosen:
+        why = incomparable(get_test(target.key.test).quantity(target.key.quantity), measured_rig,
+                           measured_particles, setup)
+        if why is None:
+            kept.append(target)
+        else:
+            left_out.append({"test": target.key.test, "quantity": target.key.quantity,
+                             "condition": target.key.condition_dict, "reason": why})
+    return kept, left_out
+
+
+def material_world(material) -> tuple[Any, Any]:
+    """The rig the material's measurements were made in and its particles (either None when not given)."""
+    from engine.particles.description import Particles
+    from service.rigs.store import record_of
+
+    if material is None:
+        return None, None
+    rig = record_of(material.rig) if material.rig is not None else None
+    particles = Particles.model_validate(material.particles) if material.particles is not None else None
+    return rig, particles
+
+
+def simulated_setup(config: CampaignCreate):
+    """The lab set-up the campaign's runs are built in (at the centre of its factor box: the rig and particles
+    are the same at every run but for a varied screening radius)."""
+    from calibration.conditions import run_spec
+    from engine.lab.errors import SpecFieldError
+    from engine.lab.resolution import setup_for
+
+    try:
+        return setup_for(run_spec(config, {f.name: 0.5 * (f.low + f.high) for f in config.factors}, 0))
+    except SpecFieldError as exc:  # e.g. a coarse factor that makes the particles larger than the lab takes
+        raise Invalid(exc.message, exc.field) from None
+
+
+def with_material_world(session: Session, body: CampaignCreate, field_prefix: str = "") -> CampaignCreate:
+    """A campaign at a material resolution ("as_measured", "coarse") runs in its material's rig with its
+    particles, copied into the configuration (the runs replay as queued if the material changes later); a 422
+    naming ``resolution`` when the material has neither and the request did not send them."""
+    if is_preset(body.resolution) or (body.rig is not None and body.particles is not None):
+        return body
+    material = get_material(session, body.material_id)
+    rig, particles = material_world(material)
+    missing = [name for name, value in (("rig", body.rig or rig), ("particles", body.particles or particles))
+               if value is None]
+    if missing:
+        raise Invalid(f"resolution {body.resolution if isinstance(body.resolution, str) else body.resolution.mode!r} "
+                      f"builds the material's particles in the rig its measurements were made in, and material "
+                      f"{material.id} ({material.name!r}) has no {' and no '.join(missing)}: give the material "
+                      f"{' and '.join(missing)} (PUT /api/v1/materials/{material.id}), send them with the campaign, "
+                      "or choose a preset resolution ('thesis', 'screening')", f"{field_prefix}resolution")
+    return CampaignCreate.model_validate({**body.model_dump(mode="json"),
+                                          "rig": rig_json(body.rig or rig),
+                                          "particles": (body.particles or particles).model_dump(mode="json", exclude_none=True)})
 
 
 def check_limits_with_targets(session: Session, config: CampaignCreate, field_prefix: str = "") -> None:
-    """``check_campaign_limits`` with the options the material's measurements derive, as queued later."""
+    """``check_campaign_limits`` with the options the material's measurements derive, as queued later (in the
+    material's rig, with its particles, at a material resolution)."""
+    config = with_material_world(session, config, field_prefix)
     check_campaign_limits(config, _settings(session), field_prefix,
                           [t.key for t in campaign_targets(session, config)])
 
@@ -66,7 +141,10 @@ def check_targets_simulated(session: Session, body: CampaignCreate) -> None:
         raise Invalid(f"material {material.id} ({material.name!r}) has no measurements, so a campaign has nothing "
                       f"to calibrate against: add them first (POST /api/v1/materials/{material.id}/measurements)",
                       "material_id")
-    chosen = campaign_targets(session, body)
+    chosen, left_out = split_targets(session, body)
+    if not chosen and left_out:
+        raise Invalid("every target is left out, none can be compared with the runs: "
+                      + "; ".join(f"{t['test']}/{t['quantity']}: {t['reason']}" for t in left_out), "resolution")
     if not chosen:
         raise Invalid(f"no target is a measurement of material {material.id}; it has "
                       f"{sorted({ResponseKey.from_record(m).label for m in material.measurements})}", "targets")
@@ -88,11 +166,13 @@ def create_campaign(session: Session, body: CampaignCreate, *, client_id: str = 
     ``service.db.built_then_committed``)."""
     if get_material(session, body.material_id) is None:
         raise NotFound(f"material {body.material_id} not found", "material_id")
+    body = with_material_world(session, body)
     check_targets_simulated(session, body)
     # the design doe/ builds and the limits of every run: a 422 now, not a failure on start
     check_limits_with_targets(session, body)
     campaign = Campaign(name=body.name, material_id=body.material_id, status=CampaignStatus.DRAFT, evaluator=body.evaluator,
-                        fidelity=body.fidelity, config=body.model_dump(mode="json"), current_iteration=0,
+                        fidelity=label(body.resolution, body.fidelity), config=body.model_dump(mode="json"),
+                        current_iteration=0,
                         schedule_id=schedule_id, client_id=client_id, owner=owner)
     session.add(campaign)
     if commit:
@@ -203,8 +283,31 @@ def campaign_summary(campaign: Campaign) -> dict[str, Any]:
         "created_at": _iso(campaign.created_at), "started_at": _iso(campaign.started_at),
         "finished_at": _iso(campaign.finished_at), "config": campaign.config,
         "stop_reason": (((current.report or {}).get("automatic") or {}).get("stop_reason") if current else None),
-        "warnings": settings_warnings(campaign.config or {}),
+        "warnings": settings_warnings(campaign.config or {}) + resolution_warnings(campaign),
     }
+
+
+def resolution_warnings(campaign: Campaign) -> list[str]:
+    """What the campaign's rig and resolution say before and after it runs: the coarse factor chosen (or a
+    particle target the direct-shear standards capped), a rig too small for the particles it runs (the
+    standards' sizes), and the targets left out (``split_targets``)."""
+    from sqlalchemy.orm import object_session
+
+    from calibration.conditions import run_spec
+    from engine.lab.resolution import setup_notes
+
+    session = object_session(campaign)
+    if session is None or not campaign.config:
+        return []
+    try:
+        config = CampaignCreate.model_validate(campaign.config)
+        setup = simulated_setup(config)
+        notes = setup_notes(run_spec(config, {f.name: 0.5 * (f.low + f.high) for f in config.factors}, 0))
+        rig = [f"rig {setup.rig_name!r}, {w}" for w in setup.rig_warnings()] if not is_preset(config.resolution) else []
+        _, left_out = split_targets(session, config)
+    except (ValueError, Invalid):  # a stored configuration this version no longer reads: the runner reports it
+        return []
+    return notes + rig + [f"{t['test']}/{t['quantity']} left out of the targets: {t['reason']}" for t in left_out]
 
 
 def run_view(run) -> dict[str, Any]:
@@ -232,3 +335,23 @@ def _design_summary(design: dict | None) -> dict | None:
 
 def _iso(value) -> str | None:
     return value.isoformat() + "Z" if value is not None else None
+
+
+def campaign_estimate(session: Session, campaign: Campaign) -> dict[str, Any] | None:
+    """Each battery's cost in the campaign's rig and resolution (at the centre of its factor box, with the
+    options its targets derive) and the batteries of its first design, shown when it is created and read."""
+    from calibration.conditions import run_spec
+    from engine.lab.cost import estimate_view
+    from service.limits import design_runs
+
+    try:
+        config = CampaignCreate.model_validate(campaign.config)
+        keys = [t.key for t in campaign_targets(session, config)]
+        spec = run_spec(config, {f.name: 0.5 * (f.low + f.high) for f in config.factors}, 0, keys)
+        view = estimate_view(spec)
+    except (ValueError, Invalid):  # SpecFieldError is one: a stored configuration this version no longer reads
+        return None
+    design = config.design
+    return {**view, "batteries": design_runs(len(config.factors), len(design.generators or ()),
+                                                            design.replicates, design.centre_runs,
+                                                            design.axial != "none")}

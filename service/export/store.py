@@ -14,6 +14,7 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
+from engine.lab.resolution import is_preset
 from service.errors import Conflict, Invalid, NotFound
 from service.export import card as cards
 
@@ -51,6 +52,11 @@ def campaign_card(session: Session, campaign_id: int, number: int | None = None)
     from service.materials.store import get_material, material_dict
 
     campaign = get_campaign(session, campaign_id)
+    resolution = (campaign.config or {}).get("resolution")
+    if not is_preset(resolution):  # the card's rig section states a preset's set-up (service.export.card)
+        raise Conflict(f"campaign {campaign.id} ran at resolution {campaign.fidelity!r} in its material's rig; a "
+                       "material card states the preset set-ups ('thesis', 'screening') only, so it cannot describe "
+                       "these particles and this rig yet", ["path", "campaign_id"])
     it = calibrated_iteration(campaign, number)
     material = get_material(session, campaign.material_id)
     view = material_dict(material)

@@ -9,7 +9,8 @@ from pydantic import BaseModel, Field, ValidationInfo, field_validator
 from service.api.responses.common import Page
 
 from engine.lab.bounds import CONDITION_BOUNDS, check_finite_tree
-from engine.lab.spec import STRICT_INPUT, WholeNumber
+from engine.lab.spec import STRICT_INPUT
+from engine.lab.whole_number import bounded_whole_number
 from engine.lab.registry import known_quantity, known_test, quantity
 from service.errors import Invalid
 from engine.lab.units import UnitError, condition_si_unit, to_si
@@ -20,6 +21,8 @@ from engine.particles.description import Particles
 MAX_REPLICATES = 1000
 MAX_TEXT = 10_000
 
+
+ReplicateCount = bounded_whole_number(1, MAX_REPLICATES)
 
 class MeasurementIn(BaseModel):
     """A measurement as a user sends it: any accepted unit, converted to SI on validation."""
@@ -39,8 +42,8 @@ class MeasurementIn(BaseModel):
         default_factory=dict, max_length=8,
         description="unit per condition entry when not SI, e.g. {'normal_stress_pa': 'kPa'}",
     )
-    reported_replicates: WholeNumber | None = Field(None, ge=1, le=MAX_REPLICATES,
-                                            description="replicates behind a published average")
+    reported_replicates: ReplicateCount | None = Field(
+        None, description="replicates behind a published average")
     standard_uncertainty: float | None = Field(None, gt=0, description="stated standard uncertainty, in `unit`")
     source: str = Field("", max_length=MAX_TEXT)
 

@@ -18,7 +18,8 @@ from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from service.campaigns.schemas import CampaignCreate
-from service.campaigns.store import campaign_targets
+from engine.lab.resolution import label
+from service.campaigns.store import campaign_targets, with_material_world
 from service.limits import check_campaign_limits
 from service.errors import ApiError
 from service.materials.store import get_material, latest_measurement_id
@@ -121,7 +122,8 @@ class Scheduler:
     def _start_campaign(self, session: Session, schedule: Schedule, due: datetime, now: datetime) -> int:
         body = dict(schedule.template)
         body["name"] = f"{body.get('name') or schedule.name} @ {due:%Y-%m-%d %H:%M}Z"[:200]
-        config = CampaignCreate.model_validate(body)
+        # at a material resolution, the material's rig and particles as they are at this firing
+        config = with_material_world(session, CampaignCreate.model_validate(body))
         # the limits in force now (they may have been lowered since the schedule was created): a firing
         # over them is skipped with the reason, not a campaign that fails on its first run
         check_campaign_limits(config, self.settings, target_keys=[t.key for t in campaign_targets(session, config)])
@@ -140,7 +142,8 @@ def create_campaign_nocommit(session: Session, config: CampaignCreate, schedule:
     ("schedule:<id>", still used for schedules made before 0004_ownership) each schedule had a fresh
     per-client limit, and a client held at 3 queued 15 jobs through 4 schedules."""
     campaign = Campaign(name=config.name, material_id=config.material_id, status=CampaignStatus.DRAFT,
-                        evaluator=config.evaluator, fidelity=config.fidelity, config=config.model_dump(mode="json"),
+                        evaluator=config.evaluator, fidelity=label(config.resolution, config.fidelity),
+                        config=config.model_dump(mode="json"),
                         current_iteration=0, schedule_id=schedule.id,
                         client_id=schedule.client_id or f"schedule:{schedule.id}", owner=schedule.owner)
     session.add(campaign)

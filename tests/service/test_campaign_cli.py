@@ -190,3 +190,17 @@ def test_material_create_and_delete(server, capsys):
     assert code == 0
     code, _, err = run(capsys, "material", "delete", "1", "--url", url)
     assert code == 2 and "HTTP 409" in err  # the bundled material stays
+
+
+def test_campaign_create_at_a_resolution_shows_its_cost(server, capsys):
+    """Issue 29: --resolution coarse --scale-factor 2 runs the bundled material's particles at twice their
+    size in its own 590 mm box, and creation prints the cost there; the factor without coarse is refused."""
+    url, _, _ = server
+    code, out, _ = run(capsys, "campaign", "create", "--url", url, "--name", "cli coarse", "--material", "1",
+                       "--evaluator", "analytic", "--resolution", "coarse", "--scale-factor", "2",
+                       "--factor", "friction_pp:0.3:1.0")
+    assert code == 0, out
+    assert "in rig thesis-590mm-shear-box at resolution coarse (sizes x 2)" in out and "particles" in out
+    code, _, err = run(capsys, "campaign", "create", "--url", url, "--name", "cli bad", "--material", "1",
+                       "--resolution", "thesis", "--scale-factor", "2", "--factor", "friction_pp:0.3:1.0")
+    assert code == 2 and "apply to --resolution coarse" in err

@@ -32,7 +32,8 @@ def _run(bench: Bench, lo: float, hi: float) -> Run:
 TEST = LabTest(
     name="anchor",
     title="Anchor pull-out: peak pull force",
-    quantities=(Quantity("peak_pull_force_n", "N", POSITIVE, conditions=("packing_height_m", "pull_speed_m_s")),),
+    quantities=(Quantity("peak_pull_force_n", "N", POSITIVE, conditions=("packing_height_m", "pull_speed_m_s"),
+                         apparatus=("anchor",)),),
     options=("include_anchor", "anchor_packing_height_m", "anchor_pull_speed_m_s", "anchor_friction",
              "anchor_bin_width_m", "anchor_pull_distance_m"),
     procedure="engine.lab.procedures.anchor:run_anchor",
@@ -40,6 +41,7 @@ TEST = LabTest(
     cost=_cost,
     run=_run,
     battery="include_anchor",
+    apparatus=("anchor",),
     progress_weight=0.35,
     description="A tube with a foot plate in a bin filled to height L accelerates to the pull speed and is pulled "
                 "while its force is recorded.",

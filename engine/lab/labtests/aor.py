@@ -49,6 +49,7 @@ TEST = LabTest(
     cost=_cost,
     run=_run,
     battery="include_aor",
+    apparatus=("angle_of_repose",),
     progress_weight=0.35,
     description="A bottomless tapered bucket on a floor is filled, levelled and lifted; the pile at rest is "
                 "measured in eight azimuthal sectors.",

@@ -8,12 +8,13 @@ from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
 
 def _cost(ctx, planned: frozenset[str]) -> StageCost:
     from engine.lab.cost import packing_spheres
+    from engine.lab.resolution import particles_field
 
     preset = ctx.preset
     solids_m3 = preset.container_area_m2 * preset.packing_height_m * preset.expected_solid_fraction
     return StageCost(RAIN_SETTLE_MAX_S + LEVEL_SETTLE_MAX_S, "options.speed_factor",
                      packing_spheres(solids_m3, preset.fill_margin, preset.shapes),
-                     "parameters.particle_radius_m" if ctx.spec.fidelity == "screening" else "fidelity")
+                     particles_field(ctx.spec))
 
 
 def _run(bench: Bench, lo: float, hi: float) -> Run:
@@ -42,9 +43,10 @@ TEST = LabTest(
         Quantity("voids_ratio", "1", POSITIVE,
                  typical=Typical(0.25, 4.0, "the voids ratios of granular packings",
                                  "Scott & Kilgour 1969; Onoda & Liniger 1990")),
-        Quantity("packing_height_m", "m", POSITIVE),
-        Quantity("bulk_mass_kg", "kg", POSITIVE),
-        Quantity("particle_count", "1", Bound(1.0, float(SQLITE_INT_MAX), low_open=False, why="a count of particles")),
+        Quantity("packing_height_m", "m", POSITIVE, apparatus=("shear_box", "fill")),
+        Quantity("bulk_mass_kg", "kg", POSITIVE, apparatus=("shear_box", "fill")),
+        Quantity("particle_count", "1", Bound(1.0, float(SQLITE_INT_MAX), low_open=False, why="a count of particles"),
+                 apparatus=("shear_box", "fill"), per_particle=True),
     ),
     options=("fill_drop_height_m", "fill_friction_pp", "shear_distance_m"),  # the ring is as wide as the shear
     procedure="engine.lab.procedures.fill:run_fill",

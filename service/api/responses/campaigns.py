@@ -11,6 +11,7 @@ from service.api.responses.common import (
     CONDITION,
     PARAMETERS,
     Condition,
+    CostEstimate,
     Factor,
     Out,
     Page,
@@ -48,6 +49,8 @@ class CampaignSummary(Out):
                                 description="factor ranges, fixed parameters and options outside their typical "
                                             "ranges, each with the unit slip it probably is "
                                             "(engine.lab.plausibility); accepted, not refused")
+    estimate: CostEstimate | None = Field(None, description="at creation (POST): each battery's particles and "
+                                                         "simulated time in the campaign's rig and resolution")
 
 
 class CampaignList(Page):

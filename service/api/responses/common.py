@@ -62,3 +62,17 @@ class LackOfFit(Out):
     chi2_per_dof: float | None = Field(None, description="statistic / dof")
     noise_band: list[float | None] | None = Field(
         None, description="[low, high]: where chi2 / dof lies by chance (1 -+ 2 sqrt(2 / dof))")
+
+
+class CostEstimate(Out):
+    """What a job (a campaign: each of its batteries) costs where it runs, shown when it is created
+    (engine.lab.cost.estimate_view): ceilings from the procedures' own stop rules, not guesses."""
+
+    rig: str = Field(description="the rig the batteries run in")
+    resolution: str = Field(description="'thesis' or 'screening' (presets), 'as_measured' or 'coarse'")
+    scale_factor: float = Field(description="particle sizes over the material's (1: as measured)")
+    particles: int = Field(description="spheres of the largest packing")
+    particles_stage: str | None = Field(None, description="the test that builds it")
+    simulated_time_s: float = Field(description="simulated time of one battery, at most")
+    stages_s: dict[str, float] = Field(default_factory=dict, description="simulated time per test, at most")
+    batteries: int | None = Field(None, description="campaigns: the batteries of the first design")

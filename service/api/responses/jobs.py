@@ -6,7 +6,7 @@ from typing import Any
 
 from pydantic import BaseModel, Field, field_serializer
 
-from service.api.responses.common import CONDITION, Condition, Out, Page
+from service.api.responses.common import CONDITION, Condition, CostEstimate, Out, Page
 from service.vocabulary import JobStatus
 
 
@@ -46,6 +46,8 @@ class JobOut(BaseModel):
                                 description="micro parameters and test options outside their typical ranges, each "
                                             "with the unit slip it probably is (engine.lab.plausibility); the job "
                                             "runs all the same")
+    estimate: CostEstimate | None = Field(None, description="at creation (POST): particles and simulated time "
+                                                         "in the rig and resolution the job runs at")
 
     @field_serializer("created_at", "started_at", "finished_at", "heartbeat_at", "lease_expires_at")
     def _utc(self, value: datetime | None) -> str | None:
@@ -75,8 +77,10 @@ class ResultProvenance(Out):
 
     parameters: dict[str, Any] = Field(description="the micro-parameters run (engine.lab.spec.MicroParameters)")
     seed: int
-    fidelity: str
+    fidelity: str = Field(description="the preset's name, or the resolution (as_measured, coarse)")
     engine_version: str
+    rig: str | None = Field(None, description="the rig the job ran in (null: stored before rigs were data)")
+    scale_factor: float = Field(1.0, description="particle sizes over the material's (a coarse resolution's factor)")
     steps: int = 0
     simulated_time_s: float | None = 0.0
     wall_time_s: float | None = 0.0

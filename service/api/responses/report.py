@@ -274,6 +274,15 @@ class DiagnosisStage(Out):
     why: str
 
 
+class LeftOutTarget(Out):
+    """A measurement not compared with the runs, and why (engine.lab.resolution.incomparable)."""
+
+    test: str
+    quantity: str
+    condition: dict[str, float] = Field(default_factory=dict)
+    reason: str
+
+
 class Report(Out):
     """As stored on the iteration (GET /campaigns/{id}/iterations' ``report``)."""
 
@@ -308,6 +317,10 @@ class Report(Out):
         None, description="one seed first, the others only where they buy power (calibration.replicates)")
     adequacy: Adequacy | None = None
     automatic: Automatic | None = None
+    left_out_targets: list[LeftOutTarget] | None = Field(
+        None, description="the material's measurements left out of the targets, with the reason: a quantity the "
+                          "apparatus sets measured in another rig than the runs', or one that scales with the "
+                          "particles' size at a coarse resolution")
     warnings: list[str] | None = Field(
         None, description="plausibility warnings of the measurements used (engine.lab.plausibility): a value "
                           "outside what granular materials measure, with the unit slip it probably is")

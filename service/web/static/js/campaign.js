@@ -85,6 +85,13 @@ export async function campaignPage(view, id, params) {
       [[h("a", { href: `#/materials/${c.material_id}` }, `#${c.material_id}`), c.evaluator, c.fidelity, String(c.current_iteration), c.phase || "–",
         `${c.runs_succeeded}/${c.runs_total}`, String(c.runs_failed)]]),
     iterationTabs(id, iterations, it?.number)];
+  // the rig and resolution's warnings (a coarse factor capped, a box small for its particles, targets left
+  // out because they cannot be compared there) and the plausibility warnings of the settings
+  const e = c.estimate;  // the cost model's ceilings where the batteries run (engine.lab.cost.estimate_view)
+  if (e) parts.push(h("p", { className: "campaign-estimate" }, h("b", {}, "Each battery: "),
+    `about ${e.particles.toLocaleString("en")} particles, up to ${Math.round(e.simulated_time_s)} s simulated, in rig ${e.rig} `
+    + `at resolution ${e.resolution} (sizes x ${Number(e.scale_factor.toPrecision(3))}); ${e.batteries} batteries in the first design.`));
+  if (c.warnings?.length) parts.push(h("ul", { className: "campaign-warnings" }, c.warnings.map((w) => h("li", {}, humanText(w)))));
   if (c.error) parts.push(h("p", { className: "job-error" }, h("b", {}, "Failed: "), humanText(c.error)));
   if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), humanText(c.stop_reason)));
   if (c.status === "running" || c.status === "paused") parts.push(progressCard(c));

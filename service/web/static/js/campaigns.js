@@ -78,6 +78,11 @@ export async function campaignsPage(view, params) {
       field("Material", materialSelect),
       field("Evaluator", evaluatorSelect(backends, defs.CampaignCreate)),
       field("Fidelity", h("select", { name: "fidelity", "data-loc": "fidelity" }, h("option", {}, "screening"), h("option", {}, "thesis"))),
+      field("Resolution", h("select", { name: "resolution", "data-loc": "resolution",
+        title: "as measured / coarse: the material's particles in the rig its measurements were made in (fidelity is then unused)" },
+        h("option", { value: "" }, "the fidelity's preset"), h("option", { value: "as_measured" }, "as measured"),
+        h("option", { value: "coarse" }, "coarse"))),
+      field("Coarse size factor", numberInput({ name: "scale_factor", placeholder: "proposed", "data-loc": "resolution.scale_factor" })),
       field("Each run simulates", testSelect(tests, "test")),
       field("Seed", h("input", { name: "seed", type: "number", value: 0, "data-loc": "seed" })),
       field("Priority", h("input", { name: "priority", type: "number", value: 0, "data-loc": "priority" }))),
@@ -151,9 +156,13 @@ function campaignBody(form, material, tests) {
   const targets = material && ticked.length
     ? ticked.map((i) => material.measurements[i]).map((m) => ({ test: m.test, quantity: m.quantity, condition: m.condition || {} }))
     : null;
+  const mode = data.get("resolution");
+  const factor = String(data.get("scale_factor") || "").trim();
+  const resolution = !mode ? null
+    : mode === "coarse" && factor ? { mode, scale_factor: real(factor, "resolution.scale_factor") } : mode;
   return {
     name: data.get("name"), material_id: num(data.get("material_id")), evaluator: data.get("evaluator"),
-    fidelity: data.get("fidelity"), test: data.get("test"), seed: num(data.get("seed")), priority: num(data.get("priority")),
+    fidelity: data.get("fidelity"), ...(resolution ? { resolution } : {}), test: data.get("test"), seed: num(data.get("seed")), priority: num(data.get("priority")),
     factors, targets, fixed_parameters: fixed, options, priors,
     design: { type: data.get("design_type"), centre_runs: num(data.get("centre_runs")), replicates: num(data.get("replicates")),
       ...(generators.length ? { generators } : {}) },
