@@ -34,7 +34,7 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
-from doe.designs import Design, _draw_seeds, _replicate_index
+from doe.designs import Design, draw_seeds, replicate_index
 
 from . import parameters as factor_paths
 
@@ -213,7 +213,7 @@ def with_earlier(design: Design, earlier: Sequence[Earlier]) -> Reused:
         if src is not None:
             seeds[j] = src.seed
         elif seeds[j] in taken:
-            seeds[j] = int(_draw_seeds(rng, 1, taken | set(seeds))[0])
+            seeds[j] = int(draw_seeds(rng, 1, taken | set(seeds))[0])
         taken.add(seeds[j])
     # the rows to run keep the design's randomised order among themselves; reused rows come after
     order = [int(design.run_order[i]) for i in keep] + [0] * len(free)
@@ -231,7 +231,7 @@ def with_earlier(design: Design, earlier: Sequence[Earlier]) -> Reused:
         f"{len(free)} as further points of the fit); {len(drop)} centre run(s) not run again: reused "
         f"replicates bring {brought} pure-error degrees of freedom"]
     merged = replace(design, coded=rows_arr, point_type=types, run_order=run_order,
-                     replicate=_replicate_index(rows_arr), seed=np.array(seeds, dtype=np.int64),
+                     replicate=replicate_index(rows_arr), seed=np.array(seeds, dtype=np.int64),
                      block=np.array([1 if s is None else 0 for s in sources], dtype=np.int64) + 1,
                      notes=notes, aliases=None)
     return Reused(merged, sources)

@@ -153,7 +153,7 @@ class Design:
             coded[np.abs(coded - level) < 1e-9] = level
         types = [classify_point(row) for row in coded]
         n = len(types)
-        return cls(factors, coded, types, np.arange(1, n + 1), _replicate_index(coded),
+        return cls(factors, coded, types, np.arange(1, n + 1), replicate_index(coded),
                    seeds if seeds is not None else np.zeros(n, dtype=int), np.ones(n, dtype=int),
                    kind="runs as given")
 
@@ -173,7 +173,8 @@ def classify_point(coded_row, tol: float = 1e-6) -> str:
     return "other"
 
 
-def _replicate_index(coded: np.ndarray) -> np.ndarray:
+def replicate_index(coded: np.ndarray) -> np.ndarray:
+    """1-based count of each row among the rows at the same coded point (the replicate number)."""
     seen: dict[bytes, int] = {}
     out = []
     for row in np.round(coded, 9):
@@ -183,7 +184,8 @@ def _replicate_index(coded: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
-def _draw_seeds(rng: np.random.Generator, n: int, taken=()) -> np.ndarray:
+def draw_seeds(rng: np.random.Generator, n: int, taken=()) -> np.ndarray:
+    """``n`` distinct simulator seeds from ``rng``, none in ``taken`` (calibration.reuse keeps reused seeds)."""
     taken = set(int(s) for s in taken)
     out = []
     while len(out) < n:
@@ -267,8 +269,8 @@ def _finish(factors, core, *, center_runs, replicates, seed, randomize, generato
     rng = np.random.default_rng(seed)
     n = coded.shape[0]
     run_order = (rng.permutation(n) + 1) if randomize else np.arange(1, n + 1)
-    seeds = _draw_seeds(np.random.default_rng([seed, 1]), n)
-    return Design(factors, coded, types, run_order, _replicate_index(coded), seeds,
+    seeds = draw_seeds(np.random.default_rng([seed, 1]), n)
+    return Design(factors, coded, types, run_order, replicate_index(coded), seeds,
                   np.ones(n, dtype=int), generators, kind, int(seed))
 
 
@@ -303,11 +305,11 @@ def _append(design: Design, coded_new, types_new, kind, notes, salt: int) -> Des
     n_new = coded_new.shape[0]
     rng = np.random.default_rng([design.base_seed, salt, design.n_runs])
     order_new = design.run_order.max(initial=0) + rng.permutation(n_new) + 1
-    seeds_new = _draw_seeds(rng, n_new, design.seed)
+    seeds_new = draw_seeds(rng, n_new, design.seed)
     coded = np.vstack([design.coded, coded_new])
     return replace(design, coded=coded, point_type=design.point_type + list(types_new),
                    run_order=np.concatenate([design.run_order, order_new]),
-                   replicate=_replicate_index(coded), seed=np.concatenate([design.seed, seeds_new]),
+                   replicate=replicate_index(coded), seed=np.concatenate([design.seed, seeds_new]),
                    block=np.concatenate([design.block, np.full(n_new, design.block.max() + 1)]),
                    kind=kind, notes=design.notes + notes, aliases=None)
 
