@@ -165,13 +165,19 @@ def confirmation_lack_of_fit(config, design, modelled, optimum: dict, confirmati
     conf = cal.confirm(modelled, confirmation_records, confirmation_seeds)
     if not conf.mean:
         return None
+    return _localised(config, design, modelled, optimum, conf)[1].lack_of_fit.p_value
+
+
+def _localised(config, design, modelled, optimum: dict, conf):
+    """(residuals, localisation) of the confirmation ``conf`` at the optimum: the one noise model and the
+    one localisation every judgement of the batteries there uses."""
     theta = dict(optimum["parameters"])
     priors = [p.model_dump() for p in config.priors]
     res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty,
                            config.model_discrepancy)
     loc = localise(res, active_bounds=cal.active_bounds(design, theta), priors=cal.prior_rows(priors, theta),
                    reachability=optimum.get("reachability", []), seed=config.seed)
-    return loc.lack_of_fit.p_value
+    return res, loc
 
 
 def active_effects(iteration_parameters: dict) -> set[str]:
@@ -239,12 +245,7 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
     design, models = fit(design_dict, runs, targets)
     modelled = [m for m in models if m.fit is not None]
     conf = cal.confirm(modelled, list(confirmation_records), list(confirmation_seeds))
-    theta = dict(optimum["parameters"])
-    priors = [p.model_dump() for p in config.priors]
-    res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty,
-                                     config.model_discrepancy)
-    loc = localise(res, active_bounds=cal.active_bounds(design, theta), priors=cal.prior_rows(priors, theta),
-                   reachability=optimum.get("reachability", []), seed=config.seed)
+    res, loc = _localised(config, design, modelled, optimum, conf)
     table = candidates()
     signatures = []
     names = [n for n in dict.fromkeys(name for name, _, _ in planned) if n != BASELINE]

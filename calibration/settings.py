@@ -136,8 +136,8 @@ class LoopSettings(BaseModel):
     allow_extrapolation: bool = False
     diagnose: bool = Field(
         True, description="after a report that is not 'calibrated', run a baseline and each candidate effect at the "
-        "optimum, at as many seeds as the confirmation (seeds of their own), and rank the missing effects "
-        "(docs/diagnosis.md)",
+        "optimum, at one seed of their own and at more (up to the confirmation's number) where they buy power "
+        "(adaptive_replicates), and rank the missing effects (docs/diagnosis.md)",
     )
     diagnose_always: bool = Field(
         False, description="run the diagnosis after every report, also one that passes with nothing flagged: "
@@ -160,7 +160,9 @@ class LoopSettings(BaseModel):
         "confirmation batteries fall outside the response surfaces' prediction intervals (the report's "
         "surrogate_check), as the library loop does. Where the surfaces predict the optimum's batteries a "
         "polishing round buys little; where they miss (typically once an effect's strength is a fifth factor) "
-        "the surfaces' optimum is not the simulator's and an effect that fits can look as if it did not",
+        "the surfaces' optimum is not the simulator's and an effect that fits can look as if it did not; an "
+        "iteration with an added effect is polished too when it misses at the surfaces' optimum (a target out of "
+        "reach, a parameter at a bound, the lack of fit failing)",
     )
     adaptive_replicates: bool = Field(
         True, description="the diagnosis runs a baseline and each candidate at one seed first, and at the other "
