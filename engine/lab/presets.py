@@ -76,7 +76,7 @@ PRESETS = {
     # bucket stands on its wide rim. Lift 20 mm/s, not 5 mm/s: at 50 or 100 mm/s the column collapses
     # instead of draining through the gap under the rim, and the pile comes out flatter. docs/lab.md.
     "screening": Preset(FIDELITY_RIGS["screening"], _spheres("sphere", 0.020), Resolution(mode=AS_MEASURED), 40.0,
-                        aor_particles=_spheres("pyramid", 0.010), stop_after_reduced=True, dst_speed_by_stress=True),
+                        aor_particles=_spheres("pyramid", 0.010), stop_after_reduced=True),
 }
 THESIS = PRESETS["thesis"].setup("thesis")
 SCREENING = PRESETS["screening"].setup("screening")

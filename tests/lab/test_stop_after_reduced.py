@@ -91,7 +91,7 @@ def _inertial_number(speed_m_s, stress_pa, band_m=0.37, d_m=0.04, rho=2500.0):
 
 
 def test_dst_speed_by_stress_holds_the_lowest_loads_inertial_number():
-    ctx = RunContext.from_spec(JobSpec(test="battery", fidelity="screening"))
+    ctx = RunContext.from_spec(JobSpec(test="battery", fidelity="screening", options={"dst_speed_by_stress": True}))
     loads = ctx.dst_normal_stresses_pa
     lowest = min(loads)
     v = ctx.shear_speed_m_s
@@ -102,7 +102,9 @@ def test_dst_speed_by_stress_holds_the_lowest_loads_inertial_number():
     assert ctx.dst_speed_scale(max(loads)) == pytest.approx(math.sqrt(6760 / 1885))
 
 
-@pytest.mark.parametrize("fidelity, options", [("screening", {"dst_speed_by_stress": False}), ("thesis", {})])
+# off unless asked for: at 35 mm it changed what the loop concluded (docs/lab.md, "Fewer steps per battery")
+@pytest.mark.parametrize("fidelity, options", [("screening", {}), ("screening", {"dst_speed_by_stress": False}),
+                                               ("thesis", {})])
 def test_dst_speed_by_stress_off_is_one_speed(fidelity, options):
     ctx = RunContext.from_spec(JobSpec(test="battery", fidelity=fidelity, options=options))
     assert all(ctx.dst_speed_scale(s) == 1.0 for s in ctx.dst_normal_stresses_pa)
