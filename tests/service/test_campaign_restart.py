@@ -18,7 +18,10 @@ pytestmark = pytest.mark.postgres  # each database test runs on SQLite and on Po
 def test_restart_mid_campaign_completes_without_duplicate_jobs(db_url):
     settings = s2_settings(db_url)
     with running_app(settings) as (client, app):
-        cid = client.post(f"{API}/campaigns", json=campaign_body(thesis_material_id(client))).json()["id"]
+        # every phase at its fullest (polishing always, the diagnosis at every seed), so each is restarted through
+        body = campaign_body(thesis_material_id(client), polish_when="always", polish_jacobian="batteries",
+                             adaptive_replicates=False)
+        cid = client.post(f"{API}/campaigns", json=body).json()["id"]
         client.post(f"{API}/campaigns/{cid}/start")
         CampaignRunner(app.state.session_factory, settings).tick()
         assert drain(app, settings, max_jobs=5) == 5  # service "dies" with 6 batteries still queued
