@@ -69,7 +69,9 @@ from calibration.evaluator_registry import DEM, names as evaluator_names  # noqa
 from calibration.keys import ResponseKey, find_response, responses_of  # noqa: E402
 from calibration.stats import weighted_rms  # noqa: E402
 from calibration.testbed import measured_priors, measurement_sd  # noqa: E402
+from calibration.vocabulary import DiagnosisVerdict  # noqa: E402
 from engine.candidates import candidates  # noqa: E402
+from engine.lab.presets import FIDELITY_RIGS, PRESETS  # noqa: E402
 from engine.lab.spec import MicroParameters  # noqa: E402
 
 API = "/api/v1"
@@ -88,6 +90,7 @@ REDUCED_PARAMETERS = {"particle_radius_m": 0.035}
 MEASURING_SEEDS = (910001, 910002, 910003)
 # one effect tried, and when it is rejected the diagnosis's next candidate
 MAX_ITERATIONS = 3
+INDICATED, INCONCLUSIVE = DiagnosisVerdict.INDICATED.value, DiagnosisVerdict.INCONCLUSIVE.value
 TRUTH_FLOOR_FACTOR = 1.1  # issue 33: the RMS after adding an effect within 1.1 x the truth's own
 DENSITY_PRIOR_BIAS = 0.02
 PRIOR_STREAM = 20261124  # the priors' scatter: a stream of its own, so the measurements do not change
@@ -95,13 +98,25 @@ PRIOR_STREAM = 20261124  # the priors' scatter: a stream of its own, so the meas
 
 @dataclass
 class Scenario:
+    """One tier-B world. ``kind``: "weak" (session 11's strengths, lambda 4-17), "strong" (lambda >= 30 wanted,
+    issue 33: the RMS must also halve), "null" (nothing hidden, the calibrated model's own set-up) or
+    "other_null" (nothing hidden, but measured with an effect-free set-up the calibrated model does not have:
+    a model-form difference no candidate is, which must not be read as a missing effect)."""
     name: str
     effect: str | None              # candidate name hidden in the measuring world
     strength: float | None = None   # None: a switch-type effect at its matched strength
     noise_seed: int = 0
-    truth: dict[str, Any] = field(default_factory=dict)
+    kind: str = "weak"
+    # the measuring world's set-up where it differs from the calibrated model's: micro parameters no factor
+    # calibrates (setup_parameters) or the whole job's rig and particles at resolution "as_measured" (setup_job)
+    setup_parameters: dict[str, Any] = field(default_factory=dict)
+    setup_job: dict[str, Any] = field(default_factory=dict)
+    # the battery's options where the scenario measures other conditions (merged over OPTIONS)
+    options: dict[str, Any] = field(default_factory=dict)
+    description: str = ""
 
     def parameters(self) -> dict[str, Any]:
+        """The micro parameters the measuring world and the calibration share (the truth of the factors)."""
         from calibration import parameters as factor_paths
 
         truth = dict(TRUTH)
@@ -113,13 +128,65 @@ class Scenario:
             strength = float(c.reference(MicroParameters.model_validate(truth)))
         return factor_paths.apply(truth, {c.factor: strength})
 
+    def measuring_job(self, seed: int, evaluator: str, options: dict, reduced: bool) -> dict[str, Any]:
+        """The job that measures this world at one seed (without its idempotency key)."""
+        parameters = {**self.parameters(), **self.setup_parameters, **(REDUCED_PARAMETERS if reduced else {})}
+        job = {"test": "battery", "seed": seed, "evaluator": evaluator, "parameters": parameters,
+               "options": {**options, **self.options}}
+        if self.setup_job:
+            if reduced:
+                raise SystemExit(f"{self.name}: its own set-up runs at the screening size only (not --reduced)")
+            job.update(self.setup_job)
+            job["options"] = {**job["options"], **SCREENING_RUN_OPTIONS}
+        else:
+            job["fidelity"] = "screening"
+        return job
+
+
+def _digest(job: dict[str, Any]) -> str:
+    """What a measuring job measures, as a short digest (its seed apart): parameters and options, and the
+    set-up where the scenario has its own (so the weak scenarios keep the keys of their earlier runs)."""
+    what = [job["parameters"], job["options"]] + ([{k: job[k] for k in ("resolution", "rig", "particles")}]
+                                                  if "rig" in job else [])
+    return hashlib.sha256(json.dumps(what, sort_keys=True).encode()).hexdigest()[:12]
+
+
+def _appendix_a(size: dict[str, Any]) -> dict[str, Any]:
+    """Appendix A's rig, spheres of the given size distribution, built as measured."""
+    from engine.lab.rigs import bundled_rig, rig_json
+
+    return {"resolution": "as_measured", "rig": rig_json(bundled_rig(FIDELITY_RIGS["screening"])),
+            "particles": {"size": size, "shapes": [{"shape": "sphere", "volume_fraction": 1.0}]}}
+
+
+# what the screening preset adds to its rig and particles (engine.lab.presets), so that a world built from
+# the same rig "as measured" differs from the preset only where the scenario says
+SCREENING_RUN_OPTIONS = {"speed_factor": PRESETS["screening"].default_speed_factor,
+                         "stop_after_reduced": PRESETS["screening"].stop_after_reduced}
 
 SCENARIOS = {
     "rolling": Scenario("rolling", "rolling_epsd2", 0.15, 1),
     "cohesion": Scenario("cohesion", "cohesion_adhesive", 80.0, 2),
     "hertz": Scenario("hertz", "hertz_mindlin", None, 3),
     "shape": Scenario("shape", "particle_shape", 1.5, 4),
-    "null": Scenario("null", None, None, 5),
+    "null": Scenario("null", None, None, 5, kind="null"),
+    # issue 33 item 2: the strong effects a real user brings
+    "rolling_strong": Scenario("rolling_strong", "rolling_epsd2", 0.3, 6, kind="strong"),
+    "shape_strong": Scenario("shape_strong", "particle_shape", 1.8, 7, kind="strong"),
+    # Gamma 180 J/m2: sigma_t ~ 1.5 F_c / d^2 with F_c = 3/2 pi R* Gamma is about 9 kPa on the 40 mm spheres
+    # (engine/effects/cohesion_adhesive.py), inside the candidate's plausible 20-200 J/m2
+    "cohesion_strong": Scenario("cohesion_strong", "cohesion_adhesive", 180.0, 8, kind="strong"),
+    # E' measured from 3 to 60 kPa: a Hertzian E' ~ sigma^(1/3) moves by 2.7x over that range, a linear one
+    # hardly at all, so the slope the CCT windows see is what separates them
+    "hertz_strong": Scenario("hertz_strong", "hertz_mindlin", None, 9, kind="strong",
+                             options={"cct_window_stresses_pa": [3.0e3, 10.0e3, 30.0e3, 60.0e3]}),
+    # issue 33: DEM nulls measured with an effect-free set-up unlike the calibrated model's
+    "null_spread": Scenario("null_spread", None, None, 10, kind="other_null",
+                            setup_job=_appendix_a({"form": "uniform", "radius_min_m": 0.019, "radius_max_m": 0.021}),
+                            description="radii uniform in 19-21 mm (LIGGGHTS's set-up) against mono-sized 20 mm"),
+    "null_damping": Scenario("null_damping", None, None, 11, kind="other_null", setup_parameters={"damping_ratio": 0.5},
+                             description="contact damping ratio 0.5 against the model's 0.8 (another code's "
+                                         "damping convention)"),
 }
 
 
@@ -205,14 +272,11 @@ def measure(svc: Service, sc: Scenario, evaluator: str, poll_s: float,
     ``options``: the battery's loads and E' windows (default OPTIONS); the campaigns calibrate on
     the conditions measured."""
     options = OPTIONS if options is None else options
-    truth = {**sc.parameters(), **(REDUCED_PARAMETERS if reduced else {})}
+    jobs = [sc.measuring_job(seed, evaluator, options, reduced) for seed in MEASURING_SEEDS]
     # the key names what is measured, so a rerun against the same service reuses exactly those jobs
-    digest = hashlib.sha256(json.dumps([truth, options], sort_keys=True).encode()).hexdigest()[:12]
-    ids = [svc.call("POST", "/jobs", json={"test": "battery", "fidelity": "screening", "seed": seed,
-                                           "evaluator": evaluator, "parameters": truth,
-                                           "options": options,
-                                           "idempotency_key": f"tierb:{sc.name}:{evaluator}:{digest}:{seed}"})["id"]
-           for seed in MEASURING_SEEDS]
+    digest = _digest(jobs[0])
+    ids = [svc.call("POST", "/jobs", json={**job, "idempotency_key": f"tierb:{sc.name}:{evaluator}:{digest}:{job['seed']}"})["id"]
+           for job in jobs]
     results = _wait_jobs(svc, ids, poll_s)
     rng = np.random.default_rng([sc.noise_seed, 20261123])
     by_key: dict[str, list[dict]] = {}
@@ -296,12 +360,17 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
     p = first["adequacy_p"] if first.get("adequacy_p") is not None else first["lack_of_fit_p"]
     out["lof_rejects"] = p is not None and p < 0.05
     out["p_omnibus"], out["p_directed"] = first["lack_of_fit_p"], first.get("directed_p")
-    try:
-        diagnosis = svc.call("GET", f"/campaigns/{cid}/diagnosis", params={"number": 1})
-        out["ranking"] = [r["effect"] for r in diagnosis["ranking"]]
-        out["alias_groups"] = [g["effects"] for g in diagnosis.get("alias_groups", [])]
-    except SystemExit:
-        pass  # no diagnosis ran (the lack of fit passed)
+    out["kind"] = sc.kind
+    out["diagnosis_verdicts"] = []
+    for h in history:  # the diagnosis of each iteration that ran one (none where the lack of fit passed)
+        response = svc.client.get(f"/campaigns/{cid}/diagnosis", params={"number": h["number"]})
+        if response.status_code != 200:
+            continue
+        diagnosis = response.json()
+        out["diagnosis_verdicts"].append(diagnosis.get("verdict"))
+        if h["number"] == 1:
+            out["ranking"] = [r["effect"] for r in diagnosis["ranking"]]
+            out["alias_groups"] = [g["effects"] for g in diagnosis.get("alias_groups", [])]
     if sc.effect in out["ranking"]:
         out["rank"] = out["ranking"].index(sc.effect) + 1
     later = history[1:]
@@ -353,12 +422,10 @@ def truth_floor(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: fl
     weighted error falls by at least half" can expect to see in this scenario."""
     report = svc.call("GET", f"/campaigns/{cid}/iterations/1")["report"]
     seeds = report["confirmation_seeds"]
-    truth = {**sc.parameters(), **(REDUCED_PARAMETERS if reduced else {})}
-    digest = hashlib.sha256(json.dumps([truth, options], sort_keys=True).encode()).hexdigest()[:12]
-    ids = [svc.call("POST", "/jobs", json={"test": "battery", "fidelity": "screening", "seed": seed,
-                                           "evaluator": evaluator, "parameters": truth, "options": options,
-                                           "idempotency_key": f"tierb-truth:{sc.name}:{evaluator}:{digest}:{seed}"})["id"]
-           for seed in seeds]
+    jobs = [sc.measuring_job(seed, evaluator, options, reduced) for seed in seeds]
+    digest = _digest(jobs[0])
+    ids = [svc.call("POST", "/jobs", json={**job, "idempotency_key": f"tierb-truth:{sc.name}:{evaluator}:{digest}:{job['seed']}"})["id"]
+           for job in jobs]
     runs = [responses_of(result) for result in _wait_jobs(svc, ids, poll_s)]
     standardised = []
     for row in report["targets"]:
@@ -443,18 +510,44 @@ def _rolling_shape_alias(o: dict) -> bool:
     return pair == ROLLING_SHAPE and any(pair <= set(g) for g in o.get("alias_groups") or [])
 
 
+def _kind(o: dict) -> str:
+    """Rows written before the strong scenarios carry no kind: an effect was a weak one, no effect the null."""
+    return o.get("kind") or ("weak" if o["effect"] else "null")
+
+
+def false_alarm(o: dict) -> bool:
+    """A null that ends with an effect kept, or whose last diagnosis says "effect indicated"."""
+    return bool(o.get("added")) or bool(o.get("diagnosis_verdicts") and o["diagnosis_verdicts"][-1] == INDICATED)
+
+
+def weak_end_right(o: dict) -> bool:
+    """Issue 33: a weak scenario ends with its true effect added or with "inconclusive", never a wrong effect kept."""
+    if o.get("added"):
+        return o["added"] == o["effect"]
+    return "inconclusive" in (o.get("stop_reason") or "") or bool(
+        o.get("diagnosis_verdicts") and o["diagnosis_verdicts"][-1] == INCONCLUSIVE)
+
+
 def criteria(outs: list[dict]) -> dict[str, Any]:
     """The issue's pass criteria over the scenarios that ran."""
     effects = [o for o in outs if o["effect"]]
     null = [o for o in outs if not o["effect"]]
+    weak = [o for o in effects if _kind(o) == "weak"]
+    strong = [o for o in effects if _kind(o) == "strong"]
     res: dict[str, Any] = {}
     res["lof_rejects_effects"] = sum(bool(o["lof_rejects"]) for o in effects)
+    res["lof_rejects_weak"] = sum(bool(o["lof_rejects"]) for o in weak)
+    res["lof_rejects_strong"] = sum(bool(o["lof_rejects"]) for o in strong)
     res["lof_rejects_null"] = sum(bool(o["lof_rejects"]) for o in null)
     res["true_first"] = sum(o["rank"] == 1 or _rolling_shape_alias(o) for o in effects)
     res["true_top2"] = sum(o["rank"] is not None and o["rank"] <= 2 for o in effects)
-    res["error_halved_chi2_le_2"] = sum(o.get("rms_ratio") is not None and o["rms_ratio"] <= 0.5
-                                        and o["chi2_per_dof_after"] is not None and o["chi2_per_dof_after"] <= 2.0
-                                        for o in effects)
+    halved = lambda o: (o.get("rms_ratio") is not None and o["rms_ratio"] <= 0.5  # noqa: E731
+                        and o["chi2_per_dof_after"] is not None and o["chi2_per_dof_after"] <= 2.0)
+    res["error_halved_chi2_le_2"] = sum(halved(o) for o in effects)
+    res["strong_halved"] = sum(halved(o) for o in strong)
+    res["weak_end_right"] = sum(weak_end_right(o) for o in weak)
+    res["null_false_alarms"] = sum(false_alarm(o) for o in null)
+    res["other_null_false_alarms"] = sum(false_alarm(o) for o in null if _kind(o) == "other_null")
     # issue 33's criterion: after an effect was added, the weighted RMS within 1.1 x the truth's own at the
     # same seeds (--truth-floor), with chi2/dof <= 2; rows without the truth floor are not counted
     floored = [o for o in outs if o.get("added") and o.get("rms_truth") is not None]
@@ -462,6 +555,8 @@ def criteria(outs: list[dict]) -> dict[str, Any]:
                                     and o["chi2_per_dof_after"] is not None and o["chi2_per_dof_after"] <= 2.0
                                     for o in floored)
     res["n_truth_floor"] = len(floored)
+    res["n_weak"], res["n_strong"] = len(weak), len(strong)
+    res["n_other_null"] = sum(_kind(o) == "other_null" for o in null)
     dens = [o for o in effects if o["effect"] in ("rolling_epsd2", "particle_shape")]
     res["density_within_5pc"] = sum(o["density_error"] is not None and abs(o["density_error"]) <= 0.05 for o in dens)
     res["n_effects"], res["n_null"], res["n_density"] = len(effects), len(null), len(dens)
@@ -613,7 +708,7 @@ def main(argv=None) -> int:
 
 
 def _print_row(o: dict) -> None:
-    print(f"{o['scenario']:<9} hidden={o['effect'] or '-':<18} lof={'rejects' if o['lof_rejects'] else 'passes'} "
+    print(f"{o['scenario']:<15} {_kind(o):<10} hidden={o['effect'] or '-':<18} lof={'rejects' if o['lof_rejects'] else 'passes'} "
           f"(omnibus p {_f(o['p_omnibus'])}, directed p {_f(o['p_directed'])}) "
           f"ranking={o['ranking'][:3]} rank={o['rank']} tried={o['tried']} added={o['added']} "
           f"rms={_rms(o)} chi2_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
@@ -669,8 +764,9 @@ def _detectability(o: dict) -> float | None:
 
 def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
     res = criteria(outs)
-    print(f"lack of fit rejects: {res['lof_rejects_effects']}/{res['n_effects']} effect scenarios "
-          f"(target all), {res['lof_rejects_null']}/{res['n_null']} null (target none)")
+    print(f"lack of fit rejects: {res['lof_rejects_weak']}/{res['n_weak']} weak effect scenarios (target >= 3 of 4), "
+          f"{res['lof_rejects_strong']}/{res['n_strong']} strong (target all), "
+          f"{res['lof_rejects_null']}/{res['n_null']} nulls (target none)")
     print(f"true effect first: {res['true_first']}/{res['n_effects']} (target >= 3 of 4); "
           f"top two: {res['true_top2']}/{res['n_effects']} (target all)")
     print(f"weighted RMS error halved with chi2/dof <= 2 after adding: {res['error_halved_chi2_le_2']}/{res['n_effects']} "
@@ -687,6 +783,15 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
     if floors:
         print("  the truth's own weighted RMS over the RMS before, about the smallest ratio a calibration of the "
               "right model can be expected to reach (--truth-floor): " + ", ".join(floors))
+    if res["n_strong"]:
+        print(f"strong scenarios (lambda >= 30 wanted): weighted RMS halved with chi2/dof <= 2: "
+              f"{res['strong_halved']}/{res['n_strong']} (target all)")
+    if res["n_weak"]:
+        print(f"weak scenarios ending with the true effect added or 'inconclusive' (never a wrong effect kept): "
+              f"{res['weak_end_right']}/{res['n_weak']} (target all)")
+    if res["n_null"]:
+        print(f"nulls ending with an effect kept or 'effect indicated': {res['null_false_alarms']}/{res['n_null']} "
+              f"(target none; {res['other_null_false_alarms']}/{res['n_other_null']} of another set-up)")
     if res["n_truth_floor"]:
         print(f"weighted RMS after adding within {TRUTH_FLOOR_FACTOR} x the truth's own, chi2/dof <= 2: "
               f"{res['within_truth_floor']}/{res['n_truth_floor']} (target all)")
