@@ -5,6 +5,12 @@ rolling resistance (EPSD2, mu_r 0.15), cohesion (the adhesive contact, Gamma 80 
 bulk cohesion on 20 mm spheres), Hertz-Mindlin (the Young's modulus matched to kp at 30 kPa, so E'
 at mid stress is about the same) and elongated clumps (aspect ratio 1.5); the fifth hides none.
 
+Issue 33 adds six beside them (``--scenarios``): four strong effects, chosen so that the detectability
+lambda is 30 or more and the weighted RMS must halve (rolling 0.3, elongation 1.8, adhesion of about 9 kPa
+bulk cohesion, Hertz-Mindlin measured with E' windows from 3 to 60 kPa), and two nulls measured with an
+effect-free set-up unlike the calibrated model's (radii uniform in 19-21 mm; damping ratio 0.5), which must
+not end with an effect kept or "effect indicated". ``Scenario.kind`` says which criteria a row counts in.
+
 The measurements are batteries run by the service's own workers with the effect on, at three
 seeds the calibration never uses, plus laboratory scatter (calibration.testbed.MEASUREMENT_SD). The
 directly measured parameters are tier A's (calibration.testbed.measured_priors: particle-wall and
