@@ -65,16 +65,30 @@ class LoopResult:
 
 
 class CalibrationLoop:
-    """``settings``: ``LoopSettings`` or its JSON dict; ``targets``: the measurements."""
+    """``settings``: ``LoopSettings`` or its JSON dict; ``targets``: the measurements.
+
+    ``measured_rig`` and ``measured_particles`` (``engine.lab.rigs.Rig``, ``engine.particles.description.Particles``,
+    or their JSON): the apparatus the measurements were made in and the material's particles. Given, the targets
+    the runs cannot be compared with (a bulk mass measured in another rig, a per-particle quantity at a coarse
+    resolution) are left out with the reason (``left_out_targets``, in every report too), as a campaign does."""
 
     def __init__(self, targets: Sequence[Measured], evaluator: BatchEvaluator,
                  settings: LoopSettings | Mapping[str, Any], *, state: LoopState | None = None,
-                 evaluator_name: str | None = None):
-        self.targets = [t if isinstance(t, Measured) else Measured.from_record(t) for t in targets]
+                 evaluator_name: str | None = None, measured_rig=None, measured_particles=None):
+        from .comparable import in_world, split
+
+        measured = [t if isinstance(t, Measured) else Measured.from_record(t) for t in targets]
         self.evaluator = evaluator
         self.evaluator_name = evaluator_name
-        raw = settings.model_dump(mode="json") if isinstance(settings, LoopSettings) else dict(settings)
-        self.state = state or LoopState(settings=LoopSettings.model_validate(raw).model_dump(mode="json"))
+        rig, particles = _world(measured_rig, measured_particles)
+        loop_settings = in_world(settings if isinstance(settings, LoopSettings) else LoopSettings.model_validate(dict(settings)),
+                                 rig, particles)
+        self.state = state or LoopState(settings=loop_settings.model_dump(mode="json"))
+        self.targets, self.left_out_targets = split(measured, rig, particles,
+                                                    LoopSettings.model_validate(self.state.settings))
+        if not self.targets and self.left_out_targets:
+            raise ValueError("no target can be compared with what the runs simulate: " + "; ".join(
+                f"{t['test']}/{t['quantity']}: {t['reason']}" for t in self.left_out_targets))
 
     @classmethod
     def on_backend(cls, targets: Sequence[Measured], backend: str, settings: LoopSettings | Mapping[str, Any],
@@ -82,11 +96,13 @@ class CalibrationLoop:
         """The loop on a registered backend (``calibration.evaluator_registry``: "dem", "analytic") in this
         process, its batteries run as a campaign's jobs would be: the settings' test and fidelity, and the
         options that make them compute every target's condition (``conditions.battery_options``)."""
+        from .comparable import in_world
         from .conditions import battery_options
         from .evaluator_registry import get
 
         loop_settings = settings if isinstance(settings, LoopSettings) else LoopSettings.model_validate(settings)
         measured = [t if isinstance(t, Measured) else Measured.from_record(t) for t in targets]
+        loop_settings = in_world(loop_settings, *_world(kwargs.get("measured_rig"), kwargs.get("measured_particles")))
         evaluator = get(backend).batch(fidelity=loop_settings.fidelity, test=loop_settings.test,
                                        options=battery_options([t.key for t in measured], loop_settings.options),
                                        lab=loop_settings.lab())
@@ -141,7 +157,8 @@ class CalibrationLoop:
     # -- applying the machine's decisions -----------------------------------------------------
     def _context(self) -> machine.Context:
         settings = LoopSettings.model_validate(self.state.settings)
-        return machine.Context(settings, self.state.settings, self.targets, self.state.iterations, validated)
+        return machine.Context(settings, self.state.settings, self.targets, self.state.iterations, validated,
+                               self.left_out_targets)
 
     def _new_iteration(self) -> None:
         settings = LoopSettings.model_validate(self.state.settings)
@@ -163,3 +180,13 @@ class CalibrationLoop:
             self.state.settings = {**self.state.settings, **t.next_settings}
         if t.complete:
             self.state.complete = True
+
+
+def _world(rig, particles):
+    """The measurements' rig and particles as the engine's models (JSON accepted), None where not given."""
+    from engine.lab.rigs import Rig
+    from engine.particles.description import Particles
+
+    return (None if rig is None else rig if isinstance(rig, Rig) else Rig.model_validate(rig),
+            None if particles is None else particles if isinstance(particles, Particles)
+            else Particles.model_validate(particles))

@@ -87,6 +87,8 @@ class Context:
     targets: Sequence[Measured]
     iterations: Sequence[Any]
     validate: Callable[[dict], dict]
+    # the measurements left out of the targets, with the reason (calibration.comparable.split): every report names them
+    left_out: Sequence[dict[str, Any]] = ()
 
 
 def records(runs) -> list[list[dict]]:
@@ -230,6 +232,7 @@ def _report(ctx: Context, it) -> Transition:
     report = build_report(s, it.models, it.optimum, confirmations, ctx.targets, assessment,
                           suspect.reach(r.responses for r in it.runs if r.kind != RunKind.DIAGNOSIS))
     report["polish"] = polished
+    report["left_out_targets"] = [dict(t) for t in ctx.left_out]
     first = confirmations[0]
     stored = {"job_id": first.job_id, "seed": first.seed, "parameters": first.natural,
               "responses": first.responses, "job_ids": [r.job_id for r in confirmations], "seeds": seeds}

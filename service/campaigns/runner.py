@@ -83,8 +83,10 @@ class CampaignRunner:
             progressed, done = self._run_all(session, campaign, config, awaited)
             if not done:
                 return progressed
-        targets = self._targets(session, campaign, config)
-        context = machine.Context(config, campaign.config, targets, campaign.iterations, self._validate)
+        from service.campaigns.store import split_targets
+
+        targets, left_out = split_targets(session, config)
+        context = machine.Context(config, campaign.config, targets, campaign.iterations, self._validate, left_out)
         transition = machine.step(context, it)
         return transition is not None and self._apply(session, campaign, it, transition)
 
@@ -123,11 +125,6 @@ class CampaignRunner:
                                     reused_from=new.reused_from,
                                     status=(RunStatus.SUCCEEDED if reused else RunStatus.PENDING).value))
         values = dict(t.values)
-        if isinstance(values.get("report"), dict):  # the targets left out at this rig and resolution, named
-            from service.campaigns.store import split_targets
-
-            config = CampaignCreate.model_validate(campaign.config)
-            values["report"] = {**values["report"], "left_out_targets": split_targets(session, config)[1]}
         if t.finished:
             values["finished_at"] = utcnow()
         if t.next_settings is not None:

@@ -47,12 +47,12 @@ def campaign_targets(session: Session, config: CampaignCreate) -> list[Measured]
 
 
 def split_targets(session: Session, config: CampaignCreate) -> tuple[list[Measured], list[dict[str, Any]]]:
-    """The campaign's targets, and those left out with the reason: a quantity the apparatus sets (a bulk mass)
-    measured in a rig other than the one the runs simulate, or one that scales with the particles' size (a
-    particle count) at a resolution that changes them (``engine.lab.resolution.incomparable``). Never compared
-    silently: the campaign's summary and every report name them."""
-    from engine.lab.registry import get as get_test
-    from engine.lab.resolution import incomparable
+    """The campaign's targets, and those left out with the reason (``calibration.comparable.split``: a quantity
+    the apparatus sets measured in another rig than the runs simulate, or one that scales with the particles'
+    size at a resolution that changes them). Never compared silently: the campaign's summary and every report
+    name them."""
+    from calibration.comparable import split
+    from engine.lab.errors import SpecFieldError
 
     material = get_material(session, config.material_id)
     wanted = [t.model_dump() for t in config.targets] if config.targets is not None else None
@@ -60,17 +60,10 @@ def split_targets(session: Session, config: CampaignCreate) -> tuple[list[Measur
     measured_rig, measured_particles = material_world(material)
     if measured_rig is None and measured_particles is None:
         return chosen, []
-    setup = simulated_setup(config)
-    kept, left_out = [], []
-    for target in chosen:
-        why = incomparable(get_test(target.key.test).quantity(target.key.quantity), measured_rig,
-                           measured_particles, setup)
-        if why is None:
-            kept.append(target)
-        else:
-            left_out.append({"test": target.key.test, "quantity": target.key.quantity,
-                             "condition": target.key.condition_dict, "reason": why})
-    return kept, left_out
+    try:
+        return split(chosen, measured_rig, measured_particles, config)
+    except SpecFieldError as exc:  # e.g. a coarse factor that makes the particles larger than the lab takes
+        raise Invalid(exc.message, exc.field) from None
 
 
 def material_world(material) -> tuple[Any, Any]:
@@ -86,15 +79,14 @@ def material_world(material) -> tuple[Any, Any]:
 
 
 def simulated_setup(config: CampaignCreate):
-    """The lab set-up the campaign's runs are built in (at the centre of its factor box: the rig and particles
-    are the same at every run but for a varied screening radius)."""
-    from calibration.conditions import run_spec
+    """The lab set-up the campaign's runs are built in (``calibration.comparable.simulated_setup``), a refusal
+    as a 422 naming the field."""
+    from calibration.comparable import simulated_setup as setup
     from engine.lab.errors import SpecFieldError
-    from engine.lab.resolution import setup_for
 
     try:
-        return setup_for(run_spec(config, {f.name: 0.5 * (f.low + f.high) for f in config.factors}, 0))
-    except SpecFieldError as exc:  # e.g. a coarse factor that makes the particles larger than the lab takes
+        return setup(config)
+    except SpecFieldError as exc:
         raise Invalid(exc.message, exc.field) from None
 
 
