@@ -103,7 +103,8 @@ def iteration_parameters(settings: LoopSettings, evaluator: str | None = None) -
     return {"factors": [f.model_dump() for f in settings.factors],
             "fixed": {k: v for k, v in fixed.items() if k != "effects"},
             "effects": fixed.get("effects", {}), "options": dict(settings.options),
-            "evaluator": evaluator, "fidelity": settings.fidelity}
+            "evaluator": evaluator, "fidelity": settings.fidelity,
+            "setup_key": reuse.setup_key(settings, evaluator)}
 
 
 def step(ctx: Context, it) -> Transition | None:
@@ -129,7 +130,8 @@ def _design(ctx: Context, it) -> Transition:
         raise LoopFailed(f"iteration {it.number}: the design cannot be built: {exc.message}") from exc
     sources = [None] * design.n_runs
     if s.reuse and it.number > 1:
-        merged = reuse.with_earlier(design, reuse.earlier_runs(ctx.iterations, it.number, s.fixed_parameters, s.factors))
+        merged = reuse.with_earlier(design, reuse.earlier_runs(ctx.iterations, it.number, s.fixed_parameters, s.factors,
+                                                               it.parameters))
         design, sources = merged.design, merged.sources
     view = design_view(design)
     for row, source in zip(view["runs"], sources):

@@ -16,6 +16,9 @@ those its own model can express:
   battery, with its seed and responses, becomes that row (an added effect's "off" face is the previous
   design: ``calibration.adding`` keeps the previous generators so the faces coincide, as a foldover builds
   on a fraction).
+* **The same set-up.** A battery counts only where it ran what the iteration runs: the same test, preset or
+  resolution with its rig and particles, battery options and evaluator (``setup_key``). An iteration that
+  changes the options (other loads) or the resolution starts from its own batteries.
 * **Every other battery informs the fit.** The rest (centre runs of the face, confirmation, polishing and
   diagnosis batteries) are appended as rows of type "other": the response surfaces are fitted on them too.
 * **Pure error from true replicates only.** Replicates are batteries at one point with different seeds,
@@ -133,15 +136,42 @@ def _fixed_of(parameters: dict[str, Any]) -> dict[str, Any]:
     return fixed
 
 
-def earlier_runs(iterations: Iterable, number: int, fixed: dict[str, Any], factors: Sequence) -> list[Earlier]:
+def setup_key(settings, evaluator: str | None) -> str:
+    """What a battery ran besides its micro parameters, as one digest: the test, the preset or the resolution
+    with its rig and particles, the battery options and the evaluator (``machine.iteration_parameters`` keeps
+    it per iteration)."""
+    import hashlib
+
+    what = {"test": settings.test, "lab": {k: (v.model_dump(mode="json") if hasattr(v, "model_dump") else v)
+                                           for k, v in settings.lab().items()},
+            "options": settings.options, "evaluator": evaluator}
+    return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def same_setup(earlier: dict[str, Any], current: dict[str, Any] | None) -> bool:
+    """Did an earlier iteration (its stored parameters) run in the current one's set-up? Compared on the
+    ``setup_key`` both carry; an iteration stored before the key existed could not change its rig or resolution,
+    so there its options, preset and evaluator are compared."""
+    if current is None:
+        return True
+    if earlier.get("setup_key") and current.get("setup_key"):
+        return earlier["setup_key"] == current["setup_key"]
+    return all(earlier.get(k) == current.get(k) for k in ("options", "fidelity", "evaluator"))
+
+
+def earlier_runs(iterations: Iterable, number: int, fixed: dict[str, Any], factors: Sequence,
+                 current: dict[str, Any] | None = None) -> list[Earlier]:
     """Every evaluated battery of iterations before ``number`` that is a point of the model (``fixed``,
-    ``factors``) inside its box, each battery once (a battery reused by iteration 2 is iteration 1's)."""
+    ``factors``) inside its box and ran in the set-up of ``current`` (the iteration's stored parameters,
+    ``same_setup``), each battery once (a battery reused by iteration 2 is iteration 1's)."""
     from doe.factors import as_factors
 
     box = as_factors([{"name": f.name, "low": f.low, "high": f.high, "unit": f.unit, "log": f.log} for f in factors])
     out: list[Earlier] = []
     seen: set[tuple[int, str]] = set()
     for it in sorted((i for i in iterations if i.number < number), key=lambda i: i.number):
+        if not same_setup(it.parameters or {}, current):
+            continue
         its_fixed = _fixed_of(it.parameters or {})
         for run in sorted(it.runs, key=lambda r: (str(r.kind), r.std_order)):
             if run.responses is None or getattr(run, "reused_from", None):

@@ -255,6 +255,9 @@ def campaign_next(args) -> int:
         body["proposed_design"] = True
     if args.override:
         body["override"] = True
+    resolution = resolution_body(args)
+    if resolution is not None:
+        body["resolution"] = resolution
     total = _call(args, "GET", f"/campaigns/{args.id}/iterations", params={"limit": 1})["total"]
     last = (_call(args, "GET", f"/campaigns/{args.id}/iterations", params={"limit": 1, "offset": total - 1})["items"][0]
             if total else None)
@@ -449,6 +452,7 @@ def register(subparsers) -> None:
                      help="add the effect although the last diagnosis found no physical match or a suspect measurement")
     nxt.add_argument("--proposed-design", action="store_true",
                      help="run the design the surface check proposed (narrowed factorial or axial runs)")
+    resolution_options(nxt)  # e.g. a coarse factor nearer 1, or as_measured to confirm at the particles' own size
     cli_export.register_campaign(csub)
 
     schedule = subparsers.add_parser("schedule", help="cron schedules that start campaigns")

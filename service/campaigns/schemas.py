@@ -13,6 +13,7 @@ from calibration.evaluator_registry import DEFAULT, EvaluatorName
 from calibration.settings import _FINITE, DesignIn, DesignPreviewIn, FactorIn, LoopSettings, PriorIn  # noqa: F401
 from engine.lab.bounds import ID_MAX, CONDITION_BOUNDS
 from engine.lab.registry import known_quantity, known_test
+from engine.lab.resolution import ResolutionIn
 from engine.lab.spec import STRICT_PAIR, MicroParameters, MicroParametersDict, TestOptions, TestOptionsDict, WholeNumber
 from engine.lab.units import UnitError, condition_si_unit
 
@@ -94,6 +95,10 @@ class IterationIn(BaseModel):
     design: DesignIn | None = None
     targets: list[TargetIn] | None = Field(None, max_length=1000)
     options: TestOptionsDict | None = None
+    resolution: ResolutionIn | None = Field(
+        None, description="the next iteration's resolution (e.g. a coarse factor nearer 1, or 'as_measured' to confirm "
+        "at the particles' own size): at a material resolution the runs are built in the material's rig with its "
+        "particles; batteries of another resolution are not reused")
     add_effect: str | None = Field(
         None, max_length=64, description="a diagnosis candidate (GET /api/v1/effects) whose strength becomes one more design "
         "factor, keeping the previous factors: from 'off' over its plausible range, or to twice the last "

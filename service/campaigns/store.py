@@ -219,6 +219,11 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
             config = with_proposed_design(config, max(campaign.iterations, key=lambda it: it.number, default=None))
         except SettingsError as exc:
             raise from_settings_error(exc) from exc
+    if "resolution" in changed:
+        # the rig and particles follow the resolution: a preset brings its own, a material resolution copies the
+        # material's again (with_material_world below), so a campaign never runs one resolution in another's rig
+        config.pop("rig", None)
+        config.pop("particles", None)
     for key, value in changed.items():
         config[key] = value
     if add_effect is not None:
@@ -231,11 +236,13 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
         except SettingsError as exc:
             raise from_settings_error(exc) from exc
     validated = CampaignCreate.model_validate(config)  # 422 naming the field if inconsistent
+    validated = with_material_world(session, validated)
     check_targets_simulated(session, validated)  # new targets or test: still something to compare
     check_limits_with_targets(session, validated)
     config = validated.model_dump(mode="json")
     won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == CampaignStatus.COMPLETED)
-                          .values(config=config, status=CampaignStatus.RUNNING, finished_at=None, updated_at=utcnow())
+                          .values(config=config, status=CampaignStatus.RUNNING, finished_at=None, updated_at=utcnow(),
+                                  fidelity=label(validated.resolution, validated.fidelity))
                           .execution_options(synchronize_session=False)).rowcount
     session.commit()
     if not won:

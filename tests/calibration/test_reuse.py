@@ -110,3 +110,25 @@ def test_centre_runs_run_only_the_pure_error_the_reused_replicates_do_not_bring(
     merged = reuse.with_earlier(design, earlier)
     centres = [i for i, s in enumerate(merged.sources) if s is None and merged.design.point_type[i] == "center"]
     assert len(centres) == expected
+
+
+def test_batteries_of_another_set_up_are_never_reused():
+    """Other loads (battery options), another resolution or another evaluator: the earlier batteries measured
+    something else, so an iteration that changes its set-up starts from its own batteries."""
+    from calibration.machine import iteration_parameters
+    from calibration.settings import LoopSettings
+
+    base = {"factors": [f.model_dump() for f in FOUR], "design": {"type": "fractional", "generators": ["D=ABC"]}}
+    settings = LoopSettings.model_validate(base)
+    first, _ = _iteration(1, FOUR, settings.design, seed=5)
+    first.parameters = iteration_parameters(settings, "dem")
+    assert len(reuse.earlier_runs([first], 2, {}, FOUR, iteration_parameters(settings, "dem"))) == 11
+    for changed, evaluator in [({"options": {"dst_normal_stresses_pa": [20e3, 40e3]}}, "dem"),
+                               ({"resolution": "thesis"}, "dem"), ({}, "analytic")]:
+        other = iteration_parameters(LoopSettings.model_validate({**base, **changed}), evaluator)
+        assert reuse.earlier_runs([first], 2, {}, FOUR, other) == [], changed or evaluator
+    # an iteration stored before the key existed: its options, preset and evaluator are compared
+    old = {k: v for k, v in first.parameters.items() if k != "setup_key"}
+    assert reuse.same_setup(old, iteration_parameters(settings, "dem"))
+    assert not reuse.same_setup(old, iteration_parameters(LoopSettings.model_validate(
+        {**base, "options": {"cct_cycles": 2}}), "dem"))

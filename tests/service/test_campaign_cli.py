@@ -204,3 +204,27 @@ def test_campaign_create_at_a_resolution_shows_its_cost(server, capsys):
     code, _, err = run(capsys, "campaign", "create", "--url", url, "--name", "cli bad", "--material", "1",
                        "--resolution", "thesis", "--scale-factor", "2", "--factor", "friction_pp:0.3:1.0")
     assert code == 2 and "apply to --resolution coarse" in err
+
+
+def test_campaign_iterate_at_another_resolution(server, capsys):
+    """`demcal campaign iterate ID --resolution coarse --scale-factor 1.3`: the next iteration of a campaign run in
+    the 400 mm preset moves into the material's own 590 mm box (POST .../iterations {"resolution": ...})."""
+    url, app, settings = server
+    code, out, _ = run(capsys, "campaign", "create", "--url", url, "--name", "cli preset then coarse", "--material", "1",
+                       "--evaluator", "analytic", "--fidelity", "screening", "--factor", "friction_pp:0.3:1.0",
+                       "--factor", "particle_density_kg_m3:2300:2700", "--start", "-q")
+    assert code == 0, out
+    cid = int(out.strip())
+    runner = CampaignRunner(app.state.session_factory, settings)
+    for _ in range(60):
+        runner.tick()
+        drain(app, settings)
+        code, out, _ = run(capsys, "campaign", "status", str(cid), "--url", url)
+        if "completed" in out:
+            break
+    assert "completed" in out
+    code, out, err = run(capsys, "campaign", "iterate", str(cid), "--url", url, "--resolution", "coarse",
+                         "--scale-factor", "1.3", "--json")
+    assert code == 0, err
+    started = json.loads(out)
+    assert started["fidelity"] == "coarse" and started["config"]["rig"]["name"] == "thesis-590mm-shear-box"

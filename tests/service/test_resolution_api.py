@@ -152,3 +152,28 @@ def test_a_preset_job_is_stored_as_before_resolutions_existed(s2):
         assert set(job.spec) == {"test", "fidelity", "seed", "parameters", "options"}
     again = client.post(f"{API}/jobs", json=body)
     assert again.status_code == 200 and again.json()["id"] == first["id"]
+
+
+def test_the_next_iteration_may_change_the_resolution_and_reuses_none_of_the_other_s_batteries(s2):
+    """POST .../iterations {"resolution": ...}: from the 400 mm preset to the material's own 590 mm box, coarse
+    x 1.3. The runs follow into the material's rig with its particles, the bulk mass (left out in the 400 mm box)
+    becomes a target, and no battery of the other set-up is reused (it simulated another box)."""
+    client, app, settings = s2
+    body = campaign_body(thesis_material_id(client), fidelity="screening", targets=MEASURED_IN_THE_BOX,
+                         design={"type": "full", "centre_runs": 2})
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    nxt = client.post(f"{API}/campaigns/{cid}/iterations", json={"resolution": {"mode": "coarse", "scale_factor": 1.3}})
+    assert nxt.status_code == 201, nxt.text
+    assert nxt.json()["fidelity"] == "coarse" and nxt.json()["config"]["rig"]["name"] == THESIS_RIG
+    assert run_to_end(client, app, settings, cid)["status"] == "completed"
+    second = client.get(f"{API}/campaigns/{cid}/iterations/2").json()
+    assert second["runs"] and not any(r.get("reused_from") for r in second["runs"])
+    assert second["report"]["left_out_targets"] == []
+    assert "bulk_mass_kg" in {r["quantity"] for r in second["report"]["targets"]}
+    # back to a preset: its own rig again (the material's is dropped), bulk mass left out once more
+    back = client.post(f"{API}/campaigns/{cid}/iterations", json={"resolution": "screening"})
+    assert back.status_code == 201 and back.json()["config"]["rig"] is None and back.json()["fidelity"] == "screening"
+    bad = client.post(f"{API}/campaigns/{cid}/iterations", json={"resolution": {"mode": "coarse", "scale_factor": 0.5}})
+    assert bad.status_code in (409, 422)
