@@ -119,7 +119,8 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
         localisation = localise(residuals, active_bounds=cal.active_bounds(design, theta),
                                 priors=cal.prior_rows(priors, theta), reachability=optimum.get("reachability", []),
                                 seed=config.seed)
-        intervals = parameter_intervals(residuals, design, theta, localisation.lack_of_fit)
+        intervals = parameter_intervals(residuals, design, theta, localisation.lack_of_fit,
+                                        discrepancy=config.model_discrepancy)
     return _json_safe({"surrogate_check": surrogate,
                        "localisation": localisation.to_dict() if localisation is not None else None,
                        "intervals": intervals if localisation is not None else None,

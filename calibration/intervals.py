@@ -12,6 +12,17 @@ include the priors, so
 with s^2 = 1 while the lack of fit passes, and s^2 = chi2 / dof (Birge's ratio) when it fails: a model that
 misses the measurements by more than their noise cannot know its parameters better than that misfit
 allows, and the intervals widen with it (the t quantile on the lack of fit's dof then replaces the normal).
+A model-form discrepancy (``calibration.discrepancy``) is not noise that averages out across a test's rows:
+whatever makes another engine's E' 12 % higher does so at every stress window alike. The fit weights each
+row by its full variance as if the rows were independent; the discrepancy is taken as one level shift per
+(test, quantity), shared by that quantity's rows (correlation 1, Kennedy & O'Hagan's discrepancy at its
+longest correlation length), and the covariance of the estimator so weighted is the sandwich
+
+    cov(u) = A^-1 J^T (I + C) J A^-1 = A^-1 + A^-1 J^T C J A^-1,   A = J^T J,
+
+where C holds the whitened discrepancy's covariances between different rows of one quantity (the diagonal
+is already in the weights). Without a discrepancy C = 0 and this is the plain inverse above: four E' windows
+then no longer count as four independent views of the stiffness when they share one model-form error.
 Parameters whose correlation reaches TRADE_CORRELATION are reported as trading: the data fix a
 combination of them, not each, and the report says so next to the intervals rather than letting a falsely
 precise optimum stand. An interval is cut at the factor's box, where the design says nothing beyond.
@@ -32,9 +43,32 @@ LEVEL = 0.95
 TRADE_CORRELATION = 0.9
 
 
-def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level: float = LEVEL) -> dict[str, Any]:
+def shared_discrepancy(res, discrepancy) -> np.ndarray:
+    """C: the whitened discrepancy's covariance between different rows of one (test, quantity), zero elsewhere
+    (priors' rows included, as zeros). Row i's discrepancy sd comes from its entry at the measured value."""
+    from .discrepancy import discrepancy_term
+
+    n = len(res.J)
+    C = np.zeros((n, n))
+    if not discrepancy:
+        return C
+    scaled, groups = np.zeros(n), [None] * n
+    for i, (key, measured, noise) in enumerate(zip(res.keys, res.measured, res.noise)):
+        term = discrepancy_term(key, float(measured), discrepancy)
+        if term is not None and term.variance > 0 and noise.sd > 0:
+            scaled[i], groups[i] = math.sqrt(term.variance) / noise.sd, (key.test, key.quantity)
+    for i in range(n):
+        for j in range(n):
+            if i != j and groups[i] is not None and groups[i] == groups[j]:
+                C[i, j] = scaled[i] * scaled[j]
+    return C
+
+
+def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level: float = LEVEL,
+                        discrepancy=()) -> dict[str, Any]:
     """{"level", "scale", "quantile", "parameters": {name: {value, sd, low, high, at_bound}},
-    "correlation": {a: {b: r}}, "trades": [...], "unidentified": [...]} at the optimum ``theta``."""
+    "correlation": {a: {b: r}}, "trades": [...], "unidentified": [...]} at the optimum ``theta``.
+    ``discrepancy``: the loop's model-form discrepancy entries (their shared part widens the intervals)."""
     free = list(res.free)
     J = np.asarray(res.J, float)
     JtJ = J.T @ J
@@ -46,7 +80,9 @@ def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level
     fails = lack_of_fit.dof > 0 and lack_of_fit.p_value < ALPHA and lack_of_fit.per_dof > 1.0
     scale = float(lack_of_fit.per_dof) if fails else 1.0
     quantile = float(sps.t.ppf(0.5 + level / 2, lack_of_fit.dof) if fails else sps.norm.ppf(0.5 + level / 2))
-    cov = scale * np.asarray(inv, float)
+    inv = np.asarray(inv, float)
+    C = shared_discrepancy(res, discrepancy)
+    cov = scale * (inv + inv @ J.T @ C @ J @ inv)
     per_coded = np.array([natural_per_coded(design.factor(n), theta[n]) for n in free])
     cov_natural = cov * np.outer(per_coded, per_coded)
     sd = np.sqrt(np.clip(np.diag(cov_natural), 0.0, None))
@@ -79,7 +115,8 @@ def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level
             "scaled_by_misfit": bool(fails), "parameters": params, "correlation": corr, "trades": trades,
             "unidentified": sorted(set(unidentified)),
             "about": "from the whitened Jacobian of every target (measurement, discrepancy and simulator noise) "
-                     "and the priors; widened by chi2/dof when the lack of fit fails; cut at the factor's box"}
+                     "and the priors, a discrepancy shared by the rows of one quantity; widened by chi2/dof when "
+                     "the lack of fit fails; cut at the factor's box"}
 
 
 def covers(intervals: dict[str, Any], truth: dict[str, float]) -> dict[str, bool]:

@@ -64,3 +64,28 @@ def test_an_unidentified_direction_gets_no_interval():
     out = parameter_intervals(res, _design(a=(0.0, 1.0), b=(0.0, 1.0)), {"a": 0.5, "b": 0.5}, _lof(1.0, 1, 0.5))
     assert out["unidentified"] == ["b"] and out["parameters"]["b"]["sd"] is None
     assert covers(out, {"a": 0.5, "b": 0.5}) == {"a": True}
+
+
+def test_a_discrepancy_shared_by_one_quantity_s_rows_does_not_average_out():
+    """Two E' windows y_i = g u + delta + e_i, each row's total variance sigma^2 = 1.0^2 of which the shared
+    discrepancy delta has d^2 = 0.6^2 (relative 0.1 of a measured 6): by hand var(u_hat) = var((y1 + y2) / 2g) =
+    (4 d^2 + 2 (sigma^2 - d^2)) / 4 g^2 = (sigma^2 + d^2) / 2 g^2, not sigma^2 / 2 g^2 as for independent rows.
+    A discrepancy on another quantity is not shared."""
+    from calibration.discrepancy import Discrepancy
+    from calibration.keys import ResponseKey
+    from calibration.records import Noise, VarianceTerm
+
+    g, sigma, d = 4.0, 1.0, 0.6
+    keys = [ResponseKey.of("cct", "confined_modulus_pa", {"normal_stress_pa": s}) for s in (15e3, 30e3)]
+    noise = [Noise(VarianceTerm(sigma**2, math.inf, "m"), VarianceTerm(0.0, math.inf, "s"))] * 2
+    res = SimpleNamespace(free=["u"], J=np.array([[-g / sigma], [-g / sigma]]), keys=keys, measured=np.array([6.0, 6.0]),
+                          noise=noise)
+    shared = [Discrepancy(test="cct", relative_sd=0.1)]
+    # coded = natural here (a factor of half-range 1 about 0)
+    out = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4), discrepancy=shared)
+    assert out["parameters"]["u"]["sd"] ** 2 == pytest.approx((sigma**2 + d**2) / (2 * g**2))
+    plain = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4))
+    assert plain["parameters"]["u"]["sd"] ** 2 == pytest.approx(sigma**2 / (2 * g**2))
+    other = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4),
+                                discrepancy=[Discrepancy(test="dst", relative_sd=0.1)])
+    assert other["parameters"]["u"]["sd"] == pytest.approx(plain["parameters"]["u"]["sd"])
