@@ -393,10 +393,26 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
         out["error_ratio"] = final["chi2"] / first["chi2"] if first["chi2"] else None
         out["chi2_per_dof_after"] = final["chi2_per_dof"]
     kept = accepted[-1] if accepted else first
+    out["coverage"] = coverage(svc, sc, cid, kept["number"])
     rho = (kept.get("optimum") or {}).get("particle_density_kg_m3")
     if rho is not None:
         out["density_error"] = rho / sc.parameters()["particle_density_kg_m3"] - 1.0
     return out
+
+
+def coverage(svc: Service, sc: Scenario, cid: int, number: int) -> dict[str, bool]:
+    """Does the kept iteration's 95 % interval (``calibration.intervals``) hold each free parameter's true value?
+    An added effect's strength counts where it is the hidden one (a wrong effect has no true strength)."""
+    from calibration import parameters as factor_paths
+    from calibration.intervals import covers
+
+    intervals = (svc.call("GET", f"/campaigns/{cid}/iterations/{number}").get("report") or {}).get("intervals") or {}
+    truth = {}
+    for name in intervals.get("parameters") or {}:
+        value = factor_paths.read(sc.parameters(), name)
+        if value is not None:
+            truth[name] = float(value)
+    return covers(intervals, truth)
 
 
 def replay(svc: Service, cid: int, body: dict) -> list[str]:
@@ -573,6 +589,8 @@ def criteria(outs: list[dict]) -> dict[str, Any]:
         res["batteries"] = max(o.get("loop_batteries_to_confirmation") or o["loop_batteries"] for o in loops)
         walls = [o["loop_wall_per_battery"] for o in loops if o.get("loop_wall_per_battery") is not None]
         res["loop_wall_per_battery"] = round(max(walls), 2) if walls else None
+    pairs = [held for o in outs for held in (o.get("coverage") or {}).values()]
+    res["coverage_pairs"], res["coverage_held"] = len(pairs), sum(pairs)
     replayed = [o for o in outs if "replay_differences" in o]
     if replayed:
         res["replay_same"] = sum(not o["replay_differences"] for o in replayed)
@@ -801,6 +819,9 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
     if res["n_truth_floor"]:
         print(f"weighted RMS after adding within {TRUTH_FLOOR_FACTOR} x the truth's own, chi2/dof <= 2: "
               f"{res['within_truth_floor']}/{res['n_truth_floor']} (target all)")
+    if res["coverage_pairs"]:
+        print(f"95 % intervals holding the true parameter: {res['coverage_held']}/{res['coverage_pairs']} scenario-parameter "
+              f"pairs ({res['coverage_held'] / res['coverage_pairs']:.2f}; goal >= 0.90)")
     print(f"particle density within 5 %: {res['density_within_5pc']}/{res['n_density']} rolling and shape "
           f"(target all)")
     for o in outs:
