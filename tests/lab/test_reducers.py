@@ -33,6 +33,23 @@ def test_bulk_properties_thesis_table_4_5_average():
     assert props["porosity"] == pytest.approx(e / (e + 1))
 
 
+def test_packing_height_is_the_highest_centre_plus_the_material_s_own_radius():
+    """Thesis section 4.5.4: H = the highest sphere's centre + its radius. Levelled grains' centres sit at or
+    below the level (0.330 m); at a coarse resolution x 2 a 32.4 mm sphere at the level would give 362.4 mm, the
+    material's own 16.2 mm sphere 346.2 mm: the rule takes the radius at the material's size."""
+    from engine.lab.reducers.packing import packing_height_m
+
+    z = np.array([0.300, 0.330, 0.310])
+    r = np.array([0.0324, 0.0324, 0.0500])
+    assert packing_height_m(z, r) == pytest.approx(0.3624)           # as measured: the highest sphere top
+    assert packing_height_m(z, r, 2.0) == pytest.approx(0.346 + 0.0002)  # 0.330 + 0.0162
+    assert packing_height_m(z, r, 2.0) < packing_height_m(z, r)
+    # the top sphere, not the highest centre, when a larger sphere stands out further
+    assert packing_height_m(np.array([0.33, 0.32]), np.array([0.01, 0.03])) == pytest.approx(0.35)
+    with pytest.raises(ValueError):
+        packing_height_m(z, r, 0.5)
+
+
 def test_bulk_properties_rejects_empty():
     with pytest.raises(ValueError):
         bulk_properties(PackingState(0.0, 2500, 0.3, 0.1, 0))

@@ -16,7 +16,7 @@ from engine.lab import sim as labsim
 from engine.lab.context import RunContext
 from engine.lab.geometry import lid_wall, shear_box_walls
 from engine.lab.presets import Fidelity
-from engine.lab.reducers.packing import PackingState, bulk_properties
+from engine.lab.reducers.packing import PackingState, bulk_properties, packing_height_m
 from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
 from engine.particles.distributions import ConstantSize, ShapeComponent, ShapeMix, TruncatedGaussian
 from engine.particles.generation import CylinderRegion, generate
@@ -121,8 +121,12 @@ def run_fill(ctx: RunContext) -> FillOutcome:
     labsim.settle(ctx, sim, "fill: rainfall and settling", threshold=1e-4, min_time_s=0.2, max_time_s=RAIN_SETTLE_MAX_S,
                   record=record)
     level_and_measure(ctx, sim, preset.packing_height_m, "fill: levelling")
+    # what the lid meets (the CCT's and DST's strains): the highest sphere top as built
     height = float(np.max(labsim.sphere_tops_m(sim)))
-    props = bulk_properties(PackingState(solid_volume_m3(sim), params.particle_density_kg_m3, height,
+    # the packing height the thesis measures, its radii at the material's own size (a coarse resolution's grains
+    # stand out of the struck-off surface by s times more; equal to ``height`` as measured)
+    measured = packing_height_m(sim.sphere_positions_m()[:, 2], sim.sphere_radii_m(), preset.scale_factor)
+    props = bulk_properties(PackingState(solid_volume_m3(sim), params.particle_density_kg_m3, measured,
                                          preset.container_area_m2, sim.n_bodies))
     if preparation_friction is not None:
         # the packing keeps its structure; the tests that start from it see the calibrated friction

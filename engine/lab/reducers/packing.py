@@ -1,6 +1,7 @@
 """Bulk density, porosity and voids ratio of a levelled packing (thesis section 4.5).
 
-The thesis measures height from the highest sphere top, takes the bulk volume as A*H, nets
+The thesis measures height from the highest sphere top (``packing_height_m``: at the material's own grain size
+at a coarse resolution), takes the bulk volume as A*H, nets
 the clump lens overlaps out of the solid volume and mass (Eqs. 4.9-4.10; the lens volume is the clump
 templates' ``engine.particles.templates.lens_volume_m3``), then applies
 Eq. 4.2 (rho_b = m_b / V_b), Eq. 4.4 (e = rho_p / rho_b - 1) and Eq. 4.7 (n = e / (e + 1)).
@@ -9,6 +10,8 @@ Porosity is returned as a fraction (SI), not in percent.
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -20,6 +23,19 @@ class PackingState:
     packing_height_m: float
     container_area_m2: float
     particle_count: int
+
+
+def packing_height_m(sphere_centres_z_m, sphere_radii_m, scale_factor: float = 1.0) -> float:
+    """The thesis's packing height (section 4.5.4: the highest sphere's centre plus its radius), with each radius
+    at the material's own size: at a coarse resolution (sizes x ``scale_factor``) the levelled grains' centres
+    still reach the level, but a radius s times the material's would add (s - 1) r to H and take it off the
+    bulk density (361 mm for a 330 mm level at x 2 in the thesis box; docs/lab.md). As measured (s = 1) this is
+    the highest sphere top."""
+    z = np.asarray(sphere_centres_z_m, float)
+    r = np.asarray(sphere_radii_m, float)
+    if not scale_factor >= 1.0:
+        raise ValueError(f"scale_factor must be >= 1 (a coarse-graining factor), got {scale_factor}")
+    return float(np.max(z + r / scale_factor))
 
 
 def bulk_properties(state: PackingState) -> dict[str, float]:
