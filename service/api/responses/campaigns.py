@@ -97,6 +97,10 @@ class IterationParameters(Out):
     options: dict[str, Any] = Field(default_factory=dict, description="lab test options")
     evaluator: str | None = None
     fidelity: str | None = None
+    setup_key: str | None = Field(
+        None, description="digest of what the iteration's batteries run besides their micro parameters (test, preset "
+        "or resolution with rig and particles, options, evaluator): a later iteration reuses only batteries of the same "
+        "key (calibration.reuse.setup_key); none on iterations stored before session 19")
 
 
 class Iteration(Out):
