@@ -25,7 +25,20 @@ def estimate_line(estimate: dict | None) -> str:
     batteries = f", {estimate['batteries']} batteries in the first design" if estimate.get("batteries") else ""
     return (f"each battery: about {estimate['particles']:,} particles, up to {estimate['simulated_time_s']:.0f} s "
             f"simulated, in rig {estimate['rig']} at resolution {estimate['resolution']} "
-            f"(sizes x {estimate['scale_factor']:.3g}){batteries}")
+            f"(sizes x {estimate['scale_factor']:.3g}){batteries}{wall_time_text(estimate)}")
+
+
+def wall_time_text(estimate: dict) -> str:
+    """'; about 4.2 min each here (3.1-5.0 min; 12 finished ... jobs ...)', or '' without a record."""
+    if estimate.get("wall_time_s") is None:
+        return ""
+    low, high = estimate.get("wall_time_range_s") or (None, None)
+    spread = f"{_duration(low)}-{_duration(high)}; " if low is not None else ""
+    return f"; about {_duration(estimate['wall_time_s'])} each here ({spread}{estimate['wall_time_basis']})"
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.1f} min" if seconds < 7200 else f"{seconds / 3600:.1f} h"
 
 
 def resolution_options(parser) -> None:

@@ -28,6 +28,7 @@ from service.errors import Conflict, Invalid, NotFound
 from service.models.job import Job
 from service.ownership import Caller, caller, owner_of
 from service.security import client_id
+from service.wall_estimate import wall_time_estimate
 from service.vocabulary import JobOrigin, JobStatus
 from service.workers.errors import scrub
 
@@ -120,7 +121,9 @@ def submit(body: JobSubmit, request: Request, response: Response, session: DbSes
         response.status_code = status.HTTP_200_OK
     response.headers["Location"] = str(request.url_for("get_job", job_id=job.id))
     out = job_out(job)
-    out.estimate = CostEstimate(**estimate_view(JobSpec.model_validate(job.spec)))
+    spec = JobSpec.model_validate(job.spec)
+    view = estimate_view(spec)
+    out.estimate = CostEstimate(**view, **wall_time_estimate(session, spec.test, view, job.evaluator))
     return out
 
 

@@ -342,6 +342,7 @@ def campaign_estimate(session: Session, campaign: Campaign) -> dict[str, Any] | 
     from calibration.conditions import run_spec
     from engine.lab.cost import estimate_view
     from service.limits import design_runs
+    from service.wall_estimate import wall_time_estimate
 
     try:
         config = CampaignCreate.model_validate(campaign.config)
@@ -351,6 +352,7 @@ def campaign_estimate(session: Session, campaign: Campaign) -> dict[str, Any] | 
     except (ValueError, Invalid):  # SpecFieldError is one: a stored configuration this version no longer reads
         return None
     design = config.design
-    return {**view, "batteries": design_runs(len(config.factors), len(design.generators or ()),
+    return {**view, **wall_time_estimate(session, spec.test, view, campaign.evaluator),
+            "batteries": design_runs(len(config.factors), len(design.generators or ()),
                                                             design.replicates, design.centre_runs,
                                                             design.axial != "none")}

@@ -76,3 +76,9 @@ class CostEstimate(Out):
     simulated_time_s: float = Field(description="simulated time of one battery, at most")
     stages_s: dict[str, float] = Field(default_factory=dict, description="simulated time per test, at most")
     batteries: int | None = Field(None, description="campaigns: the batteries of the first design")
+    wall_time_s: float | None = Field(
+        None, description="one battery's wall time on this service: the median over its latest finished jobs of wall "
+                          "s / (particles x simulated s), times this job's (service.wall_estimate); null without a record")
+    wall_time_range_s: list[float] | None = Field(
+        None, description="[low, high]: the same with the smallest and the largest of those jobs' ratios")
+    wall_time_basis: str | None = Field(None, description="which finished jobs the wall time rests on")

@@ -1,7 +1,7 @@
 // A campaign's page, the calibration loop's cockpit: drive it (start, pause, resume), pick an
 // iteration, read its verdict, targets, conditions and diagnosis, add the indicated effect to run
 // the next iteration, and follow the error and the parameters across iterations.
-import { API, api, attempt, fmt, h, optional, status, table } from "./core.js";
+import { API, api, attempt, duration, fmt, h, optional, status, table } from "./core.js";
 import { humanText } from "./labels.js";
 import { refresh } from "./live.js";
 import { targetsSection, verdictSection } from "./campaign_report.js";
@@ -90,7 +90,9 @@ export async function campaignPage(view, id, params) {
   const e = c.estimate;  // the cost model's ceilings where the batteries run (engine.lab.cost.estimate_view)
   if (e) parts.push(h("p", { className: "campaign-estimate" }, h("b", {}, "Each battery: "),
     `about ${e.particles.toLocaleString("en")} particles, up to ${Math.round(e.simulated_time_s)} s simulated, in rig ${e.rig} `
-    + `at resolution ${e.resolution} (sizes x ${Number(e.scale_factor.toPrecision(3))}); ${e.batteries} batteries in the first design.`));
+    + `at resolution ${e.resolution} (sizes x ${Number(e.scale_factor.toPrecision(3))}); ${e.batteries} batteries in the first design`
+    + (e.wall_time_s == null ? "." : `; about ${duration(e.wall_time_s)} per battery here (${duration(e.wall_time_range_s[0])}`
+       + `-${duration(e.wall_time_range_s[1])}; ${e.wall_time_basis}).`)));
   if (c.warnings?.length) parts.push(h("ul", { className: "campaign-warnings" }, c.warnings.map((w) => h("li", {}, humanText(w)))));
   if (c.error) parts.push(h("p", { className: "job-error" }, h("b", {}, "Failed: "), humanText(c.error)));
   if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), humanText(c.stop_reason)));

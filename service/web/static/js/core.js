@@ -55,6 +55,12 @@ export function fmt(value, digits = 4) {
   return Number(value.toPrecision(digits)).toString();
 }
 
+// A wall time in the unit a person reads it in (the CLI's service/cli_resolution.py _duration says the same).
+export function duration(seconds) {
+  if (seconds < 120) return `${Math.round(seconds)} s`;
+  return seconds < 7200 ? `${(seconds / 60).toFixed(1)} min` : `${(seconds / 3600).toFixed(1)} h`;
+}
+
 export function condition(cond) {
   const entries = Object.entries(cond || {});
   return entries.length ? entries.map(([k, v]) => `${k}=${fmt(v)}`).join(", ") : "–";
