@@ -104,7 +104,7 @@ def iteration_parameters(settings: LoopSettings, evaluator: str | None = None) -
             "fixed": {k: v for k, v in fixed.items() if k != "effects"},
             "effects": fixed.get("effects", {}), "options": dict(settings.options),
             "evaluator": evaluator, "fidelity": settings.fidelity,
-            "setup_key": reuse.setup_key(settings, evaluator)}
+            "lab": reuse.lab_json(settings), "setup_key": reuse.setup_key(settings, evaluator)}
 
 
 def step(ctx: Context, it) -> Transition | None:

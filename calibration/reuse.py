@@ -136,15 +136,19 @@ def _fixed_of(parameters: dict[str, Any]) -> dict[str, Any]:
     return fixed
 
 
+def lab_json(settings) -> dict[str, Any]:
+    """Where the settings' batteries run (``LoopSettings.lab``: the preset, or the resolution with its rig and
+    particles) as JSON, as an iteration records it (the material card of that iteration reads it back)."""
+    return {k: (v.model_dump(mode="json") if hasattr(v, "model_dump") else v) for k, v in settings.lab().items()}
+
+
 def setup_key(settings, evaluator: str | None) -> str:
     """What a battery ran besides its micro parameters, as one digest: the test, the preset or the resolution
     with its rig and particles, the battery options and the evaluator (``machine.iteration_parameters`` keeps
     it per iteration)."""
     import hashlib
 
-    what = {"test": settings.test, "lab": {k: (v.model_dump(mode="json") if hasattr(v, "model_dump") else v)
-                                           for k, v in settings.lab().items()},
-            "options": settings.options, "evaluator": evaluator}
+    what = {"test": settings.test, "lab": lab_json(settings), "options": settings.options, "evaluator": evaluator}
     return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()
 
 

@@ -95,6 +95,10 @@ def campaign_verify_export(args) -> int:
         card = validate(load_text(_text(args, f"/campaigns/{args.id}/material-card", params)))
     except CardError as exc:
         raise CliError(f"campaign {args.id}'s material card: {exc}") from exc
+    if card.rig.fidelity != "screening":  # calibration.export.verify builds the screening rig in LIGGGHTS
+        where = card.rig.fidelity or f"resolution {card.rig.resolution} in its material's rig"
+        raise CliError(f"campaign {args.id} was calibrated at {where}; the LIGGGHTS proof runs the screening rig "
+                       "only (docs/export.md), so it would compare the material in another apparatus")
     material = from_micro_parameters(micro_parameters(card), card.rig.fidelity)
     report = verify_export(material, seeds=tuple(range(1, args.packings + 1)),
                            progress=lambda message: print(message, file=sys.stderr, flush=True))

@@ -143,8 +143,35 @@ def _bins_of_range(r_min: float, r_max: float, bins: int) -> list[tuple[float, f
     return [(float(0.5 * (a + b)), float(q)) for a, b, q in zip(edges[:-1], edges[1:], p)]
 
 
-def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_range: int = 3) -> ExportMaterial:
-    """The material of a lab job's ``MicroParameters`` at a fidelity's particles (engine/lab/presets.py).
+SAMPLED_RADII = 65_536  # radii drawn (seed 0) to bin a size form without a closed-form distribution
+
+
+def _bins_of_size(size, r_min: float, r_max: float, bins: int) -> list[tuple[float, float]]:
+    """(radius, number probability) of ``bins`` equal-width bins of a material's size distribution
+    (engine.particles.distributions): closed form for uniform and truncated Gaussian sizes, else the share
+    of 65,536 radii drawn at seed 0 (a sieve curve, discrete sizes)."""
+    from scipy.special import ndtr
+
+    from engine.particles import distributions as dist
+
+    if r_min == r_max or isinstance(size, dist.ConstantSize):
+        return [(r_min, 1.0)]
+    edges = np.linspace(r_min, r_max, bins + 1)
+    if isinstance(size, dist.UniformSize):
+        p = np.full(bins, 1.0 / bins)
+    elif isinstance(size, dist.TruncatedGaussian):
+        cdf = ndtr((edges - size.mean) / size.sd)
+        p = np.diff(cdf) / (cdf[-1] - cdf[0])
+    else:
+        counts, _ = np.histogram(size.sample(np.random.default_rng(0), SAMPLED_RADII), bins=edges)
+        p = counts / counts.sum()
+    return [(float(0.5 * (a + b)), float(q)) for a, b, q in zip(edges[:-1], edges[1:], p) if q > 0]
+
+
+def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_range: int = 3,
+                          setup=None) -> ExportMaterial:
+    """The material of a lab job's ``MicroParameters`` at a fidelity's particles (engine/lab/presets.py), or
+    at ``setup`` (engine.lab.setup.Fidelity: a material's particles at a resolution; ``fidelity`` then names it).
 
     A size range (the thesis's Gaussian classes) becomes ``bins_per_range`` discrete sizes, each
     volume share = its number probability x its body volume, renormalised within the class.
@@ -152,7 +179,8 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
     from engine.lab.presets import fidelity as preset_of
     from engine.particles import templates as tpl
 
-    preset = preset_of(fidelity, parameters.particle_radius_m, parameters.clump_aspect_ratio)
+    preset = setup if setup is not None else \
+        preset_of(fidelity, parameters.particle_radius_m, parameters.clump_aspect_ratio)
     spheres: list[SphereClass] = []
     clumps: list[ClumpClass] = []
     builders = {"pyramid": tpl.pyramid, "double_clump": lambda r: tpl.double_clump(r, r)}
@@ -163,7 +191,8 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
                                      sphere_radii_m=[float(r) for r in t.sphere_radii_m],
                                      volume_fraction=shape.volume_fraction))
             continue
-        bins = _bins_of_range(shape.radius_min_m, shape.radius_max_m, bins_per_range)
+        bins = _bins_of_range(shape.radius_min_m, shape.radius_max_m, bins_per_range) if shape.size is None else \
+            _bins_of_size(shape.size, shape.radius_min_m, shape.radius_max_m, bins_per_range)
         if shape.shape == "sphere":
             volumes = [p * r ** 3 for r, p in bins]
             for (r, _), v in zip(bins, volumes):
@@ -182,8 +211,9 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
     notes = []
     for shape in preset.shapes:
         if shape.template is None and shape.radius_min_m != shape.radius_max_m:
+            form = "truncated Gaussian" if shape.size is None else type(shape.size).__name__
             notes.append(f"{shape.shape} radii {shape.radius_min_m * 1000:g}-{shape.radius_max_m * 1000:g} mm "
-                         f"(demcal: truncated Gaussian) as {bins_per_range} discrete sizes at the bin centres"
+                         f"(demcal: {form}) as {bins_per_range} discrete sizes at the bin centres"
                          + ("; demcal draws the two spheres of a double clump independently, the export makes "
                             "them equal" if shape.shape == "double_clump" else ""))
     total = sum(s.volume_fraction for s in spheres) + sum(c.volume_fraction for c in clumps)

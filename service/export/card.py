@@ -23,7 +23,7 @@ import json
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from engine.effects import REGISTRY
 from engine.lab.presets import fidelity as fidelity_preset
@@ -71,11 +71,13 @@ class Sphere(BaseModel):
 
 
 class RadiusDistribution(BaseModel):
-    """The distribution of a shape's sphere radius: constant, or Gaussian truncated to [min, max]."""
+    """The distribution of a shape's sphere radius: constant, Gaussian truncated to [min, max] (mean and sd of
+    the Gaussian before truncation), uniform, or "sampled" (a sieve curve or discrete sizes, stated in full in
+    ``rig.material_particles``; mean and sd here by number, of 65,536 radii drawn at seed 0)."""
 
     model_config = _STRICT
 
-    kind: Literal["constant", "truncated_gaussian"]
+    kind: Literal["constant", "truncated_gaussian", "uniform", "sampled"]
     radius_min_m: float = Field(..., gt=0)
     radius_max_m: float = Field(..., gt=0)
     mean_m: float = Field(..., gt=0)
@@ -123,12 +125,22 @@ class Contact(BaseModel):
 
 
 class Rig(BaseModel):
-    """The virtual laboratory the parameters were calibrated in: the fidelity preset, the test battery and
-    its options, and the resolution (grain size against the container)."""
+    """The virtual laboratory the parameters were calibrated in: a fidelity preset, or the material's own
+    particles (``material_particles``) at a ``resolution`` in the apparatus its measurements were made in
+    (``rig_record``); the test battery and its options; and the resolution (grain size against the container)."""
 
     model_config = _STRICT
 
-    fidelity: Fidelity
+    fidelity: Fidelity | None = Field(None, description="a preset's set-up ('thesis', 'screening'); null at a "
+                                                        "material resolution")
+    resolution: Literal["as_measured", "coarse"] | None = Field(
+        None, description="a material resolution: the material's particles as described, or coarse-grained")
+    scale_factor: float = Field(1.0, gt=0, description="particle sizes simulated over the material's (coarse)")
+    rig_record: dict[str, Any] | None = Field(None, description="at a material resolution: the apparatus, as "
+                                                                "engine.lab.rigs.Rig records it")
+    material_particles: dict[str, Any] | None = Field(
+        None, description="at a material resolution: the material's own particles (engine.particles.description); "
+                          "particles.shapes above are these at the scale factor")
     test: JobTestName
     options: dict[str, Any] = Field(default_factory=dict, max_length=64,
                                     description="the campaign's lab options (TestOptions)")
@@ -144,6 +156,36 @@ class Rig(BaseModel):
     def _options(cls, options: dict[str, Any]) -> dict[str, Any]:
         TestOptions.model_validate(options)
         return options
+
+    @field_validator("rig_record")
+    @classmethod
+    def _rig_record(cls, record: dict[str, Any] | None) -> dict[str, Any] | None:
+        from engine.lab.rigs import Rig as RigRecord
+
+        if record is not None:
+            RigRecord.model_validate(record)
+        return record
+
+    @field_validator("material_particles")
+    @classmethod
+    def _material_particles(cls, particles: dict[str, Any] | None) -> dict[str, Any] | None:
+        from engine.particles.description import Particles as ParticlesDescription
+
+        if particles is not None:
+            ParticlesDescription.model_validate(particles)
+        return particles
+
+    @model_validator(mode="after")
+    def _one_set_up(self):
+        material = (self.resolution, self.rig_record, self.material_particles)
+        if self.fidelity is not None and any(x is not None for x in material):
+            raise ValueError("a preset (fidelity) brings its own rig and particles: give fidelity, or resolution "
+                             "with rig_record and material_particles, not both")
+        if self.fidelity is None and any(x is None for x in material):
+            raise ValueError("give fidelity (a preset), or resolution with rig_record and material_particles")
+        if self.resolution == "as_measured" and self.scale_factor != 1.0:
+            raise ValueError("scale_factor: as measured is 1; a coarse resolution has its factor")
+        return self
 
 
 class CalibratedParameter(BaseModel):
@@ -274,6 +316,34 @@ _BODIES = {
 }
 
 
+SAMPLED_RADII = 65_536  # radii drawn (seed 0) for the mean and sd of a sieve curve's or discrete sizes' shape
+
+
+def _distribution(s) -> dict[str, Any]:
+    """A shape's radius distribution as the card states it (see RadiusDistribution)."""
+    from engine.particles import distributions as dist
+
+    r_min, r_max = float(s.radius_min_m), float(s.radius_max_m)
+    size = s.size
+    if size is None or isinstance(size, dist.ConstantSize) or r_min == r_max:
+        if r_min == r_max:
+            return {"kind": "constant", "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": r_min, "sd_m": 0.0}
+        # engine.particles.distributions.TruncatedGaussian's defaults: midpoint, range / 6
+        return {"kind": "truncated_gaussian", "radius_min_m": r_min, "radius_max_m": r_max,
+                "mean_m": 0.5 * (r_min + r_max), "sd_m": (r_max - r_min) / 6.0}
+    if isinstance(size, dist.TruncatedGaussian):
+        return {"kind": "truncated_gaussian", "radius_min_m": r_min, "radius_max_m": r_max,
+                "mean_m": float(size.mean), "sd_m": float(size.sd)}
+    if isinstance(size, dist.UniformSize):
+        return {"kind": "uniform", "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": 0.5 * (r_min + r_max),
+                "sd_m": (r_max - r_min) / 12.0 ** 0.5}
+    import numpy as np
+
+    radii = size.sample(np.random.default_rng(0), SAMPLED_RADII)
+    return {"kind": "sampled", "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": float(radii.mean()),
+            "sd_m": float(radii.std())}
+
+
 def _shapes(preset) -> list[dict[str, Any]]:
     """The fill's shape mix (engine.lab.procedures.fill.shape_mix builds the same) as sphere bodies."""
     out = []
@@ -284,12 +354,7 @@ def _shapes(preset) -> list[dict[str, Any]]:
             distribution = {"kind": "constant", "radius_min_m": r_max, "radius_max_m": r_max, "mean_m": r_max,
                             "sd_m": 0.0}
         else:
-            if r_min == r_max:
-                distribution = {"kind": "constant", "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": r_min,
-                                "sd_m": 0.0}
-            else:  # engine.particles.distributions.TruncatedGaussian's defaults: midpoint, range / 6
-                distribution = {"kind": "truncated_gaussian", "radius_min_m": r_min, "radius_max_m": r_max,
-                                "mean_m": 0.5 * (r_min + r_max), "sd_m": (r_max - r_min) / 6.0}
+            distribution = _distribution(s)
             if s.shape not in _BODIES:
                 raise ValueError(f"shape {s.shape!r} has no card description")
             body, template = _BODIES[s.shape], _shape_template(s.shape, r_max)
@@ -301,16 +366,33 @@ def _shapes(preset) -> list[dict[str, Any]]:
     return out
 
 
-def _preset(fidelity: str, params: MicroParameters):
-    return fidelity_preset(fidelity, params.particle_radius_m, params.clump_aspect_ratio)
+def set_up(where: dict[str, Any], params: MicroParameters):
+    """The lab set-up (engine.lab.setup.Fidelity) a card's rig section names: its preset, or the material's
+    particles at its resolution in its rig record, built by the rule every job uses (engine.lab.resolution)."""
+    if where.get("fidelity") is not None:
+        return fidelity_preset(where["fidelity"], params.particle_radius_m, params.clump_aspect_ratio)
+    from engine.lab.resolution import setup_for
+    from engine.lab.spec import JobSpec
+
+    resolution = where["resolution"] if where["resolution"] == "as_measured" else \
+        {"mode": "coarse", "scale_factor": where["scale_factor"]}
+    spec = JobSpec.model_validate({"test": where["test"], "resolution": resolution, "rig": where["rig_record"],
+                                   "particles": where["material_particles"],
+                                   "parameters": params.model_dump(mode="json")})
+    return setup_for(spec)
 
 
-def _rig(fidelity: str, test: str, options: dict[str, Any], params: MicroParameters) -> dict[str, Any]:
-    preset = _preset(fidelity, params)
+def _rig(where: dict[str, Any], params: MicroParameters) -> dict[str, Any]:
+    preset = set_up(where, params)
     # the largest grain: each shape's body at its largest sphere radius
     largest = max(2.0 * (s.template if s.template is not None else
                          _shape_template(s.shape, float(s.radius_max_m))).bounding_radius_m for s in preset.shapes)
-    return {"fidelity": fidelity, "test": test, "options": dict(options),
+    material = where.get("fidelity") is None
+    return {"fidelity": where.get("fidelity"), "resolution": where.get("resolution") if material else None,
+            "scale_factor": float(preset.scale_factor) if material else 1.0,
+            "rig_record": where.get("rig_record") if material else None,
+            "material_particles": where.get("material_particles") if material else None,
+            "test": where["test"], "options": dict(where.get("options") or {}),
             "container_radius_m": float(preset.container_radius_m),
             "container_height_m": float(preset.container_height_m),
             "smallest_sphere_radius_m": float(min(s.radius_min_m for s in preset.shapes)),
@@ -325,17 +407,25 @@ def _shape_template(shape: str, radius_m: float):
             "double_clump": lambda r: tpl.double_clump(r, r)}[shape](radius_m)
 
 
-def physics_sections(params: MicroParameters, fidelity: str, test: str, options: dict[str, Any]) -> dict[str, Any]:
-    """The particles, contact and rig sections: everything that follows from the micro parameters and the rig."""
+def physics_sections(params: MicroParameters, where: dict[str, Any]) -> dict[str, Any]:
+    """The particles, contact and rig sections: everything that follows from the micro parameters and the rig
+    section ``where`` (fidelity, or resolution with scale_factor, rig_record and material_particles; test;
+    options)."""
     dumped = params.model_dump()
     return {
         "particles": {"parameters": {n: _value(MicroParameters, n, dumped[n]) for n in PARTICLE_FIELDS},
-                      "shapes": _shapes(_preset(fidelity, params))},
+                      "shapes": _shapes(set_up(where, params))},
         "contact": {"law": CONTACT_LAW, "description": CONTACT_LAW_TEXT,
                     "parameters": {n: _value(MicroParameters, n, dumped[n]) for n in CONTACT_FIELDS},
                     "effects": _effect_cards(dumped["effects"])},
-        "rig": _rig(fidelity, test, options, params),
+        "rig": _rig(where, params),
     }
+
+
+def rig_where(rig: dict[str, Any]) -> dict[str, Any]:
+    """What ``physics_sections`` needs of a card's rig section (the rest of it follows from these)."""
+    return {k: rig.get(k) for k in ("fidelity", "resolution", "scale_factor", "rig_record", "material_particles",
+                                    "test", "options")}
 
 
 def _target_result(row: dict[str, Any] | None) -> dict[str, Any] | None:
@@ -362,7 +452,8 @@ def build_card(*, material: dict[str, Any], measurements: list[dict[str, Any]], 
                demcal_version: str) -> dict[str, Any]:
     """The card of one calibrated iteration, as a validated dict in the schema's order.
 
-    ``campaign``: id, name, and the iteration's evaluator, fidelity, test, options and factors (each
+    ``campaign``: id, name, and the iteration's evaluator, set-up (fidelity, or resolution with scale_factor,
+    rig_record and material_particles), test, options and factors (each
     iteration may have its own: an added effect, a narrowed range); ``report``: the iteration's report
     (calibration.report.build_report); ``measurements``: the material's stored measurements
     (measurement_dict), of which the report's targets are kept, in the report's order.
@@ -391,7 +482,7 @@ def build_card(*, material: dict[str, Any], measurements: list[dict[str, Any]], 
         "card_version": CARD_VERSION, "format": CARD_FORMAT, "demcal_version": demcal_version,
         "material": {"name": material["name"], "description": material.get("description") or "",
                      "source": material.get("source") or ""},
-        **physics_sections(params, campaign["fidelity"], campaign["test"], campaign.get("options") or {}),
+        **physics_sections(params, rig_where(campaign)),
         "calibration": {"campaign_id": campaign["id"], "campaign_name": campaign["name"], "iteration": iteration,
                         "evaluator": campaign["evaluator"], "verdict": report.get("verdict"),
                         "meaning": report.get("meaning"),
@@ -411,7 +502,7 @@ def parameters_card(params: MicroParameters, *, fidelity: str = "screening", tes
     return canonical({
         "card_version": CARD_VERSION, "format": CARD_FORMAT, "demcal_version": demcal_version,
         "material": {"name": name, "description": "", "source": ""},
-        **physics_sections(params, fidelity, test, dict(options or {})),
+        **physics_sections(params, {"fidelity": fidelity, "test": test, "options": dict(options or {})}),
         "calibration": None, "measurements": [],
     })
 
@@ -477,18 +568,23 @@ def micro_parameters(card: MaterialCard) -> MicroParameters:
             section, loc = "contact.effects", loc[1:]
         where = ".".join([section, *loc])
         raise CardError(where, f"{where}: {first.get('msg')}") from None
+    where = card.rig.fidelity is not None and "rig.fidelity" or "rig.resolution"
     try:
-        derived = physics_sections(params, card.rig.fidelity, card.rig.test, card.rig.options)
+        derived = physics_sections(params, rig_where(card.rig.model_dump(mode="json")))
+    except ValidationError as exc:  # the job spec the set-up is built from, e.g. a radius at a material resolution
+        first = exc.errors(include_url=False)[0]
+        raise CardError(where, f"{where}: {first.get('msg')}") from None
     except ValueError as exc:  # e.g. a screening radius at the thesis fidelity
-        raise CardError("rig.fidelity", f"rig.fidelity: {exc}") from None
+        raise CardError(where, f"{where}: {exc}") from None
     given = card.model_dump(mode="json")
     for section, key in (("particles", "shapes"), ("rig", None)):
         mine = derived[section] if key is None else derived[section][key]
         theirs = given[section] if key is None else given[section][key]
         if canonical_json(mine) != canonical_json(theirs):
             where = section if key is None else f"{section}.{key}"
-            raise CardError(where, f"{where}: not what the rig {card.rig.fidelity!r} builds with these particle "
-                                   "parameters; the particles follow from the rig and particles.parameters (edit those)")
+            built = card.rig.fidelity or f"{card.rig.resolution} x {card.rig.scale_factor:g}"
+            raise CardError(where, f"{where}: not what the rig ({built}) builds with these particle parameters; the "
+                                   "particles follow from the rig and particles.parameters (edit those)")
     return params
 
 

@@ -40,10 +40,13 @@ def liggghts_include(card: dict) -> str:
     header lists every conversion made and what LIGGGHTS cannot express exactly."""
     from calibration.export.liggghts import render
     from calibration.export.material import from_micro_parameters
-    from service.export.card import micro_parameters, validate
+    from service.export.card import micro_parameters, rig_where, set_up, validate
 
     model = validate(card)
-    return render(from_micro_parameters(micro_parameters(model), model.rig.fidelity)).text
+    params = micro_parameters(model)
+    where = rig_where(model.rig.model_dump(mode="json"))
+    return render(from_micro_parameters(params, model.rig.fidelity or model.rig.resolution,
+                                        setup=set_up(where, params))).text
 
 
 register(ExportFormat("liggghts", "text/plain", ".liggghts", liggghts_include,

@@ -52,11 +52,6 @@ def campaign_card(session: Session, campaign_id: int, number: int | None = None)
     from service.materials.store import get_material, material_dict
 
     campaign = get_campaign(session, campaign_id)
-    resolution = (campaign.config or {}).get("resolution")
-    if not is_preset(resolution):  # the card's rig section states a preset's set-up (service.export.card)
-        raise Conflict(f"campaign {campaign.id} ran at resolution {campaign.fidelity!r} in its material's rig; a "
-                       "material card states the preset set-ups ('thesis', 'screening') only, so it cannot describe "
-                       "these particles and this rig yet", ["path", "campaign_id"])
     it = calibrated_iteration(campaign, number)
     material = get_material(session, campaign.material_id)
     view = material_dict(material)
@@ -64,13 +59,32 @@ def campaign_card(session: Session, campaign_id: int, number: int | None = None)
     return cards.build_card(
         material=view, measurements=view["measurements"],
         campaign={"id": campaign.id, "name": campaign.name, "test": config.get("test", "battery"),
-                  # the iteration's own settings (an added effect, a narrowed range), else the campaign's
+                  # the iteration's own settings (an added effect, a narrowed range, a resolution), else the campaign's
                   "evaluator": settings.get("evaluator", campaign.evaluator),
-                  "fidelity": settings.get("fidelity", campaign.fidelity),
+                  **card_set_up(settings.get("lab") or config, settings.get("fidelity", campaign.fidelity)),
                   "options": settings.get("options", config.get("options") or {}),
                   "factors": settings.get("factors", config.get("factors") or [])},
         iteration=it.number, report=it.report, parameter_std=(it.optimum or {}).get("parameter_std"),
         demcal_version=demcal_version())
+
+
+def card_set_up(lab: dict[str, Any], fidelity: str) -> dict[str, Any]:
+    """The card's rig section's set-up from where an iteration ran (``calibration.reuse.lab_json``, or a campaign
+    configuration stored before iterations recorded it): the preset, or the resolution with its factor resolved
+    (a coarse target particle count becomes the factor it chose), the rig record and the material's particles."""
+    from pydantic import TypeAdapter
+
+    from engine.lab.resolution import ResolutionIn, material_setup, parsed
+    from engine.lab.rigs import Rig
+    from engine.particles.description import Particles
+
+    resolution = TypeAdapter(ResolutionIn | None).validate_python(lab.get("resolution"))
+    if is_preset(resolution):
+        return {"fidelity": resolution or fidelity}
+    rig, particles = Rig.model_validate(lab["rig"]), Particles.model_validate(lab["particles"])
+    setup, _ = material_setup(rig, particles, resolution)
+    return {"fidelity": None, "resolution": parsed(resolution).mode, "scale_factor": float(setup.scale_factor),
+            "rig_record": rig.model_dump(mode="json"), "material_particles": particles.model_dump(mode="json")}
 
 
 def material_card(session: Session, material_id: int) -> dict[str, Any]:
@@ -101,7 +115,7 @@ def _rebuilt(view: dict[str, Any], stored: dict[str, Any]) -> dict[str, Any]:
     card = {
         "card_version": stored["card_version"], "format": cards.CARD_FORMAT, "demcal_version": stored["demcal_version"],
         "material": {"name": view["name"], "description": view["description"], "source": view["source"]},
-        **cards.physics_sections(params, rig["fidelity"], rig["test"], rig["options"]),
+        **cards.physics_sections(params, rig),
         "calibration": stored["calibration"],
         "measurements": [cards.measurement_card(m, _result_of(m, stored["results"])) for m in view["measurements"]],
     }
@@ -151,7 +165,7 @@ def import_card(session: Session, data: Any, name: str | None = None):
         raise Conflict(f"a material named {name!r} exists; import under another name (?name=... or --name)", "name")
     stored = {"card_version": card.card_version, "demcal_version": card.demcal_version,
               "fixed_parameters": params.model_dump(mode="json"),
-              "rig": {"fidelity": card.rig.fidelity, "test": card.rig.test, "options": card.rig.options},
+              "rig": cards.rig_where(card.rig.model_dump(mode="json")),
               "calibration": card.calibration.model_dump(mode="json") if card.calibration is not None else None,
               # by measurement key, as the calibration matches them
               "results": [{"test": m.test, "quantity": m.quantity, "condition": m.condition,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from conftest_s2 import API, campaign_body, run_to_end, s2, thesis_material_id  # noqa: F401
+from conftest_s2 import API, campaign_body, run_to_end, running_app, s2, s2_settings, thesis_material_id  # noqa: F401
 
 THESIS_RIG = "thesis-590mm-shear-box"
 MEASURED_IN_THE_BOX = [{"test": "fill", "quantity": "bulk_density_kg_m3"},
@@ -18,7 +18,7 @@ def _loc(response) -> list:
     return response.json()["detail"][0]["loc"]
 
 
-def test_a_coarse_campaign_runs_in_its_materials_rig_and_compares_its_bulk_mass(s2):
+def test_a_coarse_campaign_runs_in_its_materials_rig_and_compares_its_bulk_mass(s2, tmp_path):
     """The thesis aggregate coarse-grained in its own 590 mm box: the campaign copies the material's rig and
     particles, every job carries them, and the bulk mass is a target whose confirmed value is the bulk density
     times that box's packing, pi (0.295 m)^2 x 0.330 m (nothing left out)."""
@@ -43,9 +43,24 @@ def test_a_coarse_campaign_runs_in_its_materials_rig_and_compares_its_bulk_mass(
     job = client.get(f"{API}/jobs", params={"campaign_id": campaign["id"], "limit": 1}).json()["items"][0]
     spec = client.get(f"{API}/jobs/{job['id']}").json()["spec"]
     assert spec["resolution"]["scale_factor"] == 1.3 and spec["rig"]["name"] == THESIS_RIG
-    # the material card states preset set-ups only: refused, not written with the 400 mm box's particles
-    card = client.get(f"{API}/campaigns/{campaign['id']}/material-card")
-    assert card.status_code == 409 and "resolution 'coarse'" in card.text
+    # the material card states this set-up: the 590 mm rig's record, the material's own particles and the
+    # shapes at x 1.3 (Table 4.2's pyramids of 7.5-10.5 mm spheres simulated at 9.75-13.65 mm)
+    response = client.get(f"{API}/campaigns/{campaign['id']}/material-card")
+    assert response.status_code == 200, response.text
+    card = response.json()
+    rig = card["rig"]
+    assert (rig["fidelity"], rig["resolution"], rig["scale_factor"]) == (None, "coarse", 1.3)
+    assert rig["rig_record"]["name"] == THESIS_RIG and rig["container_radius_m"] == pytest.approx(0.295)
+    assert rig["material_particles"]["shapes"][0]["size"]["radius_min_m"] == 0.0075
+    pyramid = next(s for s in card["particles"]["shapes"] if s["shape"] == "pyramid")["radius_distribution"]
+    assert (pyramid["radius_min_m"], pyramid["radius_max_m"]) == pytest.approx((0.0075 * 1.3, 0.0105 * 1.3))
+    # imported back (another installation) and exported again: the same card; and a LIGGGHTS include of it
+    with running_app(s2_settings(tmp_path).model_copy(update={"seed_materials": False})) as (other, _):
+        imported = other.post(f"{API}/materials/import-card", json=card)
+        assert imported.status_code == 201, imported.text
+        assert other.get(f"{API}/materials/{imported.json()['id']}/material-card").json() == card
+    include = client.get(f"{API}/campaigns/{campaign['id']}/export", params={"format": "liggghts"})
+    assert include.status_code == 200 and "multisphere" in include.text
 
 
 def test_the_old_screening_preset_leaves_the_other_boxs_bulk_mass_out_naming_it(s2):

@@ -97,6 +97,9 @@ class IterationParameters(Out):
     options: dict[str, Any] = Field(default_factory=dict, description="lab test options")
     evaluator: str | None = None
     fidelity: str | None = None
+    lab: dict[str, Any] | None = Field(
+        None, description="where the iteration's batteries run: fidelity (a preset), or resolution with the rig and "
+        "particles (calibration.reuse.lab_json); none on iterations stored before session 20")
     setup_key: str | None = Field(
         None, description="digest of what the iteration's batteries run besides their micro parameters (test, preset "
         "or resolution with rig and particles, options, evaluator): a later iteration reuses only batteries of the same "
