@@ -185,7 +185,10 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
     clumps: list[ClumpClass] = []
     builders = {"pyramid": tpl.pyramid, "double_clump": lambda r: tpl.double_clump(r, r)}
     for shape in preset.shapes:
-        if shape.template is not None:
+        if shape.template is not None and shape.size is not None:  # a material's custom clump at each drawn size
+            template = shape.template
+            builders[shape.shape] = lambda r, t=template: t.scaled(r / float(max(t.sphere_radii_m)))
+        if shape.template is not None and shape.size is None:
             t = shape.template
             clumps.append(ClumpClass(name=t.name, sphere_centres_m=[[float(x) for x in c] for c in t.sphere_offsets_m],
                                      sphere_radii_m=[float(r) for r in t.sphere_radii_m],

@@ -316,9 +316,6 @@ _BODIES = {
 }
 
 
-SAMPLED_RADII = 65_536  # radii drawn (seed 0) for the mean and sd of a sieve curve's or discrete sizes' shape
-
-
 def _distribution(s) -> dict[str, Any]:
     """A shape's radius distribution as the card states it (see RadiusDistribution)."""
     from engine.particles import distributions as dist
@@ -339,6 +336,8 @@ def _distribution(s) -> dict[str, Any]:
                 "sd_m": (r_max - r_min) / 12.0 ** 0.5}
     import numpy as np
 
+    from calibration.export.material import SAMPLED_RADII
+
     radii = size.sample(np.random.default_rng(0), SAMPLED_RADII)
     return {"kind": "sampled", "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": float(radii.mean()),
             "sd_m": float(radii.std())}
@@ -349,7 +348,11 @@ def _shapes(preset) -> list[dict[str, Any]]:
     out = []
     for s in preset.shapes:
         r_min, r_max = float(s.radius_min_m), float(s.radius_max_m)
-        if s.template is not None:
+        if s.template is not None and s.size is not None:  # a material's custom clump, scaled to each drawn size
+            distribution = _distribution(s)
+            body = "this body scaled so that its largest sphere has the drawn radius"
+            template = s.template.scaled(r_max / float(max(s.template.sphere_radii_m)))
+        elif s.template is not None:
             body, template = "this body as given (not scaled)", s.template
             distribution = {"kind": "constant", "radius_min_m": r_max, "radius_max_m": r_max, "mean_m": r_max,
                             "sd_m": 0.0}

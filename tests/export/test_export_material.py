@@ -50,3 +50,39 @@ def test_a_boolean_is_not_a_number():
             "particles": {"solid_density_kg_m3": 2500.0, "spheres": [{"radius_m": 0.02, "volume_fraction": 1.0}]},
             "contact": {"particle_stiffness_n_per_m": 1e6, "wall_stiffness_n_per_m": 1e7, "damping_ratio_normal": 0.5,
                         "damping_ratio_shear": 0.5, "friction_pp": False, "friction_pw": 0.3}})
+
+
+def _material_set_up(shapes):
+    from engine.lab.resolution import setup_for
+    from engine.lab.rigs import bundled_rig, rig_json
+    from engine.lab.spec import JobSpec
+
+    return setup_for(JobSpec(test="fill", resolution="as_measured", rig=rig_json(bundled_rig("appendix-a-400mm-shear-box")),
+                             particles={"shapes": shapes}))
+
+
+def test_a_uniform_size_becomes_three_equally_likely_sizes_weighted_by_volume():
+    """Radii uniform in 19-21 mm (the LIGGGHTS comparison's spheres): three equal-width bins, each with a third
+    of the number, at 19 1/3, 20 and 20 2/3 mm; their volume shares are r^3 / sum r^3."""
+    setup = _material_set_up([{"shape": "sphere", "volume_fraction": 1.0,
+                               "size": {"form": "uniform", "radius_min_m": 0.019, "radius_max_m": 0.021}}])
+    material = from_micro_parameters(MicroParameters(), "as_measured", setup=setup)
+    radii = [0.019 + 0.002 * (k + 0.5) / 3 for k in range(3)]
+    assert [s.radius_m for s in material.particles.spheres] == pytest.approx(radii, rel=1e-12)
+    cubes = [r ** 3 for r in radii]
+    assert [s.volume_fraction for s in material.particles.spheres] == pytest.approx([c / sum(cubes) for c in cubes])
+
+
+def test_a_sized_custom_clump_is_exported_at_its_drawn_sizes():
+    """A custom two-sphere clump (radii 10 and 5 mm, centres 15 mm apart: touching) with its largest sphere's
+    radius between 9 and 11 mm: each exported body keeps the template's shape, the small sphere half the large."""
+    clump = {"shape": "custom", "volume_fraction": 1.0, "sphere_centres_m": [[0, 0, 0], [0.015, 0, 0]],
+             "sphere_radii_m": [0.010, 0.005], "size": {"form": "uniform", "radius_min_m": 0.009, "radius_max_m": 0.011}}
+    material = from_micro_parameters(MicroParameters(), "as_measured", setup=_material_set_up([clump]))
+    bodies = material.particles.clumps
+    assert len(bodies) == 3
+    for body in bodies:
+        large, small = sorted(body.sphere_radii_m, reverse=True)
+        assert small == pytest.approx(0.5 * large, rel=1e-12) and 0.009 < large < 0.011
+        gap = [a - b for a, b in zip(body.sphere_centres_m[0], body.sphere_centres_m[1])]
+        assert sum(g * g for g in gap) ** 0.5 == pytest.approx(1.5 * large, rel=1e-12)
