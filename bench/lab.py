@@ -41,6 +41,10 @@ def main(argv=None) -> int:
                          "and the 5,000-sphere pour at one thread for the battery's efficiency")
     ap.add_argument("--options", default=None, help="--battery: the job's options as JSON (TestOptions fields)")
     ap.add_argument("--no-pour", action="store_true", help="--battery: skip the pour (no battery_efficiency)")
+    ap.add_argument("--job", default=None,
+                    help="--battery: a job spec file (JSON, engine.lab.spec.JobSpec, e.g. a material's rig and "
+                         "particles at a resolution) timed instead of the screening battery; --seed and --options "
+                         "override its own")
     args = ap.parse_args(argv)
     if args.battery and not args.threads:
         args.threads = 1  # the service runs a screening battery per core, on one thread
@@ -119,15 +123,36 @@ def battery(args) -> int:
     from engine.lab.spec import JobSpec
 
     options = json.loads(args.options) if args.options else {}
-    ctx = RunContext.from_spec(JobSpec(test="battery", fidelity="screening", seed=args.seed, options=options))
+    if args.job:
+        from pydantic import ValidationError
+
+        try:
+            with open(args.job) as fh:
+                job = json.load(fh)
+        except (OSError, ValueError) as exc:
+            raise SystemExit(f"--job {args.job}: cannot read a JSON job spec ({exc})") from None
+        if not isinstance(job, dict):
+            raise SystemExit(f"--job {args.job}: a job spec is a JSON object")
+        job.update(seed=args.seed, **({"options": {**job.get("options", {}), **options}} if options else {}))
+        try:
+            spec = JobSpec.model_validate(job)
+        except ValidationError as exc:
+            first = exc.errors(include_url=False)[0]
+            where = ".".join(str(p) for p in first.get("loc", ()))
+            raise SystemExit(f"--job {args.job}: {where}: {first.get('msg')}") from None
+        what = f"job {args.job} ({spec.test})"
+    else:
+        spec = JobSpec(test="battery", fidelity="screening", seed=args.seed, options=options)
+        what = "screening battery (fill, CCT, DST at four loads)"
+    ctx = RunContext.from_spec(spec)
     t, cpu = time.perf_counter(), time.process_time()
     result = run_in_context(ctx)
     wall, cpu = time.perf_counter() - t, time.process_time() - cpu
-    print(f"screening battery (fill, CCT, DST at four loads), seed {args.seed}, options {options or 'defaults'}")
+    print(f"{what}, seed {args.seed}, options {spec.options.model_dump(exclude_defaults=True) or 'defaults'}")
     print_stages(ctx)
     rate = ctx.particle_steps / wall
     print(f"battery: {ctx.steps} steps, {ctx.simulated_time_s:.3f} s simulated, {wall:.1f} s wall, {rate:.3e} "
-          f"body-steps/s; largest inertial number {result.provenance.max_inertial_number:.2e} "
+          f"body-steps/s; largest inertial number {result.provenance.max_inertial_number or float('nan'):.2e} "
           f"(speed factor {ctx.speed_factor:g}); load average {os.getloadavg()[0]:.2f}")
     for name, curve in result.curves.items():
         if name.startswith("dst_") and "inertial_number" in curve:
@@ -136,7 +161,7 @@ def battery(args) -> int:
                   f"{curve['shear_displacement_m'][-1] * 1000:.1f} mm of travel")
     for w in result.provenance.warnings:
         print(f"warning: {w}")
-    tail = f"screening_battery_wall_s={wall:.1f} battery_steps={ctx.steps}"
+    tail = f"{'job' if args.job else 'screening_battery'}_wall_s={wall:.1f} battery_steps={ctx.steps}"
     if args.no_pour:
         print(tail)
         return 0
