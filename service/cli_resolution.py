@@ -29,7 +29,7 @@ def estimate_line(estimate: dict | None) -> str:
 
 
 def wall_time_text(estimate: dict) -> str:
-    """'; about 4.2 min each here (3.1-5.0 min; 12 finished ... jobs ...)', or '' without a record."""
+    """'; about 4.2 min each here (3.1 min-5.0 min; 12 finished dem jobs of ...)', or '' without a record."""
     if estimate.get("wall_time_s") is None:
         return ""
     low, high = estimate.get("wall_time_range_s") or (None, None)
