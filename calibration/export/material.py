@@ -129,42 +129,15 @@ class ExportMaterial(BaseModel):
         return REGISTRY[name].params_model.model_validate(self.effects[name])
 
 
-def _bins_of_range(r_min: float, r_max: float, bins: int) -> list[tuple[float, float]]:
-    """(radius, number probability) of ``bins`` equal-width bins of demcal's truncated Gaussian
-    (mean the midpoint, sd range/6: engine.particles.distributions.TruncatedGaussian)."""
-    from scipy.special import ndtr
-
-    if r_min == r_max:
-        return [(r_min, 1.0)]
-    mean, sd = 0.5 * (r_min + r_max), (r_max - r_min) / 6.0
-    edges = np.linspace(r_min, r_max, bins + 1)
-    cdf = ndtr((edges - mean) / sd)
-    p = np.diff(cdf) / (cdf[-1] - cdf[0])
-    return [(float(0.5 * (a + b)), float(q)) for a, b, q in zip(edges[:-1], edges[1:], p)]
-
-
-SAMPLED_RADII = 65_536  # radii drawn (seed 0) to bin a size form without a closed-form distribution
-
-
 def _bins_of_size(size, r_min: float, r_max: float, bins: int) -> list[tuple[float, float]]:
     """(radius, number probability) of ``bins`` equal-width bins of a material's size distribution
-    (engine.particles.distributions): closed form for uniform and truncated Gaussian sizes, else the share
-    of 65,536 radii drawn at seed 0 (a sieve curve, discrete sizes)."""
-    from scipy.special import ndtr
-
+    (``engine.particles.distributions.bin_shares``: closed form where there is one, else sampled)."""
     from engine.particles import distributions as dist
 
     if r_min == r_max or isinstance(size, dist.ConstantSize):
         return [(r_min, 1.0)]
     edges = np.linspace(r_min, r_max, bins + 1)
-    if isinstance(size, dist.UniformSize):
-        p = np.full(bins, 1.0 / bins)
-    elif isinstance(size, dist.TruncatedGaussian):
-        cdf = ndtr((edges - size.mean) / size.sd)
-        p = np.diff(cdf) / (cdf[-1] - cdf[0])
-    else:
-        counts, _ = np.histogram(size.sample(np.random.default_rng(0), SAMPLED_RADII), bins=edges)
-        p = counts / counts.sum()
+    p = dist.bin_shares(size, edges)
     return [(float(0.5 * (a + b)), float(q)) for a, b, q in zip(edges[:-1], edges[1:], p) if q > 0]
 
 
@@ -177,6 +150,7 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
     volume share = its number probability x its body volume, renormalised within the class.
     """
     from engine.lab.presets import fidelity as preset_of
+    from engine.particles import distributions as dist
     from engine.particles import templates as tpl
 
     preset = setup if setup is not None else \
@@ -194,8 +168,10 @@ def from_micro_parameters(parameters, fidelity: str = "screening", bins_per_rang
                                      sphere_radii_m=[float(r) for r in t.sphere_radii_m],
                                      volume_fraction=shape.volume_fraction))
             continue
-        bins = _bins_of_range(shape.radius_min_m, shape.radius_max_m, bins_per_range) if shape.size is None else \
-            _bins_of_size(shape.size, shape.radius_min_m, shape.radius_max_m, bins_per_range)
+        # a range without a size form is the fill's truncated Gaussian at its defaults (midpoint, range / 6)
+        size = shape.size if shape.size is not None or shape.radius_min_m == shape.radius_max_m else \
+            dist.TruncatedGaussian(shape.radius_min_m, shape.radius_max_m)
+        bins = _bins_of_size(size, shape.radius_min_m, shape.radius_max_m, bins_per_range)
         if shape.shape == "sphere":
             volumes = [p * r ** 3 for r, p in bins]
             for (r, _), v in zip(bins, volumes):

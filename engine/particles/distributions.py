@@ -150,6 +150,60 @@ class SievePSD:
         return np.array([w[size <= s].sum() for s in self.sieve_sizes_m]) / w.sum()
 
 
+# ----------------------------------------------------------------------------- what a size form says
+
+# radii drawn (seed 0) to describe a size form without a closed-form distribution (a sieve curve, discrete sizes)
+SAMPLED_RADII = 65_536
+_CLOSED_FORMS = {ConstantSize: "constant", UniformSize: "uniform", TruncatedGaussian: "truncated_gaussian"}
+
+
+def _sampled(size) -> np.ndarray:
+    return size.sample(np.random.default_rng(0), SAMPLED_RADII)
+
+
+def number_cdf(size, radii_m) -> np.ndarray | None:
+    """P(radius <= r) of a closed-form size distribution at each r; None for a form without one."""
+    r = np.asarray(radii_m, float)
+    if isinstance(size, ConstantSize):
+        return (r >= size.radius_m).astype(float)
+    if isinstance(size, UniformSize):
+        if size.r_max_m == size.r_min_m:
+            return (r >= size.r_min_m).astype(float)
+        return np.clip((r - size.r_min_m) / (size.r_max_m - size.r_min_m), 0.0, 1.0)
+    if isinstance(size, TruncatedGaussian):
+        if size.r_max_m == size.r_min_m:
+            return (r >= size.r_min_m).astype(float)
+        a, b = (ndtr((x - size.mean) / size.sd) for x in (size.r_min_m, size.r_max_m))
+        return np.clip((ndtr((r - size.mean) / size.sd) - a) / (b - a), 0.0, 1.0)
+    return None
+
+
+def bin_shares(size, edges_m) -> np.ndarray:
+    """Number probability of each interval between consecutive ``edges_m`` (increasing): from the closed form
+    where there is one, else the share of ``SAMPLED_RADII`` radii drawn at seed 0 (the first bin closed)."""
+    edges = np.asarray(edges_m, float)
+    cdf = number_cdf(size, edges)
+    if cdf is None:
+        counts, _ = np.histogram(_sampled(size), bins=edges)
+        return counts / max(int(counts.sum()), 1)
+    shares = np.diff(cdf)
+    return shares / shares.sum() if shares.sum() > 0 else shares
+
+
+def described(size) -> tuple[str, float, float]:
+    """(kind, mean radius, sd of the radius): the closed form's ("constant", "uniform", "truncated_gaussian"), or
+    "sampled" with the moments of ``SAMPLED_RADII`` radii drawn at seed 0."""
+    kind = _CLOSED_FORMS.get(type(size))
+    if kind == "constant":
+        return kind, float(size.radius_m), 0.0
+    if kind == "uniform":
+        return kind, 0.5 * (size.r_min_m + size.r_max_m), (size.r_max_m - size.r_min_m) / 12.0 ** 0.5
+    if kind == "truncated_gaussian":
+        return kind, size.mean, size.sd
+    radii = _sampled(size)
+    return "sampled", float(radii.mean()), float(radii.std())
+
+
 # ----------------------------------------------------------------------------- shapes
 
 ShapeName = Literal["sphere", "pyramid", "double_clump", "custom"]

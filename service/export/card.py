@@ -317,37 +317,24 @@ _BODIES = {
 
 
 def _distribution(s) -> dict[str, Any]:
-    """A shape's radius distribution as the card states it (see RadiusDistribution)."""
+    """A shape's radius distribution as the card states it (see RadiusDistribution). A range without a size form
+    is the fill's truncated Gaussian at its defaults (engine.particles.distributions.TruncatedGaussian)."""
     from engine.particles import distributions as dist
 
     r_min, r_max = float(s.radius_min_m), float(s.radius_max_m)
-    size = s.size
-    if size is None or isinstance(size, dist.ConstantSize) or r_min == r_max:
-        if r_min == r_max:
-            return {"kind": "constant", "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": r_min, "sd_m": 0.0}
-        # engine.particles.distributions.TruncatedGaussian's defaults: midpoint, range / 6
-        return {"kind": "truncated_gaussian", "radius_min_m": r_min, "radius_max_m": r_max,
-                "mean_m": 0.5 * (r_min + r_max), "sd_m": (r_max - r_min) / 6.0}
-    if isinstance(size, dist.TruncatedGaussian):
-        return {"kind": "truncated_gaussian", "radius_min_m": r_min, "radius_max_m": r_max,
-                "mean_m": float(size.mean), "sd_m": float(size.sd)}
-    if isinstance(size, dist.UniformSize):
-        return {"kind": "uniform", "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": 0.5 * (r_min + r_max),
-                "sd_m": (r_max - r_min) / 12.0 ** 0.5}
-    import numpy as np
-
-    from calibration.export.material import SAMPLED_RADII
-
-    radii = size.sample(np.random.default_rng(0), SAMPLED_RADII)
-    return {"kind": "sampled", "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": float(radii.mean()),
-            "sd_m": float(radii.std())}
+    if r_min == r_max:
+        return {"kind": "constant", "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": r_min, "sd_m": 0.0}
+    size = s.size if s.size is not None and not isinstance(s.size, dist.ConstantSize) else \
+        dist.TruncatedGaussian(r_min, r_max)
+    kind, mean, sd = dist.described(size)
+    return {"kind": kind, "radius_min_m": r_min, "radius_max_m": r_max, "mean_m": float(mean), "sd_m": float(sd)}
 
 
 def _shapes(preset) -> list[dict[str, Any]]:
     """The fill's shape mix (engine.lab.procedures.fill.shape_mix builds the same) as sphere bodies."""
     out = []
     for s in preset.shapes:
-        r_min, r_max = float(s.radius_min_m), float(s.radius_max_m)
+        r_max = float(s.radius_max_m)
         if s.template is not None and s.size is not None:  # a material's custom clump, scaled to each drawn size
             distribution = _distribution(s)
             body = "this body scaled so that its largest sphere has the drawn radius"
