@@ -424,10 +424,11 @@ def acceptance(outcomes: list[dict]) -> list[Row]:
             0.85, False),
         Row("two, both lambda >= 30", "both recovered within 3 iterations", None, *frac(two, both), 0.60, False),
         Row("two, both lambda >= 30", "median weighted RMS after / before", None, *ratio(two), 0.3, True),
-        # printed, not judged: the design note sets no coverage target for tier A, whose worlds stray 2 % from
-        # the model with no discrepancy term given (issue 33 asks >= 90 % of tier B's scenario-parameter pairs)
+        # issue 33's goal for the 95 % intervals (calibration.intervals): the truth inside in >= 90 % of the
+        # (case, parameter) pairs, model-form departures included (the intervals carry the shift a passing lack
+        # of fit cannot see)
         Row("every case", "95 % intervals holding the truth", "interval_coverage",
-            *_coverage_rate(outcomes), math.nan, False),
+            *_coverage_rate(outcomes), 0.90, False),
         Row("null, other form, discrepancy", "effect indicated or added", "form_null_false_alarm",
             *frac(form_null, claims_effect), 0.10, True),
         Row("null, other form, discrepancy", "lack-of-fit fires", None, *frac(form_null, lambda o: o["lof_fired"]),

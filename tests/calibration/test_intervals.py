@@ -24,7 +24,8 @@ def test_one_parameter_by_hand():
     # whitened residual r = y - 2 u: J = -2 (one row), so var(u) = 1/4 in coded units; the factor spans
     # 0.2-1.0 (0.4 per coded unit): sd = 0.5 x 0.4 = 0.2, 95 % interval 0.6 +- 1.96 x 0.2 = 0.208-0.992
     res = SimpleNamespace(free=["friction_pp"], J=np.array([[-2.0]]))
-    out = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6}, _lof(1.0, 5, 0.4))
+    out = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6}, _lof(1.0, 5, 0.4),
+                              undetected=False)
     row = out["parameters"]["friction_pp"]
     z = sps.norm.ppf(0.975)
     assert row["sd"] == pytest.approx(0.2)
@@ -33,14 +34,15 @@ def test_one_parameter_by_hand():
     # J = -1: sd 0.4, 0.6 +- 0.784 leaves the box on both sides and is cut there
     res = SimpleNamespace(free=["friction_pp"], J=np.array([[-1.0]]))
     row = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6},
-                              _lof(1.0, 5, 0.4))["parameters"]["friction_pp"]
+                              _lof(1.0, 5, 0.4), undetected=False)["parameters"]["friction_pp"]
     assert (row["low"], row["high"], row["at_bound"]) == (0.2, 1.0, ["low", "high"])
 
 
 def test_a_failing_fit_widens_by_birge_ratio_with_t_quantile():
     # chi2/dof 4 on 5 dof, p < 0.05: sd x 2 and the t(5) quantile (2.571) replaces 1.96
     res = SimpleNamespace(free=["friction_pp"], J=np.array([[-20.0]]))
-    out = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6}, _lof(4.0, 5, 0.001))
+    out = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6}, _lof(4.0, 5, 0.001),
+                              undetected=False)
     row = out["parameters"]["friction_pp"]
     assert out["scaled_by_misfit"] and out["scale"] == 4.0
     assert row["sd"] == pytest.approx(2 * 0.4 / 20)
@@ -52,7 +54,8 @@ def test_parameters_that_trade_are_named():
     # two columns nearly parallel: rows (1, 1) and (1, 1.1) -> correlation of (J^T J)^-1 is -0.995
     J = np.array([[1.0, 1.0], [1.0, 1.1], [0.0, 0.0]]) * 10
     res = SimpleNamespace(free=["a", "b"], J=J)
-    out = parameter_intervals(res, _design(a=(0.0, 1.0), b=(0.0, 1.0)), {"a": 0.5, "b": 0.5}, _lof(1.0, 1, 0.5))
+    out = parameter_intervals(res, _design(a=(0.0, 1.0), b=(0.0, 1.0)), {"a": 0.5, "b": 0.5}, _lof(1.0, 1, 0.5),
+                              undetected=False)
     inv = np.linalg.inv(J.T @ J)
     r = inv[0, 1] / math.sqrt(inv[0, 0] * inv[1, 1])
     assert out["correlation"]["a"]["b"] == pytest.approx(r) and abs(r) >= TRADE_CORRELATION
@@ -61,7 +64,8 @@ def test_parameters_that_trade_are_named():
 
 def test_an_unidentified_direction_gets_no_interval():
     res = SimpleNamespace(free=["a", "b"], J=np.array([[1.0, 0.0], [2.0, 0.0]]))
-    out = parameter_intervals(res, _design(a=(0.0, 1.0), b=(0.0, 1.0)), {"a": 0.5, "b": 0.5}, _lof(1.0, 1, 0.5))
+    out = parameter_intervals(res, _design(a=(0.0, 1.0), b=(0.0, 1.0)), {"a": 0.5, "b": 0.5}, _lof(1.0, 1, 0.5),
+                              undetected=False)
     assert out["unidentified"] == ["b"] and out["parameters"]["b"]["sd"] is None
     assert covers(out, {"a": 0.5, "b": 0.5}) == {"a": True}
 
@@ -82,10 +86,48 @@ def test_a_discrepancy_shared_by_one_quantity_s_rows_does_not_average_out():
                           noise=noise)
     shared = [Discrepancy(test="cct", relative_sd=0.1)]
     # coded = natural here (a factor of half-range 1 about 0)
-    out = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4), discrepancy=shared)
+    out = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4), discrepancy=shared,
+                              undetected=False)
     assert out["parameters"]["u"]["sd"] ** 2 == pytest.approx((sigma**2 + d**2) / (2 * g**2))
-    plain = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4))
+    plain = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4), undetected=False)
     assert plain["parameters"]["u"]["sd"] ** 2 == pytest.approx(sigma**2 / (2 * g**2))
     other = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4),
-                                discrepancy=[Discrepancy(test="dst", relative_sd=0.1)])
+                                discrepancy=[Discrepancy(test="dst", relative_sd=0.1)], undetected=False)
     assert other["parameters"]["u"]["sd"] == pytest.approx(plain["parameters"]["u"]["sd"])
+
+
+def test_a_passing_fit_leaves_the_shift_it_cannot_see():
+    """Two E' windows y_i = g u + e_i with sd sigma, a lack of fit on 5 dof. The shift shared by the two rows that
+    the test detects half the time is k sigma with k^2 = lambda_50 / 2, lambda_50 the non-centrality at which
+    chi2'(5, lambda) passes chi2_0.95(5) with probability 1/2. It moves u_hat = (y1 + y2) / 2g by k sigma / g, so
+    by hand var(u_hat) = sigma^2 / 2 g^2 + k^2 sigma^2 / g^2. With a stated discrepancy d shared by the rows, the
+    rows' sd is the total s = sqrt(sigma^2) the weights hold and the shift k s comes on top of d's
+    (sigma^2 + d^2) / 2 g^2. A quantity measured on more rows gets less (k ~ 1 / sqrt(n))."""
+    from scipy.optimize import brentq
+
+    from calibration.discrepancy import Discrepancy
+    from calibration.intervals import undetected_shift_sd
+    from calibration.keys import ResponseKey
+    from calibration.records import Noise, VarianceTerm
+
+    critical = sps.chi2.ppf(0.95, 5)
+    lambda_50 = brentq(lambda lam: sps.ncx2.sf(critical, 5, lam) - 0.5, 1e-6, 1e3)
+    # at lambda_50 the critical value 11.07 is the median of chi2'(5, lambda): about 7, the mean 5 + 7 above it
+    assert sps.ncx2.median(5, lambda_50) == pytest.approx(critical) and 6.5 < lambda_50 < 7.5
+    k = math.sqrt(lambda_50 / 2)
+    assert undetected_shift_sd(5, 2) == pytest.approx(k)
+    assert undetected_shift_sd(5, 8) == pytest.approx(k / 2)
+
+    g, sigma = 4.0, 1.0
+    keys = [ResponseKey.of("cct", "confined_modulus_pa", {"normal_stress_pa": s}) for s in (15e3, 30e3)]
+    noise = [Noise(VarianceTerm(sigma**2, math.inf, "m"), VarianceTerm(0.0, math.inf, "s"))] * 2
+    res = SimpleNamespace(free=["u"], J=np.array([[-g / sigma], [-g / sigma]]), keys=keys, measured=np.array([6.0, 6.0]),
+                          noise=noise)
+    out = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4))
+    assert out["undetected_shift"]
+    assert out["parameters"]["u"]["sd"] ** 2 == pytest.approx(sigma**2 / (2 * g**2) + k**2 * sigma**2 / g**2)
+    stated = parameter_intervals(res, _design(u=(-1.0, 1.0)), {"u": 0.0}, _lof(1.0, 5, 0.4),
+                                 discrepancy=[Discrepancy(test="cct", relative_sd=0.1)])
+    d = 0.6  # 10 % of the measured 6, shared, inside the rows' sd of 1 the weights hold
+    assert stated["parameters"]["u"]["sd"] ** 2 == pytest.approx(
+        (sigma**2 + d**2) / (2 * g**2) + k**2 * sigma**2 / g**2)

@@ -252,6 +252,9 @@ class Intervals(Out):
     scale: float = Field(description="chi2/dof the covariance was widened by (1 while the lack of fit passes)")
     quantile: float = Field(description="normal, or t on the lack of fit's dof when widened")
     scaled_by_misfit: bool
+    undetected_shift: bool = Field(False, description="the covariance holds, for each quantity without a stated "
+                                   "model-form discrepancy, the shift shared by its rows that the lack of fit detects "
+                                   "only half the time (calibration.intervals; false in reports made before it)")
     parameters: dict[str, ParameterInterval]
     correlation: dict[str, dict[str, float | None]]
     trades: list[Trade] = Field(description="parameter pairs the measurements fix only in combination")
