@@ -74,7 +74,7 @@ def shared_discrepancy(res, discrepancy) -> np.ndarray:
 
 
 def undetected_shift_sd(dof: int, rows: int) -> float:
-    """k, in units of a row's measurement sd: the shift shared by a quantity's ``rows`` rows that the lack of fit
+    """k, in whitened units (a row's total sd): the shift shared by a quantity's ``rows`` rows that the lack of fit
     (chi2 on ``dof``, level ALPHA) detects with probability 1/2, sqrt(lambda_50 / rows)."""
     from scipy.optimize import brentq
 

@@ -180,7 +180,7 @@ def number_cdf(size, radii_m) -> np.ndarray | None:
 
 def bin_shares(size, edges_m) -> np.ndarray:
     """Number probability of each interval between consecutive ``edges_m`` (increasing): from the closed form
-    where there is one, else the share of ``SAMPLED_RADII`` radii drawn at seed 0 (the first bin closed)."""
+    where there is one, else the share of ``SAMPLED_RADII`` radii drawn at seed 0 (bins half-open, the last closed)."""
     edges = np.asarray(edges_m, float)
     cdf = number_cdf(size, edges)
     if cdf is None:
