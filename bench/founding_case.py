@@ -143,6 +143,20 @@ def main(argv=None) -> int:
         svc.close()
 
 
+def chi2_shares(targets: dict[str, Any], number: int, top: int = 5) -> str:
+    """The largest squared standardised residuals of an iteration and their share of the sum (the history's
+    ``targets``): which measurements the misfit is made of (docs/diagnosis.md: the packing height's
+    definition was 558.6 of iteration 1's 769.6)."""
+    squares = {name: float(row["residuals"][str(number)]) ** 2 for name, row in targets.items()
+               if row.get("residuals", {}).get(str(number)) is not None}
+    total = sum(squares.values())
+    if not total:
+        return "-"
+    largest = sorted(squares.items(), key=lambda item: -item[1])[:top]
+    return ", ".join(f"{name} {value:.1f} ({100 * value / total:.0f} %)" for name, value in largest) + \
+        f" of {total:.1f}"
+
+
 def report(svc: Service, cid: int, args, elapsed_s: float) -> int:
     history = svc.call("GET", f"/campaigns/{cid}/history")
     iterations = history["iterations"]
@@ -158,6 +172,7 @@ def report(svc: Service, cid: int, args, elapsed_s: float) -> int:
             ranking = ", ".join(f"{r['effect']} ({100 * r['explained']:.0f} %, Holm p {_f(r['p_holm'])})"
                                 for r in d["ranking"][:3])
             print(f"  diagnosis '{d.get('verdict')}': {ranking}", flush=True)
+        print("  chi2 by target: " + chi2_shares(history["targets"], h["number"]), flush=True)
     for h in (iterations[0], iterations[-1]):  # the spheres' saturation, and where the loop left it
         report_rows = svc.call("GET", f"/campaigns/{cid}/iterations/{h['number']}")["report"]["targets"]
         for row in report_rows:
