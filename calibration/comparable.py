@@ -21,10 +21,11 @@ def split(targets: Sequence[Measured], measured_rig, measured_particles,
     ``measured_rig``/``measured_particles``: the rig the measurements were made in and the material's particles
     (``engine.lab.rigs.Rig``, ``engine.particles.description.Particles``; None where unknown: compared, as before
     rigs were data). ``settings``: the loop's (``LoopSettings`` or a campaign's configuration)."""
-    if measured_rig is None and measured_particles is None:
-        return list(targets), []
     from engine.lab.registry import get as get_test
-    from engine.lab.resolution import incomparable
+
+    if measured_rig is None and measured_particles is None:
+        return once_each(list(targets), get_test)
+    from engine.lab.resolution import incomparable, rig_value
 
     setup = simulated_setup(settings)
     kept, left_out = [], []
@@ -34,9 +35,37 @@ def split(targets: Sequence[Measured], measured_rig, measured_particles,
         if why is None:
             kept.append(target)
         else:
-            left_out.append({"test": target.key.test, "quantity": target.key.quantity,
-                             "condition": target.key.condition_dict, "reason": why})
+            left_out.append(_left(target, why))
+    kept, derived = once_each(kept, get_test, lambda test, name: rig_value(get_test(test).quantity(name), setup))
+    return kept, left_out + derived
+
+
+def once_each(targets: list[Measured], get_test, known=None) -> tuple[list[Measured], list[dict[str, Any]]]:
+    """``targets`` with each measurement counted once: a quantity the laboratory computes from others of the same
+    test and condition (``Quantity.derived_from``: a porosity from the bulk density, a bulk mass from the bulk
+    density and the height) is left out where each of its sources is a target or the rig's own number
+    (``known(test, quantity)`` truthy: the height of a packing struck off at a level). Counted as targets of their
+    own, one weighing would enter the chi2, the lack of fit and the attribution as three to five independent
+    measurements (the founding case's fill did, docs/diagnosis.md)."""
+    present = {(t.key.test, t.key.quantity, t.key.condition) for t in targets}
+    kept, left_out = [], []
+    for target in targets:
+        test, condition = target.key.test, target.key.condition
+        quantity = get_test(test).quantity(target.key.quantity)
+        sources = quantity.derived_from
+        if sources and all((test, name, condition) in present or (known is not None and known(test, name))
+                           for name in sources):
+            left_out.append(_left(target, (
+                f"{quantity.name} is computed from {' and '.join(sources)} ({quantity.relation}): the same "
+                "measurement as those targets, counted once through them")))
+        else:
+            kept.append(target)
     return kept, left_out
+
+
+def _left(target: Measured, why: str) -> dict[str, Any]:
+    return {"test": target.key.test, "quantity": target.key.quantity, "condition": target.key.condition_dict,
+            "reason": why}
 
 
 def simulated_setup(settings):

@@ -63,6 +63,15 @@ class Quantity:
     # the value scales with the particles' size (a particle count): compared only when the job builds the
     # measured material's particles as they are
     per_particle: bool = False
+    # the value is the rig's own number when the packing is struck off at a level (the packing height is then
+    # the level, engine.lab.rigs.Fill.height_rule): nothing about the material, never a target there
+    rig_value_when_struck_off: bool = False
+    # the quantities of the same test and condition this one is computed from, and how (``relation``): the
+    # laboratory reports it from the same weighing and reading (a porosity from the bulk density and the solid
+    # density), so it is not a measurement of its own; a loop counts it once, through its sources, where they
+    # are targets (calibration.comparable.split)
+    derived_from: tuple[str, ...] = ()
+    relation: str = ""
 
 
 @dataclass(frozen=True)

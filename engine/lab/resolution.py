@@ -189,9 +189,11 @@ def material_setup(rig: Rig, particles: Particles, resolution: ResolutionIn) -> 
     factor, notes = scale_factor(rig, particles, chosen)
     built = coarse_grained(particles, factor)
     # the reduced values are bit for bit those of the whole run (stop_after_reduced); the speed by stress was
-    # validated at the screening preset only (docs/lab.md), so a material's set-up keeps one speed
+    # validated at the screening preset only (docs/lab.md), so a material's set-up keeps one speed; the packing
+    # height is read as the rig's laboratory read it (a rig without a fill section is struck off at the brim)
     setup = lab_setup(chosen.mode, rig, shape_fractions(built), default_speed_factor=DEFAULT_SPEED_FACTOR,
-                      scale_factor=factor, particles=built, stop_after_reduced=True)
+                      scale_factor=factor, particles=built, stop_after_reduced=True,
+                      fill_height_rule=rig.fill.height_rule if rig.fill is not None else "struck_off")
     return setup, notes
 
 
@@ -238,6 +240,9 @@ def incomparable(quantity, measured_rig: Rig | None, measured_particles: Particl
     same sections as the rig it was measured in; a value that scales with the particles' size
     (``Quantity.per_particle``) needs the material's own particles as they are. Unknown (a material without a
     rig or particles): compared, as before rigs were data."""
+    fixed = rig_value(quantity, setup)
+    if fixed is not None:
+        return fixed
     if measured_rig is not None and quantity.apparatus:
         differ = [name for name in quantity.apparatus if getattr(measured_rig, name) != getattr(setup.rig, name)]
         if differ:
@@ -248,4 +253,15 @@ def incomparable(quantity, measured_rig: Rig | None, measured_particles: Particl
         why = (f"coarse-grained x {setup.scale_factor:.4g}" if setup.scale_factor != 1.0
                else "not the material's particles")
         return f"{quantity.name} scales with the particles' size and the simulated particles are {why}"
+    return None
+
+
+def rig_value(quantity, setup: Fidelity) -> str | None:
+    """Why ``quantity`` is the rig's own number in ``setup`` rather than the material's, or None: a packing
+    struck off at a level (``Fill.height_rule`` "struck_off") has that level as its height, in the laboratory as
+    in the simulation, so its packing height measures the apparatus, not the material."""
+    if quantity.rig_value_when_struck_off and setup.fill_height_rule == "struck_off":
+        return (f"{quantity.name} is the level the packing is struck off at ({setup.packing_height_m:g} m, rig "
+                f"{setup.rig_name!r}): set by the apparatus, not by the material; the bulk density carries the "
+                "fill's measurement")
     return None

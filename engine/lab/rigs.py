@@ -28,7 +28,7 @@ import json
 import math
 from functools import lru_cache
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
@@ -174,6 +174,13 @@ class Fill(BaseModel):
     drop_height_m: float = Field(0.0, ge=0, le=_MAX_LENGTH_M,
                                  description="free fall of the poured particles above the top of the simulated "
                                              "rainfall column (thesis: particles poured from up to 4.7 m)")
+    height_rule: Literal["struck_off", "highest_sphere_top"] = Field(
+        "struck_off",
+        description="how the packing's height, and so its bulk volume, is read after levelling: 'struck_off' "
+                    "as a laboratory does (a straightedge across the level, the bulk volume the container's to "
+                    "it, the packing height the level itself), 'highest_sphere_top' as the thesis's DEM did "
+                    "(section 4.5.4: the highest sphere's centre plus its radius, about a grain radius above "
+                    "the level)")
 
 
 class AngleOfRepose(BaseModel):

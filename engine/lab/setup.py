@@ -97,6 +97,9 @@ class Fidelity:
     # fidelity, whose runs are the thesis-comparison tables
     stop_after_reduced: bool = False
     dst_speed_by_stress: bool = False
+    # how the fill reads its packing height (engine.lab.rigs.Fill.height_rule): a material's set-up reads it as
+    # its rig's laboratory did; the presets keep the thesis's DEM rule, so that their runs are the thesis tables'
+    fill_height_rule: str = "highest_sphere_top"
 
     def rig_warnings(self) -> list[str]:
         """The rig checked against the shear-box particles (``engine.lab.rigs.check_for_particles``): raises
@@ -237,11 +240,12 @@ def particles_of(shapes: tuple[ShapeFraction, ...]) -> Particles:
 def lab_setup(name: str, rig: Rig, shapes: tuple[ShapeFraction, ...], *, default_speed_factor: float,
               aor_shapes: tuple[ShapeFraction, ...] | None = None, scale_factor: float = 1.0,
               particles: Particles | None = None, stop_after_reduced: bool = False,
-              dst_speed_by_stress: bool = False) -> Fidelity:
+              dst_speed_by_stress: bool = False, fill_height_rule: str = "highest_sphere_top") -> Fidelity:
     """The set-up the procedures read: the rig record's apparatus, the particles, and the simulation's own
     settings (speed factor and the fill's margins, which are not part of any apparatus). A rig may hold only
     the sections of the tests its laboratory runs: each test's (``LabTest.apparatus``) is checked when a job
     plans it (``RunContext.validate``), and a section read that the record lacks raises naming ``rig``."""
     return Fidelity(name=name, rig=rig, shapes=shapes, default_speed_factor=default_speed_factor,
                     aor_shapes=aor_shapes, scale_factor=scale_factor, particles=particles,
-                    stop_after_reduced=stop_after_reduced, dst_speed_by_stress=dst_speed_by_stress)
+                    stop_after_reduced=stop_after_reduced, dst_speed_by_stress=dst_speed_by_stress,
+                    fill_height_rule=fill_height_rule)

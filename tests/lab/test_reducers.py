@@ -50,6 +50,26 @@ def test_packing_height_is_the_highest_centre_plus_the_material_s_own_radius():
         packing_height_m(z, r, 0.5)
 
 
+def test_a_packing_struck_off_has_the_level_as_its_height():
+    """A laboratory strikes the packing off with a straightedge at the level and takes the container's volume to
+    it as the bulk volume (thesis Table 4.5: 329-330 mm for the 330 mm level); the thesis's DEM rule reads the
+    highest sphere top instead (Table 4.10: 340 mm). Bulk density m / (A H) then differs by the ratio of the two
+    heights, here 330 / 362.4 for the same packing."""
+    from engine.lab.reducers.packing import read_packing_height_m
+
+    z = np.array([0.300, 0.330, 0.310])
+    r = np.array([0.0324, 0.0324, 0.0500])
+    assert read_packing_height_m("struck_off", 0.330, z, r) == 0.330
+    assert read_packing_height_m("highest_sphere_top", 0.330, z, r) == pytest.approx(0.3624)
+    area, solid = 0.2734, 0.050
+    struck = bulk_properties(PackingState(solid, 2586.5, 0.330, area, 10))
+    thesis = bulk_properties(PackingState(solid, 2586.5, 0.3624, area, 10))
+    assert struck["bulk_mass_kg"] == thesis["bulk_mass_kg"] == pytest.approx(solid * 2586.5)
+    assert thesis["bulk_density_kg_m3"] / struck["bulk_density_kg_m3"] == pytest.approx(0.330 / 0.3624)
+    with pytest.raises(ValueError, match="height rule"):
+        read_packing_height_m("by eye", 0.330, z, r)
+
+
 def test_bulk_properties_rejects_empty():
     with pytest.raises(ValueError):
         bulk_properties(PackingState(0.0, 2500, 0.3, 0.1, 0))

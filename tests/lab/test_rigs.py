@@ -116,6 +116,7 @@ def _rig(**changes) -> dict:
     ("angle_of_repose__fill_height_m", 0.5, ("angle_of_repose", "fill_height_m")),  # above the 370 mm rim
     ("anchor__bin_width_m", 0.1, ("anchor", "bin_width_m")),  # narrower than the 110 mm plate
     ("fill__level_height_m", 0.4, ("fill",)),  # above the 330 mm brim
+    ("fill__height_rule", "by eye", ("fill", "height_rule")),  # neither the laboratory's nor the thesis DEM's
 ])
 def test_bad_rig_is_refused_naming_the_field(path, value, loc):
     with pytest.raises(ValidationError) as err:

@@ -46,7 +46,9 @@ TEST = LabTest(
                  # aggregate 8.69 MPa: a decade of room on both sides
                  typical=Typical(1.0e6, 1.0e9, "the confined moduli of granular packings",
                                  "Domenico & Mifflin 1965")),
-        Quantity("bulk_stiffness_n_per_m", "N/m", POSITIVE, apparatus=("shear_box", "fill")),
+        Quantity("bulk_stiffness_n_per_m", "N/m", POSITIVE, apparatus=("shear_box", "fill"),
+                 derived_from=("confined_modulus_pa",),
+                 relation="k = E' A / H, the container's area over the packing's height"),
     ),
     options=("cct_max_stress_pa", "cct_cycles", "cct_window_stresses_pa", "speed_factor", "max_inertial_number",
              "inertial_number_action", "stop_after_reduced"),

@@ -4,7 +4,8 @@ Why whole bodies are deleted by their centre of mass: the thesis deleted single 
 lay above 330 mm, which for clumps leaves fragments (half a pyramid is not one of its shapes, and
 its mass is no template's). Deleting whole bodies keeps every particle a valid shape; the centre-of-
 mass rule removes a body straddling the level as often as it keeps one, so the solid volume below
-the level is unbiased. H is then measured as the thesis did, from the highest sphere top.
+the level is unbiased. H is then read as the rig's laboratory read it (``Fill.height_rule``): the level the
+packing was struck off at, or, at the presets, as the thesis's DEM did, from the highest sphere top.
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from engine.lab import sim as labsim
 from engine.lab.context import RunContext
 from engine.lab.geometry import lid_wall, shear_box_walls
 from engine.lab.presets import Fidelity
-from engine.lab.reducers.packing import PackingState, bulk_properties, packing_height_m
+from engine.lab.reducers.packing import PackingState, bulk_properties, read_packing_height_m
 from engine.lab.stops import LEVEL_SETTLE_MAX_S, RAIN_SETTLE_MAX_S
 from engine.particles.distributions import ConstantSize, ShapeComponent, ShapeMix, TruncatedGaussian
 from engine.particles.generation import CylinderRegion, generate
@@ -123,9 +124,11 @@ def run_fill(ctx: RunContext) -> FillOutcome:
     level_and_measure(ctx, sim, preset.packing_height_m, "fill: levelling")
     # what the lid meets (the CCT's and DST's strains): the highest sphere top as built
     height = float(np.max(labsim.sphere_tops_m(sim)))
-    # the packing height the thesis measures, its radii at the material's own size (a coarse resolution's grains
-    # stand out of the struck-off surface by s times more; equal to ``height`` as measured)
-    measured = packing_height_m(sim.sphere_positions_m()[:, 2], sim.sphere_radii_m(), preset.scale_factor)
+    # the packing height as the rig's laboratory reads it: the level it was struck off at, or the thesis's DEM rule
+    # with the radii at the material's own size (a coarse resolution's grains stand out of the levelled surface by
+    # s times more; equal to ``height`` as measured)
+    measured = read_packing_height_m(preset.fill_height_rule, preset.packing_height_m, sim.sphere_positions_m()[:, 2],
+                                     sim.sphere_radii_m(), preset.scale_factor)
     props = bulk_properties(PackingState(solid_volume_m3(sim), params.particle_density_kg_m3, measured,
                                          preset.container_area_m2, sim.n_bodies))
     if preparation_friction is not None:

@@ -1,7 +1,8 @@
 """Bulk density, porosity and voids ratio of a levelled packing (thesis section 4.5).
 
-The thesis measures height from the highest sphere top (``packing_height_m``: at the material's own grain size
-at a coarse resolution), takes the bulk volume as A*H, nets
+The height is read as the rig's laboratory read it (``read_packing_height_m``): struck off at the level, or
+as the thesis's DEM did from the highest sphere top (``packing_height_m``: at the material's own grain size
+at a coarse resolution). The bulk volume is A*H; the reducer nets
 the clump lens overlaps out of the solid volume and mass (Eqs. 4.9-4.10; the lens volume is the clump
 templates' ``engine.particles.templates.lens_volume_m3``), then applies
 Eq. 4.2 (rho_b = m_b / V_b), Eq. 4.4 (e = rho_p / rho_b - 1) and Eq. 4.7 (n = e / (e + 1)).
@@ -36,6 +37,21 @@ def packing_height_m(sphere_centres_z_m, sphere_radii_m, scale_factor: float = 1
     if not scale_factor >= 1.0:
         raise ValueError(f"scale_factor must be >= 1 (a coarse-graining factor), got {scale_factor}")
     return float(np.max(z + r / scale_factor))
+
+
+def read_packing_height_m(rule: str, level_m: float, sphere_centres_z_m, sphere_radii_m,
+                          scale_factor: float = 1.0) -> float:
+    """The packing height by ``rule`` (``engine.lab.rigs.Fill.height_rule``). "struck_off": the level itself, as
+    a laboratory reads a packing struck off with a straightedge across the brim (its bulk volume the
+    container's to the level; the thesis's 329-330 mm for a 330 mm level, Table 4.5); the bodies whose centre
+    of mass stood above it were removed, which keeps the solid volume below the level unbiased.
+    "highest_sphere_top": the thesis's DEM rule (``packing_height_m``), about one grain radius above the level
+    (Table 4.10: 340 mm DEM against 329 mm measured)."""
+    if rule == "struck_off":
+        return float(level_m)
+    if rule == "highest_sphere_top":
+        return packing_height_m(sphere_centres_z_m, sphere_radii_m, scale_factor)
+    raise ValueError(f"unknown packing height rule {rule!r} (struck_off, highest_sphere_top)")
 
 
 def bulk_properties(state: PackingState) -> dict[str, float]:
