@@ -499,7 +499,11 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
     out["coverage"] = coverage(svc, sc, cid, kept["number"])
     # measured quantities the campaign could not compare at its resolution or rig (issue 29: none in the own rig)
     report = svc.call("GET", f"/campaigns/{cid}/iterations/1").get("report") or {}
-    out["left_out"] = sorted(f"{t['test']}/{t['quantity']}" for t in report.get("left_out_targets") or [])
+    out["left_out"] = sorted(f"{t['test']}/{t['quantity']}" for t in report.get("left_out_targets") or []
+                             if t.get("kind", "incomparable") == "incomparable")
+    # the same measurement as a kept target (a porosity from the bulk density; a struck-off packing's height)
+    out["counted_once"] = sorted(f"{t['test']}/{t['quantity']}" for t in report.get("left_out_targets") or []
+                                 if t.get("kind") == "counted_once")
     rho = (kept.get("optimum") or {}).get("particle_density_kg_m3")
     if rho is not None:
         out["density_error"] = rho / sc.parameters()["particle_density_kg_m3"] - 1.0
@@ -891,6 +895,7 @@ def _print_row(o: dict) -> None:
           f"ranking={o['ranking'][:3]} rank={o['rank']} tried={o['tried']} added={o['added']} "
           f"rms={_rms(o)} chi2_ratio={_f(o['error_ratio'])} chi2/dof_after={_f(o['chi2_per_dof_after'])} "
           f"density_error={_f(o['density_error'])} left_out={','.join(o.get('left_out') or []) or '-'} "
+          f"counted_once={','.join(o.get('counted_once') or []) or '-'} "
           f"stop='{o['stop_reason']}' "
           f"batteries={o['batteries']} battery_time={o['battery_s']:.0f}s wall={o['wall_s']:.0f}s", flush=True)
     for row in o.get("phases") or []:

@@ -4,7 +4,9 @@ A measurement carries the apparatus it was made in and the material's particles;
 (a preset, or those particles, as measured or coarse-grained, in that rig). A value the apparatus sets (a
 bulk mass) measured in another rig, or one that scales with the particles' size (a particle count) at a
 resolution that changes them, has no simulated counterpart (``engine.lab.resolution.incomparable``). Such
-targets are left out with the reason, never compared silently; the machine puts them in every report.
+targets are left out with the reason, never compared silently; the machine puts them in every report. So is a
+quantity the laboratory computes from others that are targets (``once_each``: a porosity from the bulk density),
+and a packing height that is the rig's level: one measurement enters the statistics once.
 One function for both drivers: the service's campaigns (the material's rig and particles from the database)
 and the notebook loop (``CalibrationLoop(..., measured_rig=, measured_particles=)``).
 """
@@ -17,7 +19,7 @@ from .records import Measured
 
 def split(targets: Sequence[Measured], measured_rig, measured_particles,
           settings) -> tuple[list[Measured], list[dict[str, Any]]]:
-    """(the targets the runs can be compared with, those left out as {test, quantity, condition, reason}).
+    """(the targets the runs can be compared with, those left out as {test, quantity, condition, reason, kind}).
     ``measured_rig``/``measured_particles``: the rig the measurements were made in and the material's particles
     (``engine.lab.rigs.Rig``, ``engine.particles.description.Particles``; None where unknown: compared, as before
     rigs were data). ``settings``: the loop's (``LoopSettings`` or a campaign's configuration)."""
@@ -35,7 +37,8 @@ def split(targets: Sequence[Measured], measured_rig, measured_particles,
         if why is None:
             kept.append(target)
         else:
-            left_out.append(_left(target, why))
+            fixed = rig_value(get_test(target.key.test).quantity(target.key.quantity), setup) is not None
+            left_out.append(_left(target, why, "counted_once" if fixed else "incomparable"))
     kept, derived = once_each(kept, get_test, lambda test, name: rig_value(get_test(test).quantity(name), setup))
     return kept, left_out + derived
 
@@ -57,15 +60,17 @@ def once_each(targets: list[Measured], get_test, known=None) -> tuple[list[Measu
                            for name in sources):
             left_out.append(_left(target, (
                 f"{quantity.name} is computed from {' and '.join(sources)} ({quantity.relation}): the same "
-                "measurement as those targets, counted once through them")))
+                "measurement as those targets, counted once through them"), "counted_once"))
         else:
             kept.append(target)
     return kept, left_out
 
 
-def _left(target: Measured, why: str) -> dict[str, Any]:
+def _left(target: Measured, why: str, kind: str) -> dict[str, Any]:
+    """One left-out target; ``kind`` "incomparable" (no counterpart in the runs' rig or resolution) or
+    "counted_once" (the same measurement as targets kept: computed from them, or the rig's own number)."""
     return {"test": target.key.test, "quantity": target.key.quantity, "condition": target.key.condition_dict,
-            "reason": why}
+            "reason": why, "kind": kind}
 
 
 def simulated_setup(settings):

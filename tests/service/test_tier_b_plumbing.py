@@ -37,8 +37,8 @@ def test_own_material_in_its_own_rig_through_a_live_service(tmp_path):
     """Issue 29's "material of your own making" on the stand-in: the bench creates the 300 mm rig through the API,
     measures the gravel (8-16 mm sieve curve, half elongated) "as measured" in it with rolling resistance hidden,
     and calibrates a material naming that rig, coarse-grained x 1.875 in the same box. No measured quantity is left
-    out for the rig or the resolution (the bulk mass is compared in the box it was weighed in; the stand-in has no
-    model of the packing height, which the report marks "not modelled"), the lack of fit rejects, rolling
+    out for the rig or the resolution (the bulk mass would be compared in the box it was weighed in; struck off at the
+    level, it and the packing height are the bulk density's measurement again, counted once), the lack of fit rejects, rolling
     resistance is named first, particle density comes back within 5 % of the truth (the pycnometer prior 2 %
     off), and the notebook loop replays the service's campaign. The DEM run of it is in docs/diagnosis.md."""
     out = subprocess.run(
@@ -50,6 +50,10 @@ def test_own_material_in_its_own_rig_through_a_live_service(tmp_path):
     figures = dict(item.split("=") for item in lines[-1].split())
     (row,) = [line for line in lines if line.startswith("own_rig ")]
     assert "left_out=- " in row, row
+    # struck off at the 200 mm level as a laboratory does: the height is the rig's and the bulk mass rho_b A H,
+    # one weighing with the bulk density, counted once as the bulk density
+    counted = row.split("counted_once=")[1].split()[0].split(",")
+    assert set(counted) == {"fill/packing_height_m", "fill/bulk_mass_kg"}, row
     assert figures["n_own_rig"] == "1" and figures["lof_rejects_effects"] == "1", out.stdout
     assert "rank=1 " in row, row
     assert figures["own_rig_first_density_5pc"] == "1", out.stdout

@@ -2,7 +2,7 @@
 the polish summary, the diagnosis and its adequacy test, and the automatic mode's record)."""
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import Field
 
@@ -278,12 +278,16 @@ class DiagnosisStage(Out):
 
 
 class LeftOutTarget(Out):
-    """A measurement not compared with the runs, and why (engine.lab.resolution.incomparable)."""
+    """A measurement not compared with the runs, and why (calibration.comparable.split)."""
 
     test: str
     quantity: str
     condition: dict[str, float] = Field(default_factory=dict)
     reason: str
+    kind: Literal["incomparable", "counted_once"] = Field(
+        "incomparable", description="'incomparable': the runs' rig or resolution has no counterpart of it; "
+                                    "'counted_once': the same measurement as targets already counted (a quantity "
+                                    "computed from them, or the rig's own number)")
 
 
 class Report(Out):
