@@ -69,7 +69,7 @@ class Quantity:
     # the quantities of the same test and condition this one is computed from, and how (``relation``): the
     # laboratory reports it from the same weighing and reading (a porosity from the bulk density and the solid
     # density), so it is not a measurement of its own; a loop counts it once, through its sources, where they
-    # are targets (calibration.comparable.split)
+    # are targets (calibration.comparable.once_each)
     derived_from: tuple[str, ...] = ()
     relation: str = ""
 
