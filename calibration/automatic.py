@@ -140,13 +140,62 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
             # say why the loop still stops
             reason += f" (every battery at the optimum together: lack of fit p {pooled:.2g})"
         return {**record, "stop_reason": reason}
-    name = options[0]
     base_config = {**campaign_config, "factors": base.parameters["factors"], "fixed_parameters": _fixed(base.parameters)}
+    options, tie = cheapest_of_equals(options, diagnosis, base_config, base_report)
+    if tie is not None:
+        record["tie_break"] = tie
+    name = options[0]
     try:
         nxt = with_effect_factor(base_config, name, **effect_hints(base_report, name))
     except ValueError as exc:  # SettingsError included
         return {**record, "stop_reason": _cannot_run(name, exc)}
     return _configured(record, name, base.number, nxt, validate)
+
+
+# two candidates' scores closer than this (relative) are one number: the residual space cannot tell them apart
+# (with as many free parameters as targets but one, every signature is parallel or anti-parallel to the misfit)
+EQUAL_SCORE = 1e-9
+
+
+def cheapest_of_equals(options: list[str], diagnosis: dict, base_config: dict,
+                       base_report: dict) -> tuple[list[str], dict | None]:
+    """``options`` with the leaders the diagnosis cannot tell apart (equal score test statistic, to
+    ``EQUAL_SCORE``) ordered by what a battery of each costs: the spheres of the largest packing with the
+    effect on, at the centre of the next iteration's box (``engine.lab.cost``; a DEM step's work is linear in
+    the spheres). Between equals the ranking's order was the last digits of two equal numbers; the data choose
+    nothing there, the cost does, and the record says so. Returns (options, the tie break or None)."""
+    scores = {row.get("effect"): row.get("lm") for row in diagnosis.get("ranking") or []}
+    lead = scores.get(options[0]) if options else None
+    if lead is None or len(options) < 2:
+        return options, None
+    equal = [n for n in options if scores.get(n) is not None
+             and abs(scores[n] - lead) <= EQUAL_SCORE * max(abs(lead), 1.0)]
+    if len(equal) < 2:
+        return options, None
+    spheres = {}
+    for name in equal:
+        try:
+            spheres[name] = _battery_spheres(with_effect_factor(base_config, name, **effect_hints(base_report, name)))
+        except (ValueError, KeyError):  # a set-up the lab refuses: the ranking's order stands
+            return options, None
+    chosen = sorted(equal, key=lambda n: spheres[n])  # stable: the ranking's order among equal costs
+    rest = [n for n in options if n not in equal]
+    return chosen + rest, {
+        "equal": equal, "spheres": spheres, "chosen": chosen[0],
+        "message": (f"{', '.join(equal)} explain the misfit equally (score {lead:.4g}): these measurements cannot "
+                    f"tell them apart; {chosen[0]} is tried first, its batteries having the fewest spheres "
+                    f"({', '.join(f'{n} {spheres[n]}' for n in equal)}); the others stay offered")}
+
+
+def _battery_spheres(config: dict) -> int:
+    """Spheres of the largest packing of a battery at the centre of ``config``'s factor box."""
+    from calibration.conditions import run_spec
+    from calibration.settings import LoopSettings
+    from engine.lab.cost import estimate
+
+    settings = LoopSettings.model_validate({k: v for k, v in config.items() if k in LoopSettings.model_fields})
+    centre = {f.name: 0.5 * (f.low + f.high) for f in settings.factors}
+    return estimate(run_spec(settings, centre, 0)).particles
 
 
 def _fixed(parameters: dict) -> dict:

@@ -191,6 +191,15 @@ class SuspectMeasurement(Out):
     message: str
 
 
+class TieBreak(Out):
+    """Candidates with one score (calibration.automatic.cheapest_of_equals): the cheapest battery is tried first."""
+
+    equal: list[str]
+    spheres: dict[str, int] = Field(description="spheres of the largest packing of a battery with each effect on")
+    chosen: str
+    message: str
+
+
 class Automatic(Out):
     """The automatic mode's record of an iteration: its decision and the next step or why it stopped."""
 
@@ -201,6 +210,8 @@ class Automatic(Out):
     stop_reason: str | None = None
     widened: bool | None = Field(None, description="the next iteration redoes this one on a wider range")
     next_config: dict[str, Any] | None = Field(None, description="the next iteration's configuration (CampaignCreate)")
+    tie_break: TieBreak | None = Field(None, description="the leading candidates the diagnosis could not tell apart "
+                                                         "and why the next effect was tried first among them")
 
 
 class Trend(Out):
