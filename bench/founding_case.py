@@ -173,6 +173,10 @@ def report(svc: Service, cid: int, args, elapsed_s: float) -> int:
                                 for r in d["ranking"][:3])
             print(f"  diagnosis '{d.get('verdict')}': {ranking}", flush=True)
         print("  chi2 by target: " + chi2_shares(history["targets"], h["number"]), flush=True)
+        tie = ((svc.call("GET", f"/campaigns/{cid}/iterations/{h['number']}").get("report") or {})
+               .get("automatic") or {}).get("tie_break")
+        if tie:
+            print(f"  tie break: {tie['message']}", flush=True)
     for h in (iterations[0], iterations[-1]):  # the spheres' saturation, and where the loop left it
         report_rows = svc.call("GET", f"/campaigns/{cid}/iterations/{h['number']}")["report"]["targets"]
         for row in report_rows:
