@@ -48,6 +48,7 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
             # automatic mode: whether this iteration's added effect was kept, and why the loop stopped
             "decision": (report.get("automatic") or {}).get("decision"),
             "stop_reason": (report.get("automatic") or {}).get("stop_reason"),
+            "tie_break": ((report.get("automatic") or {}).get("tie_break") or {}).get("message"),
             "range_widened": bool(plan.get("widened")),
             # an added effect explains the misfit only when every check holds; else what it leaves
             "explains": _explains(added, base, report),

@@ -33,3 +33,15 @@ def test_a_score_the_data_prefer_keeps_its_place():
     assert cheapest_of_equals(["particle_shape", "rolling_epsd2"], ranked, CONFIG, {}) == \
         (["particle_shape", "rolling_epsd2"], None)
     assert cheapest_of_equals(["particle_shape"], TIED, CONFIG, {}) == (["particle_shape"], None)
+
+
+def test_the_history_carries_the_tie_break_to_the_page_and_the_api():
+    from calibration.history import history
+    from calibration.state import IterationState
+
+    options, tie = cheapest_of_equals(["particle_shape", "rolling_epsd2"], TIED, CONFIG, {})
+    its = [IterationState(number=1, parameters={"factors": []},
+                          report={"automatic": {"next_effect": options[0], "tie_break": tie}}),
+           IterationState(number=2, parameters={"factors": []}, report={"verdict": "calibrated"})]
+    rows = history(its)["iterations"]
+    assert rows[0]["tie_break"] == tie["message"] and rows[1]["tie_break"] is None

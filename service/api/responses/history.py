@@ -48,6 +48,8 @@ class HistoryEntry(Out):
     stop_reason: str | None = Field(description="automatic mode: why the loop stopped here")
     range_widened: bool = Field(description="the iteration redid its base on a wider strength range")
     effect_added_next: list[str] | None = Field(description="what the next iteration added")
+    tie_break: str | None = Field(None, description="automatic mode: the candidates the diagnosis could not tell "
+                                                    "apart and why the next effect went first among them")
     explains: Explanation | None = Field(None, description="how much of the misfit the added effect explains")
     batteries: IterationBatteries | None = Field(None, description="batteries run per phase, design rows reused, and why")
 

@@ -85,7 +85,9 @@ export function historySection(history, iterations, priors) {
           h("span", { className: "chi2dof", "data-iteration": String(it.number) }, fmt(it.chi2_per_dof, 4)),
           it.noise_band ? `${fmt(Math.max(0, it.noise_band[0]), 2)} – ${fmt(it.noise_band[1], 2)}` : "–",
           adequacyCell(it), it.verdict || "–",
-          it.effect_added_next ? `+ ${it.effect_added_next.join(", ")}` : "–",
+          // automatic mode between candidates of one score: the cheaper went first, and the cell says so
+          it.effect_added_next ? (it.tie_break ? h("span", { className: "tie-break", title: it.tie_break },
+            `+ ${it.effect_added_next.join(", ")} (tie: fewest spheres)`) : `+ ${it.effect_added_next.join(", ")}`) : "–",
           // automatic mode: whether the effect this iteration added was kept (calibration.decisions)
           it.decision ? h("span", { className: it.decision.accepted ? "good" : "bad" }, `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`) : "–",
           // an added effect explains the misfit only when every check holds; otherwise what it leaves
