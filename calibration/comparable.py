@@ -32,12 +32,12 @@ def split(targets: Sequence[Measured], measured_rig, measured_particles,
     setup = simulated_setup(settings)
     kept, left_out = [], []
     for target in targets:
-        why = incomparable(get_test(target.key.test).quantity(target.key.quantity), measured_rig,
-                           measured_particles, setup)
+        quantity = get_test(target.key.test).quantity(target.key.quantity)
+        fixed = rig_value(quantity, setup)  # the rig's own number: the same measurement, not a missing one
+        why = fixed or incomparable(quantity, measured_rig, measured_particles, setup)
         if why is None:
             kept.append(target)
         else:
-            fixed = rig_value(get_test(target.key.test).quantity(target.key.quantity), setup) is not None
             left_out.append(_left(target, why, "counted_once" if fixed else "incomparable"))
     kept, derived = once_each(kept, get_test, lambda test, name: rig_value(get_test(test).quantity(name), setup))
     return kept, left_out + derived
