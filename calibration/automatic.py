@@ -5,7 +5,7 @@ campaign's ``max_iterations`` is reached; the reason it stopped is stored with t
 (``report.automatic.stop_reason``) and shown in the campaign's summary and history.
 
 An iteration that added an effect is judged against the iteration it was built on
-(``calibration.decisions.judge``: the error must fall significantly with the lack of fit no worse).
+(``calibration.decisions.judge``: the error must fall significantly, and a lack of fit that passed must still pass).
 A rejected effect leaves the model as it was: the next candidate indicated by that earlier
 iteration's diagnosis is tried instead, and when none is left nothing improves. An added strength
 pinned at the top of its range (the optimum wants more than the range allows) is first given a range twice as wide on the same base, once (``calibration.decisions.widened_top``,

@@ -2,10 +2,10 @@
 
 * ``effect_range``: the range an added effect's strength gets as a design factor.
 * ``judge``: whether an iteration with an added effect earned its place over the one before
-  (design note step 6): the weighted error must fall with the lack of fit no worse, and the fall
-  must be significant, by the boundary-corrected likelihood-ratio test for an effect that vanishes
-  at its "off" strength (Self & Liang 1987: 1/2 chi2_0 + 1/2 chi2_1) or, for a switch-type effect
-  (not nested), by BIC.
+  (design note step 6): the weighted error must fall without a passing lack of fit turned into a
+  failing one, and the fall must be significant, by the boundary-corrected likelihood-ratio test for
+  an effect that vanishes at its "off" strength (Self & Liang 1987: 1/2 chi2_0 + 1/2 chi2_1) or, for
+  a switch-type effect (not nested), by BIC.
 
 Both work on plain numbers, so the service can call them on what it stored in the database.
 """
@@ -88,12 +88,23 @@ class Decision:
 def judge(candidate: Candidate, *, chi2_before: float, chi2_after: float, n_residuals: int,
           free_before: int, free_after: int, lof_p_before: float, lof_p_after: float,
           strength: float | None = None) -> Decision:
-    """The added effect is accepted when the weighted error falls, the lack of fit gets no worse
-    (or passes), and the fall is significant (LR p < ALPHA, or BIC falls by more than 2)."""
+    """The added effect is accepted when the weighted error falls, a lack of fit that passed still
+    passes, and the fall is significant (LR p < ALPHA, or BIC falls by more than 2).
+
+    Why the lack of fit is compared by its outcome and not by its p-value: each iteration's p-value
+    is read against that iteration's own null (the simulator's scatter at its own confirmation
+    points, drawn by Monte Carlo), so two p-values below ALPHA are two statements "far outside the
+    noise", both at the resolution of the draws, and their order says nothing about which fit is
+    better. The founding case showed it: rolling resistance took chi2 from 68.7 to 18.6 on the same
+    four residuals (LR p 7e-13), and was rejected because the second p-value (5 draws in 20,001
+    beyond it) was below the first (12 in 20,001). Between two failing fits the likelihood-ratio
+    test on the same residuals decides; the effect is then kept as "partly explains"
+    (``explanation``) and the misfit it leaves goes to the next diagnosis."""
     lr = chi2_before - chi2_after
     p = None if candidate.is_switch else stats.boundary_lr_pvalue(lr)
     delta_bic = stats.bic(chi2_after, free_after, n_residuals) - stats.bic(chi2_before, free_before, n_residuals)
-    improves = chi2_after < chi2_before and (lof_p_after > lof_p_before or lof_p_after >= ALPHA)
+    turned_failing = lof_p_before >= ALPHA and lof_p_after < ALPHA
+    improves = chi2_after < chi2_before and not turned_failing
     significant = (p is not None and p < ALPHA) or delta_bic < -2.0
     return Decision(candidate.name, bool(improves and significant), float(chi2_before), float(chi2_after),
                     float(lr), p, float(delta_bic), float(lof_p_before), float(lof_p_after), strength)

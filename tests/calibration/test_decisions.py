@@ -43,3 +43,34 @@ def test_a_switch_effect_is_never_widened():
     low, high, log = effect_range(hertz, reference=1.0e9)
     assert log and (low, high) == pytest.approx((2.5e8, 4.0e9))
     assert widened_top(hertz, high) is None
+
+
+# ``judge``: the likelihood-ratio test decides between two fits of the same residuals; the lack of fit
+# only vetoes a fit that passed and no longer does. The p-values below are inputs (each iteration's own
+# Monte Carlo p-value), the expected LR p-value is the Self & Liang mixture, 1/2 P(chi2_1 > lr).
+
+def _judge(**kw):
+    from calibration.decisions import judge
+    base = dict(chi2_before=68.7, chi2_after=18.6, n_residuals=4, free_before=3, free_after=3)
+    return judge(candidates()["rolling_epsd2"], **{**base, **kw})
+
+
+def test_a_significant_fall_between_two_failing_fits_is_kept_whatever_their_p_values():
+    """Both fits far outside the noise: the second's Monte Carlo p-value (5 draws in 20,001) below the
+    first's (12 in 20,001) says nothing about which is better; chi2 68.7 -> 18.6 on the same residuals does."""
+    from scipy import stats
+    d = _judge(lof_p_before=12 / 20001, lof_p_after=5 / 20001)
+    assert d.accepted
+    assert d.lr == pytest.approx(50.1) and d.p_value == pytest.approx(0.5 * stats.chi2.sf(50.1, 1))
+
+
+def test_a_passing_lack_of_fit_turned_failing_is_rejected():
+    assert not _judge(chi2_before=6.0, chi2_after=1.0, lof_p_before=0.2, lof_p_after=0.01).accepted
+    assert _judge(chi2_before=6.0, chi2_after=1.0, lof_p_before=0.2, lof_p_after=0.3).accepted
+
+
+def test_a_fall_within_chance_is_rejected():
+    # lr 2: 1/2 P(chi2_1 > 2) = 0.079 > 0.05, and BIC falls by 2 only (same free parameters): not enough
+    d = _judge(chi2_before=20.0, chi2_after=18.0, lof_p_before=0.001, lof_p_after=0.002)
+    assert d.p_value == pytest.approx(0.0786, abs=1e-4) and not d.accepted
+    assert not _judge(chi2_before=18.0, chi2_after=20.0, lof_p_before=0.001, lof_p_after=0.002).accepted
