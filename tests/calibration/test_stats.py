@@ -179,3 +179,21 @@ def test_weighted_rms_is_the_root_mean_square_of_the_standardised_residuals():
     # (3, 4, None): sqrt((9 + 16) / 2); a missing residual is left out, none at all is NaN
     assert math.isclose(stats.weighted_rms([3.0, 4.0, None]), math.sqrt(12.5))
     assert math.isnan(stats.weighted_rms([]))
+
+
+def test_a_test_within_its_own_noise_never_fails_however_exactly_the_fit_absorbs_it():
+    """One free parameter reaches the first residual only (M = diag(0, 1, 1)): under the fitted null
+    that residual is exactly 0, so any residual left there (an optimum held at a bound) is "impossible".
+    Against the noise alone its p is P(chi2_1 >= 0.04) = 0.841 (known variances), which is the answer;
+    a residual 3 sd off on a test the fit cannot reach keeps the fitted null's p, P(chi2_1 >= 9) = 0.0027."""
+    M = stats.residual_maker(np.array([[1.0], [0.0], [0.0]]))
+    r = np.array([0.2, 3.0, -0.5])
+    first, second = np.array([0]), np.array([1])
+    assert stats.group_pvalue(r, first, M, None) < 1e-6           # the fitted null alone: "fails"
+    assert stats.test_pvalue(r, first, M, None, None) == pytest.approx(sps.chi2.sf(0.04, 1), rel=1e-9)
+    assert stats.test_pvalue(r, second, M, None, None) == pytest.approx(sps.chi2.sf(9.0, 1), rel=1e-9)
+    # the same with variances from three replicates (Monte Carlo nulls): still far from failing
+    df = np.full(3, 2.0)
+    draws, unfitted = stats.null_residuals(M, df, seed=1), stats.null_residuals(np.eye(3), df, seed=1)
+    assert stats.group_pvalue(r, first, M, draws) < 1e-3
+    assert stats.test_pvalue(r, first, M, draws, unfitted) > 0.5
