@@ -34,6 +34,8 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
         entries.append({
             "number": it.number, "effects": effects, "added_effect": added,
             "optimum": report.get("optimum"), "parameter_std": (it.optimum or {}).get("parameter_std"),
+            # what the data fix: the report's 95 % interval (noise, simulator, misfit; cut at the box)
+            "parameter_interval": _intervals(report),
             "chi2": lof.get("statistic"), "chi2_per_dof": lof.get("chi2_per_dof"), "dof": lof.get("dof"),
             "noise_band": lof.get("noise_band"), "lack_of_fit_p": lof.get("p_value"),
             # once the diagnosis ran: Holm over the lack of fit and the candidates' directed test
@@ -110,6 +112,17 @@ def _explains(added: list[str] | None, base, report: dict) -> dict | None:
     fell = before.get("statistic") is not None and after.get("statistic") is not None and \
         after["statistic"] < before["statistic"]
     return explanation(added, fell, base.report or {}, report)
+
+
+def _intervals(report: dict) -> dict[str, list[float]] | None:
+    """{parameter: [low, high]} of the report's intervals (``calibration.intervals``), or None before
+    an iteration has them. The optimiser's sd (``parameter_std``) knows the targets' uncertainty alone
+    and no box; a chart drawing optimum +- 2 of it put bars beyond the design box that the report's own
+    intervals, cut there, never reach."""
+    rows = ((report.get("intervals") or {}).get("parameters")) or {}
+    out = {name: [float(row["low"]), float(row["high"])] for name, row in rows.items()
+           if row.get("low") is not None and row.get("high") is not None}
+    return out or None
 
 
 def _finite(value: float) -> float | None:

@@ -157,6 +157,13 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
                           trace.element_handle())
     for points, bound in zip(drawn, (added["low"], added["high"])):
         assert len(points) == 2 and all(1.5 < x < 2.5 and y == bound for x, y in points), (points, bound)
+    # its bar is the report's 95 % interval, which never leaves the box (an optimiser's +-2 sd once did)
+    bars = page.evaluate("""async (el) => {
+        const echarts = await import("/static/vendor/echarts-6.1.0/echarts.esm.min.js");
+        return echarts.getInstanceByDom(el).getOption().series.find((s) => s.name === "95 % interval").data; }""",
+                         trace.element_handle())
+    interval = history[1]["parameter_interval"][added["name"]]
+    assert [b[-2:] for b in bars] == [interval] and added["low"] <= interval[0] <= interval[1] <= added["high"]
     # iteration 1 stays readable from the selector
     page.locator("nav.iterations a", has_text=re.compile(r"^1")).click()
     expect_text(page, "p.active-effects", "Iteration 1 model: no contact effects")

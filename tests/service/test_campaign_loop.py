@@ -55,6 +55,15 @@ def test_diagnosis_names_the_effect_and_adding_it_lets_the_error_fall(s2):
         assert math.isclose(entry["weighted_rms"], math.sqrt(sum(x * x for x in r) / len(r)), rel_tol=1e-12)
     phi = next(v for k, v in history["targets"].items() if k.startswith("dst__friction_angle_deg"))
     assert abs(phi["residuals"]["2"]) < abs(phi["residuals"]["1"])
+    # each parameter's interval is the report's, inside the design box the iteration ran
+    for entry in (first, second):
+        report = client.get(f"{API}/campaigns/{cid}/report", params={"number": entry["number"]}).json()
+        it = next(i for i in iterations if i["number"] == entry["number"])
+        box = {f["name"]: (f["low"], f["high"]) for f in it["parameters"]["factors"]}
+        assert set(entry["parameter_interval"]) == set(report["intervals"]["parameters"]) == set(box)
+        for name, (low, high) in entry["parameter_interval"].items():
+            assert [low, high] == [report["intervals"]["parameters"][name][k] for k in ("low", "high")]
+            assert box[name][0] <= low <= entry["optimum"][name] <= high <= box[name][1], name
 
 
 def test_automatic_mode_adds_the_indicated_effect_and_stops_with_a_reason(s2):

@@ -106,7 +106,7 @@ DIAGNOSIS = {"verdict", "message", "ranking", "critical_lm", "fingerprints", "al
              "indicated", "adequacy", "directed", "lack_of_fit"}
 RANKED = {"effect", "title", "lm", "p_holm", "explained", "strength", "plausible_range", "unit", "alias_group",
           "significant"}
-HISTORY_ENTRY = {"number", "effects", "added_effect", "optimum", "parameter_std", "chi2", "chi2_per_dof", "dof",
+HISTORY_ENTRY = {"number", "effects", "added_effect", "optimum", "parameter_std", "parameter_interval", "chi2", "chi2_per_dof", "dof",
                  "noise_band", "lack_of_fit_p", "adequacy_p", "directed_p", "per_test", "weighted_rms", "verdict",
                  "top_effect", "decision", "stop_reason", "range_widened", "effect_added_next"}
 

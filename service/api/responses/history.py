@@ -32,7 +32,11 @@ class HistoryEntry(Out):
     effects: list[str] = Field(description="candidate effects in the iteration's model")
     added_effect: list[str] | None = Field(description="effects added relative to the iteration it was built on")
     optimum: ParameterValues | None = Field(description=PARAMETERS)
-    parameter_std: ParameterValues | None = Field(description="standard deviation per factor, its unit")
+    parameter_std: ParameterValues | None = Field(description="the optimiser's standard deviation per factor (the "
+                                                              "targets' uncertainty alone), its unit")
+    parameter_interval: dict[str, list[float]] | None = Field(
+        None, description="per factor [low, high] of the report's 95 % interval (measurement, simulator, misfit; "
+                          "cut at the design box), its unit; null before the iteration has a report")
     chi2: float | None = Field(description="lack-of-fit statistic")
     chi2_per_dof: float | None
     dof: int | None

@@ -40,10 +40,10 @@ function box(rows, key) {
 }
 
 function traceChart(name, rows) {
-  // rows: [{number, value, std, low, high, prior}]
+  // rows: [{number, value, interval, low, high, prior}]; interval: the report's 95 % one, cut at the box
   const series = [
     { type: "line", name: "optimum", data: rows.map((r) => [r.number, r.value]), symbolSize: 8, itemStyle: { color: "#1f5fa8" }, z: 3 },
-    errorBars("±2 sd", rows.filter((r) => Number.isFinite(r.std)).map((r) => [r.number, r.value, null, null, r.value - 2 * r.std, r.value + 2 * r.std]), "#1f5fa8"),
+    errorBars("95 % interval", rows.filter((r) => r.interval).map((r) => [r.number, r.value, null, null, r.interval[0], r.interval[1]]), "#1f5fa8"),
     { type: "line", name: "bounds", data: box(rows, "low"), showSymbol: false, lineStyle: { color: "#98a2b3", type: "dashed" } },
     { type: "line", name: "bounds ", data: box(rows, "high"), showSymbol: false, lineStyle: { color: "#98a2b3", type: "dashed" } },
   ];
@@ -61,7 +61,7 @@ function parameterTraces(history, iterations, priors) {
   const factorsOf = new Map(iterations.map((it) => [it.number, Object.fromEntries((it.parameters?.factors || []).map((f) => [f.name, f]))]));
   return names.map((name) => traceChart(name, history.iterations.filter((it) => it.optimum && name in it.optimum).map((it) => {
     const f = factorsOf.get(it.number)?.[name];
-    return { number: it.number, value: it.optimum[name], std: it.parameter_std?.[name], low: f?.low, high: f?.high,
+    return { number: it.number, value: it.optimum[name], interval: it.parameter_interval?.[name], low: f?.low, high: f?.high,
       prior: priors.find((p) => p.parameter === name) };
   })));
 }
@@ -94,6 +94,6 @@ export function historySection(history, iterations, priors) {
           it.explains ? h("span", { className: `explains ${it.explains.explains === "explains" ? "good" : "bad"}`, title: it.explains.explains_message }, it.explains.explains) : "–",
           batteriesCell(it.batteries)]))),
       h("div", { className: "panels" }, errorChart(its))),
-    h("h4", {}, "Parameters: optimum ±2 sd against the design box (dashed) and priors"),
+    h("h4", {}, "Parameters: optimum with its 95 % interval (the report's, cut at the design box) against the box (dashed) and priors"),
     h("div", { className: "panels small" }, parameterTraces(history, iterations, priors)));
 }
