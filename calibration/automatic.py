@@ -139,6 +139,10 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
             # the iteration's report saw a misfit (on one confirmation battery, or a target out of reach);
             # say why the loop still stops
             reason += f" (every battery at the optimum together: lack of fit p {pooled:.2g})"
+        if not rejected and diagnosis.get("measure_next"):
+            # an honest "inconclusive" says what would decide it; a misfit no candidate matches, where it sits
+            advice = "check first" if diagnosis.get("verdict") == DiagnosisVerdict.NO_MATCH else "measure next"
+            reason += f"; {advice}: {', '.join(diagnosis['measure_next'])}"
         return {**record, "stop_reason": reason}
     base_config = {**campaign_config, "factors": base.parameters["factors"], "fixed_parameters": _fixed(base.parameters)}
     options, tie = cheapest_of_equals(options, diagnosis, base_config, base_report)

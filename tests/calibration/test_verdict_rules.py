@@ -170,6 +170,21 @@ def test_the_automatic_mode_adds_nothing_against_the_diagnosis():
         "rolling_epsd2"
 
 
+def test_an_inconclusive_stop_says_what_to_measure_next():
+    """The loop stops on "inconclusive" with the diagnosis's own advice, where it has one, in the stop reason."""
+    case = make_case(3, "null")
+    settings = loop_settings(case)
+    factors = [f.model_dump() for f in settings.factors]
+    it = SimpleNamespace(number=1, parameters={"factors": factors, "fixed": {}, "effects": {}}, report=None)
+    campaign = {"factors": factors, "fidelity": settings.fidelity, "fixed_parameters": {}}
+    report = {"verdict": Verdict.MISSES.value, "lack_of_fit": {"p_value": 1e-4}, "adequacy": {"fails": True},
+              "diagnosis": {"verdict": DiagnosisVerdict.INCONCLUSIVE.value, "indicated": [], "ranking": [],
+                            "measure_next": ["dst residual_shear_stress_pa"]}}
+    record = automatic.next_step(settings, campaign, [it], it, report, validate=lambda c: c)
+    assert record["next_effect"] is None
+    assert record["stop_reason"] == "diagnosis: inconclusive; measure next: dst residual_shear_stress_pa"
+
+
 # -- an effect that leaves misfit partly explains it ---------------------------------------------------
 def test_an_effect_that_leaves_the_fit_outside_the_noise_partly_explains_it():
     before = {"lack_of_fit": {"chi2_per_dof": 1320.0}}
