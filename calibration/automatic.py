@@ -20,7 +20,7 @@ from typing import Callable
 
 from calibration.adding import effect_hints, with_effect_factor
 from calibration.analysis import active_effects, model_fails
-from calibration.decisions import explanation, judge, widened_top
+from calibration.decisions import explanation, judge, widened_box, widened_top
 from calibration.errors import SettingsError
 from calibration.settings import validated
 from calibration.vocabulary import AGAINST_ADDING, DiagnosisVerdict, StopReason, Verdict
@@ -79,6 +79,25 @@ def widening(config, iterations: list, it, report: dict) -> dict | None:
     return None if top is None else {"effect": name, "factor": c.factor, "base": plan.get("next_base"), "high": top}
 
 
+def box_widening(iterations: list, it, report: dict) -> tuple[list[dict], list[dict]]:
+    """(the factors of ``it`` with every base factor its optimum pins at a box edge moved out, the
+    widenings as {"parameter", "side", "from", "to"}) by ``calibration.decisions.widened_box``; no
+    widening leaves the factors as they were. An effect's strength is left to ``widening``."""
+    first = next((p for p in iterations if p.number == 1), None)
+    first_box = {f["name"]: f for f in ((first.parameters if first is not None else {}) or {}).get("factors", [])}
+    pinned = {b.get("parameter"): b.get("side") for b in (report.get("conflicts") or {}).get("active_bounds", [])}
+    factors, done = [], []
+    for f in it.parameters.get("factors", []):
+        side = pinned.get(f["name"])
+        wider = widened_box(f, side, first_box.get(f["name"])) if side in ("low", "high") else None
+        if wider is None:
+            factors.append(dict(f))
+            continue
+        factors.append(wider)
+        done.append({"parameter": f["name"], "side": side, "from": float(f[side]), "to": float(wider[side])})
+    return factors, done
+
+
 def builds_on(config, iterations: list, it, report: dict) -> bool:
     """Will the automatic mode build on iteration ``it``? Not when the effect it added did not earn its
     place (the next candidate then comes from the diagnosis of the iteration it was built on), nor when
@@ -108,7 +127,10 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     wide = widening(config, iterations, it, report)
     if wide is not None:
         params = it.parameters
-        factors = [{**f, "high": wide["high"]} if f["name"] == wide["factor"] else dict(f) for f in params["factors"]]
+        factors, box = box_widening(iterations, it, report)
+        factors = [{**f, "high": wide["high"]} if f["name"] == wide["factor"] else f for f in factors]
+        if box:
+            record["widened_box"] = box
         return _configured({**record, "widened": True}, wide["effect"], wide["base"],
                            {**campaign_config, "factors": factors, "fixed_parameters": _fixed(params)}, validate)
     rejected = decision is not None and not decision["accepted"]
@@ -129,7 +151,17 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     # "no physical match" and "suspect measurement" offer nothing to add, whatever the ranking holds
     offered = [] if diagnosis.get("verdict") in AGAINST_ADDING else diagnosis.get("indicated", [])
     options = [name for name in offered if name not in skip]
+    # base factors pinned at a box edge short of their typical limit: the next iteration gets the room
+    factors, box = box_widening(iterations, base, base_report)
+    if box:
+        record["widened_box"] = box
+    if not options and box and not rejected:
+        # nothing to add, but the optimum sits on a box edge drawn narrower than the parameter's values
+        # usually lie: before the loop stops on the diagnosis, the same model runs in the wider box
+        return _widened_only(record, base.number, {**campaign_config, "factors": factors,
+                                                   "fixed_parameters": _fixed(base.parameters)}, validate)
     if not options:
+        record.pop("widened_box", None)
         # a rejected effect with no other candidate left: nothing improves; otherwise the diagnosis
         # of the model as it stands says why no effect is indicated
         reason = StopReason.NOTHING_IMPROVES.value if rejected else \
@@ -144,7 +176,7 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
             advice = "check first" if diagnosis.get("verdict") == DiagnosisVerdict.NO_MATCH else "measure next"
             reason += f"; {advice}: {', '.join(diagnosis['measure_next'])}"
         return {**record, "stop_reason": reason}
-    base_config = {**campaign_config, "factors": base.parameters["factors"], "fixed_parameters": _fixed(base.parameters)}
+    base_config = {**campaign_config, "factors": factors, "fixed_parameters": _fixed(base.parameters)}
     options, tie = cheapest_of_equals(options, diagnosis, base_config, base_report)
     if tie is not None:
         record["tie_break"] = tie
@@ -212,6 +244,19 @@ def _fixed(parameters: dict) -> dict:
 
 def _cannot_run(name: str, exc: Exception) -> str:
     return f"{StopReason.CANNOT_RUN.value}{name} cannot run: {getattr(exc, 'message', None) or str(exc)}"
+
+
+def _widened_only(record: dict, base_number: int, nxt: dict, validate: Validate) -> dict[str, Any]:
+    """The record whose next iteration is the base model in a wider box (no effect added), or why it cannot run."""
+    names = ", ".join(w["parameter"] for w in record["widened_box"])
+    try:
+        validated = validate(nxt)
+    except Exception as exc:  # noqa: BLE001 - as in _configured
+        if isinstance(exc, (ValueError, SettingsError)) or hasattr(exc, "message"):
+            return {**record, "stop_reason": f"{StopReason.CANNOT_RUN.value}the box widened for {names} cannot run: "
+                                             f"{getattr(exc, 'message', None) or str(exc)}"}
+        raise
+    return {**record, "next_effect": None, "next_base": base_number, "next_config": validated}
 
 
 def _configured(record: dict, name: str, base_number: int, nxt: dict, validate: Validate) -> dict[str, Any]:

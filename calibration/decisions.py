@@ -66,6 +66,36 @@ def widened_top(candidate: Candidate, high: float) -> float | None:
     return min(cap, off + 2.0 * (high - off))
 
 
+def widened_box(factor: dict, side: str, first: dict | None = None) -> dict | None:
+    """The base factor ``factor`` ({"name", "low", "high", "log"?}) with its ``side`` ("low" or "high")
+    moved out by the box's width (on a log factor, by its ratio), but not past where the parameter's
+    values usually lie (``parameters.typical_range``); None when that side already reaches it, the
+    factor is an effect's strength (``widened_top`` widens those), or the side was widened before:
+    ``first`` is the factor as the campaign's first iteration had it, and a side already beyond it is
+    left alone (once, as an effect's range).
+
+    Why: an optimum pinned at a box edge with the misfit pushing outward is either a box drawn too
+    narrow or a parameter compensating for missing physics (``localise.conflicts``). Where the edge
+    is the parameter's plausible limit (a friction coefficient at 1.0) it is the second, and the
+    diagnosis's job; where it is not (a contact stiffness at 3 MN/m, whose typical range runs to
+    1e10 N/m) a wider box is the cheaper explanation, and an effect added on top of it would be asked
+    to make up for the box. The founding case's spheres with rolling resistance pinned the stiffness at
+    the README box's 3 MN/m with E' still 3.4 sd low."""
+    typical = params_mod.typical_range(factor["name"])
+    if typical is None:
+        return None
+    low, high = float(factor["low"]), float(factor["high"])
+    if first is not None and ((side == "high" and high > float(first["high"]) * (1 + 1e-9))
+                              or (side == "low" and low < float(first["low"]) * (1 - 1e-9))):
+        return None
+    log = bool(factor.get("log"))
+    if side == "high":
+        edge = min(high * (high / low) if log else high + (high - low), typical[1])
+        return {**factor, "high": edge} if edge > high * (1 + 1e-9) else None
+    edge = max(low * (low / high) if log else low - (high - low), typical[0])
+    return {**factor, "low": edge} if edge < low * (1 - 1e-9) else None
+
+
 @dataclass
 class Decision:
     """Whether an added effect earned its place."""

@@ -52,6 +52,8 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
             "stop_reason": (report.get("automatic") or {}).get("stop_reason"),
             "tie_break": ((report.get("automatic") or {}).get("tie_break") or {}).get("message"),
             "range_widened": bool(plan.get("widened")),
+            # base factors whose box this iteration ran wider than the one it was built on (automatic mode)
+            "box_widened": [w["parameter"] for w in plan.get("widened_box") or []],
             # an added effect explains the misfit only when every check holds; else what it leaves
             "explains": _explains(added, base, report),
             "batteries": batteries(it),

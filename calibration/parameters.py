@@ -51,6 +51,18 @@ def upper_limit(name: str) -> float:
     return limit
 
 
+def typical_range(name: str) -> tuple[float, float] | None:
+    """(low, high) where a scalar micro parameter's values usually lie (its field's ``Typical``,
+    ``engine.lab.bounds``: friction coefficients 0.1-1.0, thesis Table 4.4; contact stiffnesses 1e4-1e10
+    N/m; grain densities 800-8,000 kg/m3), or None for an effect's parameter or a field without one."""
+    from engine.lab.bounds import Typical
+
+    if check_factor(name) not in SCALAR_FIELDS:
+        return None
+    typical = next((m for m in MicroParameters.model_fields[name].metadata if isinstance(m, Typical)), None)
+    return None if typical is None else (float(typical.low), float(typical.high))
+
+
 def apply(base: Mapping[str, Any], values: Mapping[str, float]) -> dict[str, Any]:
     """A copy of the parameter dict ``base`` with each dotted factor set to its value."""
     out = copy.deepcopy(dict(base))

@@ -74,3 +74,32 @@ def test_a_fall_within_chance_is_rejected():
     d = _judge(chi2_before=20.0, chi2_after=18.0, lof_p_before=0.001, lof_p_after=0.002)
     assert d.p_value == pytest.approx(0.0786, abs=1e-4) and not d.accepted
     assert not _judge(chi2_before=18.0, chi2_after=20.0, lof_p_before=0.001, lof_p_after=0.002).accepted
+
+
+# ``widened_box``: a base factor pinned at a box edge short of where its values usually lie (engine.lab.bounds'
+# Typical ranges: friction coefficients 0.1-1.0, thesis Table 4.4; contact stiffness 1e4-1e10 N/m) gets the
+# box's width more on that side, once; at its typical limit it is the diagnosis's business.
+
+def test_a_pinned_stiffness_gets_the_box_width_more_within_its_typical_range():
+    from calibration.decisions import widened_box
+    k = {"name": "particle_stiffness_n_per_m", "low": 1.0e6, "high": 3.0e6}
+    assert widened_box(k, "high")["high"] == pytest.approx(5.0e6)
+    assert widened_box(k, "low")["low"] == pytest.approx(1.0e4)          # 1e6 - 2e6 < 0: the typical floor
+    assert widened_box({**k, "log": True}, "high")["high"] == pytest.approx(9.0e6)  # x (3e6 / 1e6)
+    assert widened_box({**k, "high": 1.0e10}, "high") is None            # already at the typical ceiling
+
+
+def test_friction_at_its_typical_ceiling_is_not_widened_and_below_it_is_capped_there():
+    from calibration.decisions import widened_box
+    assert widened_box({"name": "friction_pp", "low": 0.3, "high": 1.0}, "high") is None
+    assert widened_box({"name": "friction_pw", "low": 0.2, "high": 0.8}, "high")["high"] == pytest.approx(1.0)
+    assert widened_box({"name": "effects.rolling_epsd2.rolling_friction", "low": 0.0, "high": 0.5}, "high") is None
+
+
+def test_a_box_is_widened_once():
+    from calibration.decisions import widened_box
+    first = {"name": "particle_stiffness_n_per_m", "low": 1.0e6, "high": 3.0e6}
+    wider = widened_box(first, "high", first)
+    assert wider["high"] == pytest.approx(5.0e6)
+    assert widened_box(wider, "high", first) is None                     # that side was widened already
+    assert widened_box(wider, "low", first)["low"] == pytest.approx(1.0e4)  # the other side has not been

@@ -266,6 +266,50 @@ def test_an_added_strength_pinned_at_the_top_of_its_range_is_redone_once_on_a_wi
     assert widening(config, [first, second], second, unpinned) is None
 
 
+def test_a_base_factor_pinned_short_of_its_typical_range_gets_a_wider_box_with_the_next_effect_or_alone():
+    """The founding case's iteration 2: rolling resistance kept, the stiffness pinned at the README box's
+    3 MN/m, friction_pp at 1.0. The next iteration gets the stiffness box widened by its width (to 5 MN/m,
+    engine.lab.bounds' typical range runs to 1e10 N/m) beside the next effect; friction_pp, at the top of
+    measured friction coefficients (0.1-1.0, thesis Table 4.4), is left to the diagnosis. With nothing
+    indicated, the same model runs in the wider box rather than the loop stopping; and a box widened once
+    is not widened again."""
+    from types import SimpleNamespace
+
+    from calibration.automatic import next_step
+
+    box = [{"name": "particle_density_kg_m3", "low": 2300.0, "high": 2700.0, "unit": "kg/m3", "log": False},
+           {"name": "particle_stiffness_n_per_m", "low": 1.0e6, "high": 3.0e6, "unit": "N/m", "log": False},
+           {"name": "friction_pp", "low": 0.3, "high": 1.0, "unit": "", "log": False}]
+    first = SimpleNamespace(number=1, parameters={"factors": box, "fixed": {}}, report={})
+    pinned = [{"parameter": "particle_stiffness_n_per_m", "side": "high"}, {"parameter": "friction_pp", "side": "high"}]
+    report = {"verdict": "model misses the measurements", "conflicts": {"active_bounds": pinned},
+              "lack_of_fit": {"statistic": 18.6, "dof": 1, "n_residuals": 4, "p_value": 0.00025},
+              "adequacy": {"fails": True}, "optimum": {"particle_stiffness_n_per_m": 3.0e6, "friction_pp": 1.0},
+              "diagnosis": {"verdict": "effect indicated", "indicated": ["particle_shape"],
+                            "ranking": [{"effect": "particle_shape", "lm": 20.0, "strength": 1.5}]}}
+    config = SimpleNamespace(max_iterations=4)
+    campaign = {"name": "c", "material_id": 1, "factors": box, "design": {"type": "full", "centre_runs": 3}}
+    record = next_step(config, campaign, [first], first, report, validate=lambda c: c)
+    assert record["next_effect"] == "particle_shape"
+    assert record["widened_box"] == [{"parameter": "particle_stiffness_n_per_m", "side": "high", "from": 3.0e6,
+                                      "to": pytest.approx(5.0e6)}]
+    factors = {f["name"]: f for f in record["next_config"]["factors"]}
+    assert (factors["particle_stiffness_n_per_m"]["low"], factors["particle_stiffness_n_per_m"]["high"]) == \
+        (1.0e6, pytest.approx(5.0e6))
+    assert factors["friction_pp"]["high"] == 1.0 and "clump_aspect_ratio" in factors
+
+    nothing = {**report, "diagnosis": {"verdict": "inconclusive", "indicated": [], "ranking": []}}
+    alone = next_step(config, campaign, [first], first, nothing, validate=lambda c: c)
+    assert alone["next_effect"] is None and alone["stop_reason"] is None and alone["next_base"] == 1
+    assert [f["high"] for f in alone["next_config"]["factors"]] == [2700.0, pytest.approx(5.0e6), 1.0]
+
+    second = SimpleNamespace(number=2, parameters={"factors": alone["next_config"]["factors"], "fixed": {}}, report=None)
+    first.report = {"automatic": alone}
+    again = next_step(config, campaign, [first, second], second, nothing, validate=lambda c: c)
+    assert again["next_effect"] is None and again["stop_reason"].startswith("diagnosis: inconclusive")
+    assert "widened_box" not in again
+
+
 def test_the_history_counts_an_added_effect_from_its_base_and_marks_a_widened_range(s2):
     """Automatic mode built iteration 3 on iteration 1 again (rolling resistance redone on a wider
     range): the history says iteration 3 added rolling resistance, over a widened range, and that

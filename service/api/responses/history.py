@@ -51,6 +51,9 @@ class HistoryEntry(Out):
     decision: Decision | None = Field(description="automatic mode: whether the added effect was kept")
     stop_reason: str | None = Field(description="automatic mode: why the loop stopped here")
     range_widened: bool = Field(description="the iteration redid its base on a wider strength range")
+    box_widened: list[str] = Field(default_factory=list, description="base factors this iteration ran in a wider box "
+                                                                     "than the iteration it was built on (their optimum "
+                                                                     "sat on an edge short of their typical range)")
     effect_added_next: list[str] | None = Field(description="what the next iteration added")
     tie_break: str | None = Field(None, description="automatic mode: the candidates the diagnosis could not tell "
                                                     "apart and why the next effect went first among them")

@@ -200,6 +200,15 @@ class TieBreak(Out):
     message: str
 
 
+class BoxWidening(Out):
+    """A base factor's box edge moved out for the next iteration (calibration.decisions.widened_box)."""
+
+    parameter: str
+    side: str = Field(description="low or high")
+    from_: float = Field(alias="from", description="the edge this iteration had, the factor's unit")
+    to: float = Field(description="the edge the next iteration gets, within the parameter's typical range")
+
+
 class Automatic(Out):
     """The automatic mode's record of an iteration: its decision and the next step or why it stopped."""
 
@@ -209,6 +218,8 @@ class Automatic(Out):
     next_base: int | None = None
     stop_reason: str | None = None
     widened: bool | None = Field(None, description="the next iteration redoes this one on a wider range")
+    widened_box: list[BoxWidening] | None = Field(None, description="base factors the next iteration runs in a wider "
+                                                                    "box: their optimum sat on an edge of this one")
     next_config: dict[str, Any] | None = Field(None, description="the next iteration's configuration (CampaignCreate)")
     tie_break: TieBreak | None = Field(None, description="the leading candidates the diagnosis could not tell apart "
                                                          "and why the next effect was tried first among them")

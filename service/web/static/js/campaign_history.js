@@ -81,7 +81,7 @@ export function historySection(history, iterations, priors) {
   // the table takes the card's width (eight columns do not fit beside the chart); the chart sits under it
   return h("section", { className: "card history" }, h("h3", {}, "Across iterations"),
     h("div", {}, h("div", { className: "scroll" }, table(["Iteration", "Effects", "χ²/dof", "Noise band", "p (omnibus · directed → Holm)", "Verdict", "Next", "Automatic", "Added effect", "Batteries"],
-        its.map((it) => [String(it.number), (it.effects.length ? it.effects.join(", ") : "none") + (it.range_widened ? " (range widened)" : ""),
+        its.map((it) => [String(it.number), (it.effects.length ? it.effects.join(", ") : "none") + (it.range_widened ? " (range widened)" : "") + (it.box_widened?.length ? ` (box widened: ${it.box_widened.join(", ")})` : ""),
           h("span", { className: "chi2dof", "data-iteration": String(it.number) }, fmt(it.chi2_per_dof, 4)),
           it.noise_band ? `${fmt(Math.max(0, it.noise_band[0]), 2)} – ${fmt(it.noise_band[1], 2)}` : "–",
           adequacyCell(it), it.verdict || "–",
