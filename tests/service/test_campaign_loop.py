@@ -322,8 +322,11 @@ def test_the_history_counts_an_added_effect_from_its_base_and_marks_a_widened_ra
     box = body["factors"]
     rolling = {"name": "effects.rolling_epsd2.rolling_friction", "low": 0.0, "high": 0.25, "unit": "1"}
     lof = {"statistic": 20.0, "dof": 6, "chi2_per_dof": 3.3, "p_value": 0.003}
+    stiffness = box[[f["name"] for f in box].index("particle_stiffness_n_per_m")]
     plans = [{"next_effect": "rolling_epsd2", "next_base": 1},
-             {"next_effect": "rolling_epsd2", "next_base": 1, "widened": True},
+             {"next_effect": "rolling_epsd2", "next_base": 1, "widened": True,
+              "widened_box": [{"parameter": stiffness["name"], "side": "high", "from": stiffness["high"],
+                               "to": 2 * stiffness["high"] - stiffness["low"]}]},
              {"stop_reason": "lack of fit passes"}]
     with app.state.session_factory() as session:
         for number, (factors, plan) in enumerate([(box, plans[0]), (box + [rolling], plans[1]),
@@ -337,3 +340,7 @@ def test_the_history_counts_an_added_effect_from_its_base_and_marks_a_widened_ra
     assert [e["added_effect"] for e in entries] == [None, ["rolling_epsd2"], ["rolling_epsd2"]]
     assert [e["effect_added_next"] for e in entries] == [["rolling_epsd2"], ["rolling_epsd2"], None]
     assert [e["range_widened"] for e in entries] == [False, False, True]
+    assert [e["box_widened"] for e in entries] == [[], [], [stiffness["name"]]]
+    # the record's widening reads back through the report's response model ("from" is a keyword in Python)
+    report = client.get(f"{API}/campaigns/{cid}/report", params={"number": 2}).json()
+    assert report["automatic"]["widened_box"] == plans[1]["widened_box"]
