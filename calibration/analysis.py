@@ -15,6 +15,7 @@ import numpy as np
 from calibration import calibrate as cal
 from calibration.attribute import signature_seeds
 from calibration import fits
+from calibration import stats
 from calibration.fitting import TargetModel
 from calibration.localise import ALPHA, localise
 from calibration.intervals import parameter_intervals
@@ -181,6 +182,33 @@ def _localised(config, design, modelled, optimum: dict, conf):
     return res, loc
 
 
+def diagnosis_projection(res, design, theta: dict[str, float]):
+    """M for the diagnosis: what the free parameters cannot absorb, where a parameter pinned on a box edge
+    short of its typical range counts as absorbing.
+
+    The report's lack of fit judges the model in its box, so a parameter pinned with the misfit pushing
+    outward absorbs nothing more there (``calibrate.residuals_at``). The diagnosis asks another question:
+    which physics is missing. A friction coefficient at 1.0 cannot go further (the misfit it leaves is the
+    candidates' to explain); a contact stiffness at a box edge of 3 MN/m can, and the automatic mode gives it
+    the room (``decisions.widened_box``). A signature along what the wider box would absorb is no evidence
+    of missing physics: the founding case's E' deficit with the stiffness pinned is not Hertz-Mindlin's.
+    Returns (M, the names of the parameters counted as absorbing for that reason only)."""
+    from dataclasses import replace
+
+    from calibration.decisions import widened_box
+
+    pinned = {b["parameter"]: b["side"] for b in cal.active_bounds(design, theta)}
+    absorbing, room = [], []
+    for keep, name in zip(res.absorbing, res.free):
+        f = design.factor(name)
+        wider = not keep and pinned.get(name) is not None and widened_box(
+            {"name": name, "low": f.low, "high": f.high, "log": f.log}, pinned[name]) is not None
+        absorbing.append(bool(keep or wider))
+        if wider:
+            room.append(name)
+    return replace(res, absorbing=absorbing).M(), room
+
+
 def active_effects(iteration_parameters: dict) -> set[str]:
     """Names of the effects already in an iteration's model (``iteration_parameters``: its factors, fixed
     parameters and fixed contact effects): every fixed contact effect, and every candidate that says it
@@ -260,7 +288,10 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
         if c.is_switch:
             reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
         signatures.append(Signature(c, vector, step, reference))
-    att = attribute(loc, res.r, res.M(), signatures, [k.label for k in res.keys])
+    M, room = diagnosis_projection(res, design, dict(optimum["parameters"]))
+    left = stats.lack_of_fit(res.r, M, res.df, seed=config.seed) if room else None
+    att = attribute(loc, res.r, M, signatures, [k.label for k in res.keys],
+                    room=(room, left.p_value if left is not None else 0.0))
     from calibration.replicates import simulator_share
 
     share = simulator_share({k: conf.sim_sd[k] for k in res.keys if k in conf.sim_sd},

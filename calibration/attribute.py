@@ -280,10 +280,13 @@ def _alias_groups(ranked: list[Ranked], labels: list[str]) -> list[dict]:
 
 
 def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[Signature],
-              labels: list[str]) -> Attribution:
+              labels: list[str], room: tuple[list[str], float] = ((), 0.0)) -> Attribution:
     """Rank the candidates; ``labels`` name the target rows (for the separating measurement). The
     directed test runs against the localisation's own null draws, and the verdict is judged on the
-    localisation with that test (``Localisation.with_directed``), as the caller's iteration then is."""
+    localisation with that test (``Localisation.with_directed``), as the caller's iteration then is.
+    ``room``: (parameters pinned on a box edge short of their typical range, which ``M`` counts as
+    absorbing; the lack-of-fit p of what ``M`` leaves, NaN when nothing is left); when what they leave
+    lies within the noise the verdict says a wider box comes first."""
     candidates = {s.candidate.name: s.candidate for s in signatures}
     directed = stats.directed_test(r, M, [s.vector for s in signatures], loc.null_draws)
     loc = loc.with_directed(directed)
@@ -304,12 +307,12 @@ def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[
     fingerprints = {"columns": list(FINGERPRINT_COLUMNS), "observed": observed_fingerprint(loc),
                     "effects": {c.name: {col: c.fingerprint.get(col, "0") for col in FINGERPRINT_COLUMNS}
                                 for c in candidates.values()}}
-    verdict, message, measure_next = _verdict(loc, ranked, groups, labels, r, M)
+    verdict, message, measure_next = _verdict(loc, ranked, groups, labels, r, M, room)
     return Attribution(ranked, groups, fingerprints, verdict, message, measure_next, candidates, directed,
                        loc.adequacy_p)
 
 
-def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels, r, M):
+def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels, r, M, room=((), 0.0)):
     rt = M @ r
     worst = [labels[i] for i in np.argsort(-np.abs(rt[:len(labels)]))[:3]]
     if loc.lack_of_fit.dof <= 0:
@@ -319,6 +322,11 @@ def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels
     if not loc.fails:
         return (DiagnosisVerdict.NO_MISFIT, "the model agrees with the measurements within their noise; no effect is needed",
                 [])
+    names, left_p = room
+    if names and not left_p < ALPHA:  # NaN (nothing left) or within the noise
+        return (DiagnosisVerdict.INCONCLUSIVE,
+                f"the misfit lies along what a wider box for {', '.join(names)} would absorb (pinned on an edge "
+                "short of its typical range): widen that range before adding physics", [])
     good = [x for x in ranked if x.p_holm < ALPHA and x.plausible and x.score.explained >= MIN_EXPLAINED]
     if good:
         best = good[0]
