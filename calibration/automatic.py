@@ -9,7 +9,9 @@ An iteration that added an effect is judged against the iteration it was built o
 A rejected effect leaves the model as it was: the next candidate indicated by that earlier
 iteration's diagnosis is tried instead, and when none is left nothing improves. An added strength
 pinned at the top of its range (the optimum wants more than the range allows) is first given a range twice as wide on the same base, once (``calibration.decisions.widened_top``,
-as the library loop does), and that iteration is the one judged. Pure functions of
+as the library loop does), and that iteration is the one judged. A base factor pinned on a box edge short
+of its typical range gets the box's width more on that side, once (``box_widening``): beside the next
+effect, or alone when the diagnosis indicates none (it counted such a factor as absorbing). Pure functions of
 what the database holds, so the runner stays resumable.
 """
 from __future__ import annotations
