@@ -182,7 +182,7 @@ def _localised(config, design, modelled, optimum: dict, conf):
     return res, loc
 
 
-def diagnosis_projection(res, design, theta: dict[str, float]):
+def diagnosis_projection(res, design, theta: dict[str, float], priors=()):
     """M for the diagnosis: what the free parameters cannot absorb, where a parameter pinned on a box edge
     short of its typical range counts as absorbing.
 
@@ -198,11 +198,12 @@ def diagnosis_projection(res, design, theta: dict[str, float]):
     from calibration.decisions import widened_box
 
     pinned = {b["parameter"]: b["side"] for b in cal.active_bounds(design, theta)}
+    measured = {p.parameter: {"value": p.value, "uncertainty": p.uncertainty} for p in priors}
     absorbing, room = [], []
     for keep, name in zip(res.absorbing, res.free):
         f = design.factor(name)
         wider = not keep and pinned.get(name) is not None and widened_box(
-            {"name": name, "low": f.low, "high": f.high, "log": f.log}, pinned[name]) is not None
+            {"name": name, "low": f.low, "high": f.high, "log": f.log}, pinned[name], prior=measured.get(name)) is not None
         absorbing.append(bool(keep or wider))
         if wider:
             room.append(name)
@@ -288,7 +289,7 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
         if c.is_switch:
             reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
         signatures.append(Signature(c, vector, step, reference))
-    M, room = diagnosis_projection(res, design, dict(optimum["parameters"]))
+    M, room = diagnosis_projection(res, design, dict(optimum["parameters"]), config.priors)
     left = stats.lack_of_fit(res.r, M, res.df, seed=config.seed) if room else None
     att = attribute(loc, res.r, M, signatures, [k.label for k in res.keys],
                     room=(room, left.p_value if left is not None else 0.0))
@@ -341,7 +342,9 @@ def report_verdict(unreachable: list, assessment: dict, suspects: list[dict] = (
     longer decide where the optimum is, so their check is reported but does not veto "calibrated"."""
     loc = assessment.get("localisation")
     surrogate = assessment.get("surrogate_check") or {}
-    return verdict(unreachable=unreachable, lack_of_fit_fails=None if loc is None else loc["fails"],
+    # no degrees of freedom left: the adequacy test was not made (its p is NaN), so it neither fails nor passes
+    testable = loc is not None and (loc["lack_of_fit"].get("dof") or 0) > 0
+    return verdict(unreachable=unreachable, lack_of_fit_fails=loc["fails"] if testable else None,
                    surrogate_ok=None if assessment.get("polished") else surrogate.get("confirmed"),
                    failing_tests=failing_tests(loc["tests"] if loc else []), suspects=list(suspects),
                    lack_of_fit=loc["lack_of_fit"] if loc else None)

@@ -81,17 +81,20 @@ def widening(config, iterations: list, it, report: dict) -> dict | None:
     return None if top is None else {"effect": name, "factor": c.factor, "base": plan.get("next_base"), "high": top}
 
 
-def box_widening(iterations: list, it, report: dict) -> tuple[list[dict], list[dict]]:
+def box_widening(iterations: list, it, report: dict, priors=()) -> tuple[list[dict], list[dict]]:
     """(the factors of ``it`` with every base factor its optimum pins at a box edge moved out, the
     widenings as {"parameter", "side", "from", "to"}) by ``calibration.decisions.widened_box``; no
-    widening leaves the factors as they were. An effect's strength is left to ``widening``."""
+    widening leaves the factors as they were. An effect's strength is left to ``widening``; ``priors``
+    (the settings' directly measured parameters) keep a measured parameter's box."""
+    measured = {p.parameter: {"value": p.value, "uncertainty": p.uncertainty} for p in priors}
     first = next((p for p in iterations if p.number == 1), None)
     first_box = {f["name"]: f for f in ((first.parameters if first is not None else {}) or {}).get("factors", [])}
     pinned = {b.get("parameter"): b.get("side") for b in (report.get("conflicts") or {}).get("active_bounds", [])}
     factors, done = [], []
     for f in it.parameters.get("factors", []):
         side = pinned.get(f["name"])
-        wider = widened_box(f, side, first_box.get(f["name"])) if side in ("low", "high") else None
+        wider = widened_box(f, side, first_box.get(f["name"]), measured.get(f["name"])) if side in ("low", "high") \
+            else None
         if wider is None:
             factors.append(dict(f))
             continue
@@ -129,7 +132,7 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     wide = widening(config, iterations, it, report)
     if wide is not None:
         params = it.parameters
-        factors, box = box_widening(iterations, it, report)
+        factors, box = box_widening(iterations, it, report, config.priors)
         factors = [{**f, "high": wide["high"]} if f["name"] == wide["factor"] else f for f in factors]
         if box:
             record["widened_box"] = box
@@ -140,7 +143,8 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     base_report = report if base is it else (base.report or {})
     passes = not model_fails(report)
     if not rejected and passes and report.get("verdict") != Verdict.OUT_OF_REACH:
-        reason = StopReason.PASSES.value
+        testable = ((report.get("lack_of_fit") or {}).get("dof") or 0) > 0
+        reason = StopReason.PASSES.value if testable else StopReason.UNTESTABLE.value
         if report.get("verdict") == Verdict.PARTLY_CALIBRATED:
             # the whole passes but a test fails its own check: say so where the loop says why it stopped
             reason += f" ({report['verdict']}: {report.get('meaning')})"
@@ -154,7 +158,7 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     offered = [] if diagnosis.get("verdict") in AGAINST_ADDING else diagnosis.get("indicated", [])
     options = [name for name in offered if name not in skip]
     # base factors pinned at a box edge short of their typical limit: the next iteration gets the room
-    factors, box = box_widening(iterations, base, base_report)
+    factors, box = box_widening(iterations, base, base_report, config.priors)
     if box:
         record["widened_box"] = box
     if not options and box and not rejected:

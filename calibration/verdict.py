@@ -32,6 +32,10 @@ VERDICTS = {
                                "check: the model reproduces the other tests, not {these}; see the diagnosis",
     Verdict.CALIBRATED: "the model reproduces the measurements within their noise at the optimum",
 }
+# "partly calibrated" without a failing test: the fit could not be tested at all
+UNTESTED = ("the targets are matched, but with as many free parameters as measured values no misfit is left to test "
+            "the model against their noise: measure more (each shear load, E' at several stresses) or fix "
+            "parameters measured directly")
 
 TEST_NAMES = {"prior": "the directly measured parameters (priors)"}
 
@@ -57,12 +61,15 @@ def verdict(*, unreachable: list, lack_of_fit_fails: bool | None, surrogate_ok: 
         name = Verdict.MISSES
     elif surrogate_ok is False:
         name = Verdict.SURROGATE_INADEQUATE
-    elif failing:
+    elif failing or lack_of_fit_fails is None:
+        # a failing test, or no test at all: "calibrated" needs the adequacy test made and passed
         name = Verdict.PARTLY_CALIBRATED
     else:
         name = Verdict.CALIBRATED
     meaning = VERDICTS[name]
-    if name == Verdict.PARTLY_CALIBRATED:
+    if name == Verdict.PARTLY_CALIBRATED and not failing:
+        meaning = UNTESTED
+    elif name == Verdict.PARTLY_CALIBRATED:
         names = ", ".join(_test_name(t) for t in failing)
         one = len(failing) == 1
         meaning = meaning.format(tests=names, s="s" if one else "", their="its" if one else "their",
@@ -88,7 +95,7 @@ def checks(*, unreachable, lack_of_fit_fails, surrogate_ok, failing_tests, suspe
     detail = "not testable (no degrees of freedom left)" if lack_of_fit_fails is None else (
         "the misfit exceeds the noise" if lack_of_fit_fails else "the misfit lies within the noise")
     per_dof, band, p = lof.get("chi2_per_dof"), lof.get("noise_band") or [None, None], lof.get("p_value")
-    if per_dof is not None and band[1] is not None:
+    if lack_of_fit_fails is not None and per_dof is not None and band[1] is not None:
         detail += f": chi2/dof {per_dof:.3g} on {lof.get('dof')} dof, p {p:.3g}"
         if adequacy_p is not None:
             detail += f"; with the candidates' directed test (Holm) p {adequacy_p:.3g}"

@@ -104,6 +104,7 @@ class StopReason(Word):
     verdict or the reason the next iteration cannot run, after these prefixes."""
 
     PASSES = "lack of fit passes"
+    UNTESTABLE = "lack of fit not testable"  # as many free parameters as measured values: nothing left to test
     SUSPECT_MEASUREMENT = "suspect measurement: "  # + the measurement and its likely unit slip
     MAX_ITERATIONS = "maximum number of iterations reached"
     NOTHING_IMPROVES = "nothing improves"

@@ -51,6 +51,29 @@ def test_a_test_failing_its_own_check_refuses_calibrated():
     assert all(c["holds"] is not False for c in calibrated["checks"])
 
 
+def test_a_fit_with_no_degrees_of_freedom_left_is_not_called_calibrated():
+    """Four targets, four free parameters: the optimum can match them all and nothing is left to test the
+    model against their noise (the lack of fit's p is NaN). The adequacy check is "not made", the verdict
+    "partly calibrated" saying why, and the automatic mode stops with "lack of fit not testable", not "passes"."""
+    untested = {"statistic": 0.4, "dof": 0, "p_value": float("nan"), "n_residuals": 4,
+                "chi2_per_dof": float("nan"), "noise_band": [float("nan"), float("nan")]}
+    passing = [dict(t, fails=False) for t in TESTS]
+    result = report_verdict([], {"localisation": {"fails": False, "tests": passing, "lack_of_fit": untested},
+                                 "surrogate_check": {"confirmed": True}})
+    assert result["verdict"] == Verdict.PARTLY_CALIBRATED and "as many free parameters as measured" in result["meaning"]
+    adequacy = _check(result, "model against the measurements")
+    assert adequacy["holds"] is None and adequacy["detail"] == "not testable (no degrees of freedom left)"
+
+    case = make_case(3, "null")
+    settings = loop_settings(case)
+    factors = [f.model_dump() for f in settings.factors]
+    it = SimpleNamespace(number=1, parameters={"factors": factors, "fixed": {}, "effects": {}}, report=None)
+    campaign = {"factors": factors, "fidelity": settings.fidelity, "fixed_parameters": {}}
+    report = {**result, "lack_of_fit": {**untested, "p_value": None}, "conflicts": {"active_bounds": []}}
+    record = automatic.next_step(settings, campaign, [it], it, report, validate=lambda c: c)
+    assert record["stop_reason"].startswith(StopReason.UNTESTABLE + " (partly calibrated: the targets are matched")
+
+
 def test_the_diagnosed_verdict_keeps_the_rule():
     report = {"verdict": Verdict.CALIBRATED.value, "tests": TESTS, "lack_of_fit": ISSUE_LOF, "unreachable": [],
               "surrogate_check": {"confirmed": True}}

@@ -500,7 +500,7 @@ def test_no_physical_match_page_offers_no_add_button(page, service, shots):
     import time
 
     from conftest_s2 import campaign_body
-    from test_verdict_rules_api import IMPOSSIBLE_BULK_DENSITY
+    from test_verdict_rules_api import DENSITY_PRIOR, IMPOSSIBLE_BULK_DENSITY
 
     material = service.api("GET", "/materials", params={"limit": 200}).json()["items"]
     thesis = next(m for m in material if m["name"] == "thesis-coarse-aggregate")
@@ -509,7 +509,8 @@ def test_no_physical_match_page_offers_no_add_button(page, service, shots):
     assert service.api("DELETE", f"/materials/{copy['id']}/measurements/{old['id']}").status_code == 204
     assert service.api("POST", f"/materials/{copy['id']}/measurements", json={
         "test": "fill", "quantity": "bulk_density_kg_m3", "values": IMPOSSIBLE_BULK_DENSITY, "unit": "kg/m3"}).status_code == 201
-    cid = service.api("POST", "/campaigns", json=campaign_body(copy["id"], name="no match")).json()["id"]
+    cid = service.api("POST", "/campaigns", json=campaign_body(copy["id"], name="no match",
+                                                                priors=[DENSITY_PRIOR])).json()["id"]
     assert service.api("POST", f"/campaigns/{cid}/start").status_code < 300
     deadline = time.monotonic() + TIMEOUT_MS / 1000
     while service.api("GET", f"/campaigns/{cid}").json()["status"] != "completed":

@@ -171,7 +171,7 @@ def test_a_diagnosis_that_finds_no_misfit_stops_the_loop_and_says_on_what_eviden
     it = SimpleNamespace(number=1, report=None, parameters={"factors": [], "fixed": {}})
     report = {"lack_of_fit": {"p_value": 0.01}, "verdict": "model misses the measurements",
               "diagnosis": {"verdict": "no misfit", "indicated": [], "lack_of_fit": {"p_value": 0.26}}}
-    record = next_step(SimpleNamespace(max_iterations=3), {}, [it], it, report)
+    record = next_step(SimpleNamespace(max_iterations=3, priors=[]), {}, [it], it, report)
     assert record["next_effect"] is None
     assert record["stop_reason"].startswith("diagnosis: no misfit") and "p 0.26" in record["stop_reason"]
 
@@ -250,7 +250,7 @@ def test_an_added_strength_pinned_at_the_top_of_its_range_is_redone_once_on_a_wi
                                                                       "unit": "1", "log": False}], "fixed": {}})
     pinned = {"conflicts": {"active_bounds": [{"parameter": factor, "side": "high"}]}, "verdict": "calibrated",
               "lack_of_fit": {**lof, "statistic": 12.0, "dof": 9, "p_value": 0.2}, "optimum": {factor: 0.248}}
-    config = SimpleNamespace(max_iterations=4)
+    config = SimpleNamespace(max_iterations=4, priors=[])
     campaign = {"name": "c", "material_id": 1, "factors": box, "design": {"type": "full", "centre_runs": 3}}
     record = next_step(config, campaign, [first, second], second, pinned)
     assert record["widened"] and record["next_effect"] == "rolling_epsd2" and record["next_base"] == 1
@@ -261,7 +261,7 @@ def test_an_added_strength_pinned_at_the_top_of_its_range_is_redone_once_on_a_wi
     second.report = {**pinned, "automatic": record}
     third = SimpleNamespace(number=3, parameters={**second.parameters, "factors": record["next_config"]["factors"]})
     assert widening(config, [first, second, third], third, pinned) is None  # once
-    assert widening(SimpleNamespace(max_iterations=2), [first, second], second, pinned) is None  # no room left
+    assert widening(SimpleNamespace(max_iterations=2, priors=[]), [first, second], second, pinned) is None  # no room left
     unpinned = {**pinned, "conflicts": {"active_bounds": []}}
     assert widening(config, [first, second], second, unpinned) is None
 
@@ -287,7 +287,7 @@ def test_a_base_factor_pinned_short_of_its_typical_range_gets_a_wider_box_with_t
               "adequacy": {"fails": True}, "optimum": {"particle_stiffness_n_per_m": 3.0e6, "friction_pp": 1.0},
               "diagnosis": {"verdict": "effect indicated", "indicated": ["particle_shape"],
                             "ranking": [{"effect": "particle_shape", "lm": 20.0, "strength": 1.5}]}}
-    config = SimpleNamespace(max_iterations=4)
+    config = SimpleNamespace(max_iterations=4, priors=[])
     campaign = {"name": "c", "material_id": 1, "factors": box, "design": {"type": "full", "centre_runs": 3}}
     record = next_step(config, campaign, [first], first, report, validate=lambda c: c)
     assert record["next_effect"] == "particle_shape"
