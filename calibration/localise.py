@@ -196,11 +196,11 @@ def localise(res: Residuals, *, active_bounds=(), priors=(), reachability=(), se
     names = res.tests
     groups = list(dict.fromkeys(names))
     pvals = []
-    # the noise alone, nothing fitted: a test within its own measurements' noise never fails (test_pvalue)
+    # the noise alone, nothing fitted: a test within its own measurements' noise never fails (own_check_pvalue)
     unfitted = stats.null_residuals(np.eye(r.size), df, seed=seed)
     for test in groups:
         members = np.array([i for i, t in enumerate(names) if t == test])
-        pvals.append(stats.test_pvalue(r, members, M, draws, unfitted))
+        pvals.append(stats.own_check_pvalue(r, members, M, draws, unfitted))
         chi2 = float(np.sum(r[members] ** 2))
         tests.append({"test": test, "n": int(members.size), "chi2": chi2,
                       "share": chi2 / total if total > 0 else 0.0, "p_value": pvals[-1]})

@@ -139,7 +139,7 @@ def group_pvalue(r: np.ndarray, members: np.ndarray, M: np.ndarray, draws: np.nd
     return float((np.count_nonzero(sims >= t_obs) + 1) / (sims.size + 1))
 
 
-def test_pvalue(r: np.ndarray, members: np.ndarray, M: np.ndarray, draws: np.ndarray | None,
+def own_check_pvalue(r: np.ndarray, members: np.ndarray, M: np.ndarray, draws: np.ndarray | None,
                 unfitted: np.ndarray | None) -> float:
     """P-value of one test's share of the misfit: the larger of its p against the fitted null (``M``,
     ``draws``) and against the noise alone (identity projection, ``unfitted``: the same null with

@@ -190,10 +190,10 @@ def test_a_test_within_its_own_noise_never_fails_however_exactly_the_fit_absorbs
     r = np.array([0.2, 3.0, -0.5])
     first, second = np.array([0]), np.array([1])
     assert stats.group_pvalue(r, first, M, None) < 1e-6           # the fitted null alone: "fails"
-    assert stats.test_pvalue(r, first, M, None, None) == pytest.approx(sps.chi2.sf(0.04, 1), rel=1e-9)
-    assert stats.test_pvalue(r, second, M, None, None) == pytest.approx(sps.chi2.sf(9.0, 1), rel=1e-9)
+    assert stats.own_check_pvalue(r, first, M, None, None) == pytest.approx(sps.chi2.sf(0.04, 1), rel=1e-9)
+    assert stats.own_check_pvalue(r, second, M, None, None) == pytest.approx(sps.chi2.sf(9.0, 1), rel=1e-9)
     # the same with variances from three replicates (Monte Carlo nulls): still far from failing
     df = np.full(3, 2.0)
     draws, unfitted = stats.null_residuals(M, df, seed=1), stats.null_residuals(np.eye(3), df, seed=1)
     assert stats.group_pvalue(r, first, M, draws) < 1e-3
-    assert stats.test_pvalue(r, first, M, draws, unfitted) > 0.5
+    assert stats.own_check_pvalue(r, first, M, draws, unfitted) > 0.5
