@@ -234,7 +234,8 @@ def campaign_diagnosis(args) -> int:
 
 def campaign_history(args) -> int:
     h = _call(args, "GET", f"/campaigns/{args.id}/history")
-    rows = [[e["number"], (", ".join(e["effects"]) or "-") + (" (range widened)" if e.get("range_widened") else ""),
+    rows = [[e["number"], (", ".join(e["effects"]) or "-") + (" (range widened)" if e.get("range_widened") else "")
+             + (f" (box widened: {', '.join(e['box_widened'])})" if e.get("box_widened") else ""),
              e["chi2_per_dof"],
              "[" + ", ".join(_fmt(x) for x in e["noise_band"] or []) + "]", e["verdict"],
              ", ".join(e.get("effect_added_next") or []) or "-"] for e in h["iterations"]]

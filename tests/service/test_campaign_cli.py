@@ -228,3 +228,18 @@ def test_campaign_iterate_at_another_resolution(server, capsys):
     assert code == 0, err
     started = json.loads(out)
     assert started["fidelity"] == "coarse" and started["config"]["rig"]["name"] == "thesis-590mm-shear-box"
+
+
+def test_the_history_table_names_a_widened_box(monkeypatch, capsys):
+    """`demcal campaign history` says which iteration ran a wider box than the one it was built on, as the page does."""
+    from types import SimpleNamespace
+
+    from service import cli_campaigns
+
+    entry = {"number": 1, "effects": [], "range_widened": False, "box_widened": [], "chi2_per_dof": 18.6,
+             "noise_band": [0.0, 3.83], "verdict": "model misses the measurements", "effect_added_next": None}
+    history = {"iterations": [entry, {**entry, "number": 2, "box_widened": ["particle_stiffness_n_per_m"]}]}
+    monkeypatch.setattr(cli_campaigns, "_call", lambda *args, **kwargs: history)
+    assert cli_campaigns.campaign_history(SimpleNamespace(id=1, json=False, quiet=False)) == 0
+    rows = capsys.readouterr().out.splitlines()
+    assert "box widened" not in rows[2] and "- (box widened: particle_stiffness_n_per_m)" in rows[3]
