@@ -198,7 +198,7 @@ def diagnosis_projection(res, design, theta: dict[str, float], priors=()):
     from calibration.decisions import widened_box
 
     pinned = {b["parameter"]: b["side"] for b in cal.active_bounds(design, theta)}
-    measured = {p.parameter: {"value": p.value, "uncertainty": p.uncertainty} for p in priors}
+    measured = {p.parameter: p for p in priors}
     absorbing, room = [], []
     for keep, name in zip(res.absorbing, res.free):
         f = design.factor(name)

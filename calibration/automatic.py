@@ -86,7 +86,7 @@ def box_widening(iterations: list, it, report: dict, priors=()) -> tuple[list[di
     widenings as {"parameter", "side", "from", "to"}) by ``calibration.decisions.widened_box``; no
     widening leaves the factors as they were. An effect's strength is left to ``widening``; ``priors``
     (the settings' directly measured parameters) keep a measured parameter's box."""
-    measured = {p.parameter: {"value": p.value, "uncertainty": p.uncertainty} for p in priors}
+    measured = {p.parameter: p for p in priors}
     first = next((p for p in iterations if p.number == 1), None)
     first_box = {f["name"]: f for f in ((first.parameters if first is not None else {}) or {}).get("factors", [])}
     pinned = {b.get("parameter"): b.get("side") for b in (report.get("conflicts") or {}).get("active_bounds", [])}
@@ -164,8 +164,8 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
     if not options and box and not rejected:
         # nothing to add, but the optimum sits on a box edge drawn narrower than the parameter's values
         # usually lie: before the loop stops on the diagnosis, the same model runs in the wider box
-        return _widened_only(record, base.number, {**campaign_config, "factors": factors,
-                                                   "fixed_parameters": _fixed(base.parameters)}, validate)
+        return _configured(record, None, base.number, {**campaign_config, "factors": factors,
+                                                      "fixed_parameters": _fixed(base.parameters)}, validate)
     if not options:
         record.pop("widened_box", None)
         # a rejected effect with no other candidate left: nothing improves; otherwise the diagnosis
@@ -252,25 +252,14 @@ def _cannot_run(name: str, exc: Exception) -> str:
     return f"{StopReason.CANNOT_RUN.value}{name} cannot run: {getattr(exc, 'message', None) or str(exc)}"
 
 
-def _widened_only(record: dict, base_number: int, nxt: dict, validate: Validate) -> dict[str, Any]:
-    """The record whose next iteration is the base model in a wider box (no effect added), or why it cannot run."""
-    names = ", ".join(w["parameter"] for w in record["widened_box"])
-    try:
-        validated = validate(nxt)
-    except Exception as exc:  # noqa: BLE001 - as in _configured
-        if isinstance(exc, (ValueError, SettingsError)) or hasattr(exc, "message"):
-            return {**record, "stop_reason": f"{StopReason.CANNOT_RUN.value}the box widened for {names} cannot run: "
-                                             f"{getattr(exc, 'message', None) or str(exc)}"}
-        raise
-    return {**record, "next_effect": None, "next_base": base_number, "next_config": validated}
-
-
-def _configured(record: dict, name: str, base_number: int, nxt: dict, validate: Validate) -> dict[str, Any]:
-    """The record with the next iteration's validated settings, or the reason they cannot run."""
+def _configured(record: dict, name: str | None, base_number: int, nxt: dict, validate: Validate) -> dict[str, Any]:
+    """The record with the next iteration's validated settings, or the reason they cannot run. ``name``: the
+    effect the next iteration adds; None for the same model in the wider box the record's ``widened_box`` says."""
     try:
         validated = validate(nxt)
     except Exception as exc:  # noqa: BLE001 - any refusal of the settings is a reason to stop, worded
         if isinstance(exc, (ValueError, SettingsError)) or hasattr(exc, "message"):
-            return {**record, "stop_reason": _cannot_run(name, exc)}
+            what = name or "the box widened for " + ", ".join(w["parameter"] for w in record["widened_box"])
+            return {**record, "stop_reason": _cannot_run(what, exc)}
         raise
     return {**record, "next_effect": name, "next_base": base_number, "next_config": validated}

@@ -66,13 +66,13 @@ def widened_top(candidate: Candidate, high: float) -> float | None:
     return min(cap, off + 2.0 * (high - off))
 
 
-def widened_box(factor: dict, side: str, first: dict | None = None, prior: dict | None = None) -> dict | None:
+def widened_box(factor: dict, side: str, first: dict | None = None, prior=None) -> dict | None:
     """The base factor ``factor`` ({"name", "low", "high", "log"?}) with its ``side`` ("low" or "high")
     moved out by the box's width (on a log factor, by its ratio), but not past where the parameter's
     values usually lie (``parameters.typical_range``); None when that side already reaches it, the
     factor is an effect's strength (``widened_top`` widens those), or the side was widened before:
     ``first`` is the factor as the campaign's first iteration had it, and a side already beyond it is
-    left alone (once, as an effect's range). ``prior`` ({"value", "uncertainty"}: the parameter measured
+    left alone (once, as an effect's range). ``prior`` (a ``settings.PriorIn``: the parameter measured
     directly) keeps the box where the edge lies more than 2 of its sd from the measured value: the data
     pushing a measured parameter away from its measurement is a conflict to report, not room to give.
 
@@ -87,7 +87,7 @@ def widened_box(factor: dict, side: str, first: dict | None = None, prior: dict 
     if typical is None:
         return None
     low, high = float(factor["low"]), float(factor["high"])
-    if prior is not None and abs((high if side == "high" else low) - float(prior["value"])) > 2.0 * float(prior["uncertainty"]):
+    if prior is not None and abs((high if side == "high" else low) - prior.value) > 2.0 * prior.uncertainty:
         return None
     if first is not None and ((side == "high" and high > float(first["high"]) * (1 + 1e-9))
                               or (side == "low" and low < float(first["low"]) * (1 - 1e-9))):

@@ -109,7 +109,8 @@ def test_a_measured_parameter_pushed_away_from_its_measurement_keeps_its_box():
     """Particle density by water displacement, 2,586.5 kg/m3 +- 1 % (thesis Section 4.5.2): an edge at 2,700
     lies 4.4 sd from it, so the data pushing there contradict the measurement; an edge at 2,620 (1.3 sd) does not."""
     from calibration.decisions import widened_box
-    prior = {"value": 2586.5, "uncertainty": 25.865}
+    from calibration.settings import PriorIn
+    prior = PriorIn(parameter="particle_density_kg_m3", value=2586.5, uncertainty=25.865)
     rho = {"name": "particle_density_kg_m3", "low": 2300.0, "high": 2700.0}
     assert widened_box(rho, "high") is not None and widened_box(rho, "high", prior=prior) is None
     assert widened_box({**rho, "high": 2620.0}, "high", prior=prior)["high"] == pytest.approx(2940.0)
