@@ -192,7 +192,7 @@ def residuals_at(design: Design, models: Sequence[TargetModel], theta: dict[str,
     not absorbing, so the diagnosis does not project the missing effect away with it.
     """
     free = list(design.names)
-    keys, measured, model, noise, rows = [], [], [], [], []
+    keys, measured, model, noise, rows, surface_se = [], [], [], [], [], []
     m = len(conf.seeds)
     variances = target_variances([tm.target for tm in models], default_relative, discrepancy)
     for tm in models:
@@ -207,6 +207,7 @@ def residuals_at(design: Design, models: Sequence[TargetModel], theta: dict[str,
         model.append(conf.mean[tm.key])
         noise.append(n)
         rows.append(-coded_gradient(tm.fit, design, theta, free) / n.sd)
+        surface_se.append(surface_standard_error(tm.fit, theta))
     prior_names, prior_r = [], []
     for p in priors:
         f = design.factor(p["parameter"])
@@ -225,4 +226,11 @@ def residuals_at(design: Design, models: Sequence[TargetModel], theta: dict[str,
         outward = (side == "high" and grad_s[j] < 0) or (side == "low" and grad_s[j] > 0)
         absorbing.append(not outward)
     return Residuals(keys, np.array(measured), np.array(model), noise, prior_names, np.array(prior_r),
-                     J, free, absorbing)
+                     J, free, absorbing, np.array(surface_se, float))
+
+
+def surface_standard_error(fit, theta: dict[str, float]) -> float:
+    """The standard error of the surface's mean prediction at ``theta`` (doe's se_mean: x^T cov(beta) x), 0 when
+    the surface has no residual degrees of freedom to estimate it from (a saturated fit)."""
+    se = fit.predict([{n: theta[n] for n in fit.design.names}])[0]["se_mean"]
+    return float(se) if se is not None and math.isfinite(se) else 0.0

@@ -32,6 +32,14 @@ with n the quantity's rows and lambda_50 the non-centrality at which chi2'(dof, 
 critical value with probability 1/2 (median power, on the lack of fit's own dof and ALPHA). It enters C with its
 diagonal (the weights do not hold it). No constant is chosen: the allowance follows from the test's dof and
 level, and it shrinks as a quantity is measured on more rows.
+The optimum itself was searched for on the fitted response surfaces, so their error moves it as the measurements'
+noise does: at the optimum, u solves J^T r = 0 with r_i = (y_i - f_i(u)) / s_i, and an error e_i in surface i's
+prediction shifts u by A^-1 J^T e / s exactly as a measurement error would. Each target's surface is its own
+regression, so the surfaces' errors enter C's diagonal as (se_i / s_i)^2, se_i the standard error of the
+surface's mean prediction at the optimum (x^T cov(beta) x, doe's se_mean); a surface fitted with no residual
+dof has no error estimate and adds nothing (the surrogate check then says it is untested). The responses of one
+battery come from one packing, so their surfaces' errors are not strictly independent; the diagonal is the
+approximation made.
 Parameters whose correlation reaches TRADE_CORRELATION are reported as trading: the data fix a
 combination of them, not each, and the report says so next to the intervals rather than letting a falsely
 precise optimum stand. An interval is cut at the factor's box, where the design says nothing beyond.
@@ -95,6 +103,19 @@ def undetected_discrepancy(res, dof: int) -> np.ndarray:
     return np.where(same, np.outer(scaled, scaled), 0.0)
 
 
+def surface_error(res) -> np.ndarray:
+    """S: the whitened covariance of the surfaces' prediction errors at the optimum, diagonal (se_i / s_i)^2 on
+    the target rows, zero on the priors' rows and where ``res`` carries no surface error."""
+    n = len(res.J)
+    S = np.zeros((n, n))
+    se = getattr(res, "surface_se", None)
+    if se is None or len(se) == 0:
+        return S
+    k = len(res.keys)
+    S[:k, :k] = np.diag((np.asarray(se, float) / res.sd) ** 2)
+    return S
+
+
 def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level: float = LEVEL,
                         discrepancy=(), undetected: bool = True) -> dict[str, Any]:
     """{"level", "scale", "quantile", "parameters": {name: {value, sd, low, high, at_bound}},
@@ -113,7 +134,7 @@ def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level
     scale = float(lack_of_fit.per_dof) if fails else 1.0
     quantile = float(sps.t.ppf(0.5 + level / 2, lack_of_fit.dof) if fails else sps.norm.ppf(0.5 + level / 2))
     inv = np.asarray(inv, float)
-    C = shared_discrepancy(res, discrepancy)
+    C = shared_discrepancy(res, discrepancy) + surface_error(res)
     if undetected:
         C = C + undetected_discrepancy(res, lack_of_fit.dof)
     cov = scale * (inv + inv @ J.T @ C @ J @ inv)
@@ -149,8 +170,10 @@ def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level
             "scaled_by_misfit": bool(fails), "parameters": params, "correlation": corr, "trades": trades,
             "unidentified": sorted(set(unidentified)),
             "undetected_shift": bool(undetected),
+            "surface_error": bool(np.any(surface_error(res))),
             "about": "from the whitened Jacobian of every target (measurement, discrepancy and simulator noise) "
-                     "and the priors, a discrepancy shared by the rows of one quantity"
+                     "and the priors, the response surfaces' prediction error at the optimum, a discrepancy shared "
+                     "by the rows of one quantity"
                      + (", and per quantity the further shift the lack of fit detects only half the time"
                         if undetected else "")
                      + "; widened by chi2/dof when the lack of fit fails; cut at the factor's box"}

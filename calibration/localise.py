@@ -41,6 +41,10 @@ class Residuals:
     J: np.ndarray                            # d r / d (coded free parameter), rows = targets + priors
     free: list[str]
     absorbing: list[bool]                    # False: column dropped (parameter pinned, pushing outward)
+    # the fitted surface's standard error of its mean prediction at the optimum, per target row (natural units;
+    # 0 where the surface has no error estimate). Not part of the lack of fit, which compares batteries with
+    # measurements; it moves the optimum the surfaces were searched for, so the intervals carry it.
+    surface_se: np.ndarray | None = None
 
     @property
     def sd(self) -> np.ndarray:

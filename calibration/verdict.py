@@ -37,6 +37,9 @@ UNTESTED = ("the targets are matched, but with as many free parameters as measur
             "the model against their noise: measure more (each shear load, E' at several stresses) or fix "
             "parameters measured directly")
 
+UNCONFIRMED = ("no simulated response was confirmed by batteries at the optimum, so the fit has not been compared with "
+               "the measurements at all: see the surrogate check and the targets the virtual lab does not simulate")
+
 TEST_NAMES = {"prior": "the directly measured parameters (priors)"}
 
 
@@ -68,7 +71,7 @@ def verdict(*, unreachable: list, lack_of_fit_fails: bool | None, surrogate_ok: 
         name = Verdict.CALIBRATED
     meaning = VERDICTS[name]
     if name == Verdict.PARTLY_CALIBRATED and not failing:
-        meaning = UNTESTED
+        meaning = UNTESTED if lack_of_fit is not None else UNCONFIRMED
     elif name == Verdict.PARTLY_CALIBRATED:
         names = ", ".join(_test_name(t) for t in failing)
         one = len(failing) == 1
@@ -92,7 +95,8 @@ def checks(*, unreachable, lack_of_fit_fails, surrogate_ok, failing_tests, suspe
              "detail": ("out of reach: " + ", ".join(unreachable)) if unreachable else
              "every target is reachable by some parameter set in the box"}]
     lof = lack_of_fit or {}
-    detail = "not testable (no degrees of freedom left)" if lack_of_fit_fails is None else (
+    detail = ("not testable (no degrees of freedom left)" if lack_of_fit is not None else
+              "not made (nothing confirmed at the optimum)") if lack_of_fit_fails is None else (
         "the misfit exceeds the noise" if lack_of_fit_fails else "the misfit lies within the noise")
     per_dof, band, p = lof.get("chi2_per_dof"), lof.get("noise_band") or [None, None], lof.get("p_value")
     if lack_of_fit_fails is not None and per_dof is not None and band[1] is not None:

@@ -131,3 +131,38 @@ def test_a_passing_fit_leaves_the_shift_it_cannot_see():
     d = 0.6  # 10 % of the measured 6, shared, inside the rows' sd of 1 the weights hold
     assert stated["parameters"]["u"]["sd"] ** 2 == pytest.approx(
         (sigma**2 + d**2) / (2 * g**2) + k**2 * sigma**2 / g**2)
+
+
+def test_the_surfaces_error_moves_the_optimum_as_the_measurement_noise_does():
+    """One target y = g u measured with sd s; the optimum is found on a fitted surface whose mean prediction has
+    standard error e. By hand u_hat = (y - e_f) / g, so var(u_hat) = (s^2 + e^2) / g^2: with s = 1, e = 0.75, g = 2
+    in coded units, sd = 1.25 / 2 = 0.625 coded, 0.25 natural on a 0.2-1.0 box (0.4 per coded unit)."""
+    from calibration.keys import ResponseKey
+
+    key = ResponseKey("cct", "confined_modulus", "sigma_20")
+    s, e, g = 1.0, 0.75, 2.0
+    res = SimpleNamespace(free=["friction_pp"], J=np.array([[-g / s]]), keys=[key], sd=np.array([s]),
+                          surface_se=np.array([e]))
+    out = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6}, _lof(1.0, 5, 0.4),
+                              undetected=False)
+    assert out["parameters"]["friction_pp"]["sd"] == pytest.approx(math.sqrt(s**2 + e**2) / g * 0.4)
+    assert out["surface_error"] is True
+    # a surface with no error estimate (se 0) leaves the measurement-only sd 0.4 / 2 = 0.2
+    res.surface_se = np.array([0.0])
+    out = parameter_intervals(res, _design(friction_pp=(0.2, 1.0)), {"friction_pp": 0.6}, _lof(1.0, 5, 0.4),
+                              undetected=False)
+    assert out["parameters"]["friction_pp"]["sd"] == pytest.approx(0.2) and out["surface_error"] is False
+
+
+def test_surface_standard_error_at_the_centre_of_an_orthogonal_design():
+    """For an orthogonal two-level design with n runs, the intercept's variance is MSE / n and at the centre
+    (coded 0) the mean prediction is the intercept alone: se = sqrt(MSE / n) (Montgomery, Design and Analysis
+    of Experiments, the variance of a predicted mean in a 2^k design)."""
+    from calibration.calibrate import surface_standard_error
+    from doe import fit_response, full_factorial
+
+    d = full_factorial([("a", 1.0, 3.0), ("b", 10.0, 30.0)], center_runs=0, replicates=3, seed=2)
+    rng = np.random.default_rng(4)
+    y = 5 + 2.0 * d.coded[:, 0] - 1.0 * d.coded[:, 1] + rng.normal(0, 0.3, d.n_runs)
+    fit = fit_response(d, y, terms=["A", "B"], curvature=False)
+    assert surface_standard_error(fit, {"a": 2.0, "b": 20.0}) == pytest.approx(math.sqrt(fit.mse / d.n_runs))

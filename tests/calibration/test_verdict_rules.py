@@ -64,6 +64,13 @@ def test_a_fit_with_no_degrees_of_freedom_left_is_not_called_calibrated():
     adequacy = _check(result, "model against the measurements")
     assert adequacy["holds"] is None and adequacy["detail"] == "not testable (no degrees of freedom left)"
 
+    # nothing confirmed at the optimum (no localisation at all): also not "calibrated", and not blamed on the
+    # number of parameters either
+    unconfirmed = report_verdict([], {"localisation": None, "surrogate_check": {"confirmed": None}})
+    assert unconfirmed["verdict"] == Verdict.PARTLY_CALIBRATED
+    assert "no simulated response was confirmed" in unconfirmed["meaning"]
+    assert _check(unconfirmed, "model against the measurements")["detail"] == "not made (nothing confirmed at the optimum)"
+
     case = make_case(3, "null")
     settings = loop_settings(case)
     factors = [f.model_dump() for f in settings.factors]
