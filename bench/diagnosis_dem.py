@@ -255,10 +255,12 @@ SCENARIOS = {
     "rolling_strong": Scenario("rolling_strong", "rolling_epsd2", 0.3, 6, kind="strong"),
     "shape_strong": Scenario("shape_strong", "particle_shape", 1.8, 7, kind="strong"),
     # Gamma 180 J/m2: sigma_t ~ 1.5 F_c / d^2 with F_c = 3/2 pi R* Gamma is about 9 kPa on the 40 mm spheres
-    # (engine/effects/cohesion_adhesive.py), inside the candidate's plausible 20-200 J/m2
+    # (engine/effects/cohesion_adhesive.py), inside the candidate's plausible 20-200 J/m2. Measured (session 24):
+    # a cohesion intercept of about 4 kPa, lambda ~ 8 against tier B's 13 % scatter on the residual shear stress
     "cohesion_strong": Scenario("cohesion_strong", "cohesion_adhesive", 180.0, 8, kind="strong"),
-    # E' measured from 3 to 60 kPa: a Hertzian E' ~ sigma^(1/3) moves by 2.7x over that range, a linear one
-    # hardly at all, so the slope the CCT windows see is what separates them
+    # E' measured from 3 to 60 kPa, chosen because a Hertzian contact's stiffness ~ F^(1/3) moves by 2.7x over
+    # that range. Measured (session 24, docs/diagnosis.md): the linear packing's E' rises as much (3.3x against
+    # the Hertzian world's 3.5x; the contact network grows under load), so these windows do not separate the laws
     "hertz_strong": Scenario("hertz_strong", "hertz_mindlin", None, 9, kind="strong",
                              options={"cct_window_stresses_pa": [3.0e3, 10.0e3, 30.0e3, 60.0e3]}),
     # issue 33: DEM nulls measured with an effect-free set-up unlike the calibrated model's
