@@ -277,6 +277,9 @@ class Intervals(Out):
     undetected_shift: bool = Field(False, description="the covariance holds, for each quantity without a stated "
                                    "model-form discrepancy, the shift shared by its rows that the lack of fit detects "
                                    "only half the time (calibration.intervals; false in reports made before it)")
+    surface_error: bool = Field(False, description="the covariance holds the response surfaces' prediction error at "
+                                "the optimum (calibration.intervals; false where no surface has an error estimate, "
+                                "and in reports made before it)")
     parameters: dict[str, ParameterInterval]
     correlation: dict[str, dict[str, float | None]]
     trades: list[Trade] = Field(description="parameter pairs the measurements fix only in combination")
