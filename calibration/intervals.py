@@ -134,7 +134,8 @@ def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level
     scale = float(lack_of_fit.per_dof) if fails else 1.0
     quantile = float(sps.t.ppf(0.5 + level / 2, lack_of_fit.dof) if fails else sps.norm.ppf(0.5 + level / 2))
     inv = np.asarray(inv, float)
-    C = shared_discrepancy(res, discrepancy) + surface_error(res)
+    S = surface_error(res)
+    C = shared_discrepancy(res, discrepancy) + S
     if undetected:
         C = C + undetected_discrepancy(res, lack_of_fit.dof)
     cov = scale * (inv + inv @ J.T @ C @ J @ inv)
@@ -170,7 +171,7 @@ def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level
             "scaled_by_misfit": bool(fails), "parameters": params, "correlation": corr, "trades": trades,
             "unidentified": sorted(set(unidentified)),
             "undetected_shift": bool(undetected),
-            "surface_error": bool(np.any(surface_error(res))),
+            "surface_error": bool(np.any(S)),
             "about": "from the whitened Jacobian of every target (measurement, discrepancy and simulator noise) "
                      "and the priors, the response surfaces' prediction error at the optimum, a discrepancy shared "
                      "by the rows of one quantity"
