@@ -268,7 +268,7 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
     residuals are the report's (the confirmation batteries); each candidate's signature is its mean
     minus the planned baseline's at the same seeds (common random numbers), seeds the confirmation
     did not use, so that the signatures' noise is independent of the residuals."""
-    from calibration.attribute import Signature, attribute, signature_vector
+    from calibration.attribute import Signature, attribute, signature_noise_var, signature_vector
     from calibration.fitting import run_values
     from engine.candidates import candidates
 
@@ -285,10 +285,11 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
         values = [run_values(records) for n, _, records in planned if n == name]
         step = 1.0 if c.is_switch else c.step
         vector = signature_vector(res, values, baseline, step)
+        noise = signature_noise_var(res, conf.sim_sd, len(values), step)
         reference = None
         if c.is_switch:
             reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
-        signatures.append(Signature(c, vector, step, reference))
+        signatures.append(Signature(c, vector, step, reference, noise))
     M, room = diagnosis_projection(res, design, dict(optimum["parameters"]), config.priors)
     left = stats.lack_of_fit(res.r, M, res.df, seed=config.seed) if room else None
     att = attribute(loc, res.r, M, signatures, [k.label for k in res.keys],

@@ -46,6 +46,9 @@ class Signature:
     vector: np.ndarray            # whitened, per unit strength (rows: targets then priors)
     step: float                   # strength change the battery applied
     reference: float | None = None  # switch-type: the strength switched on
+    # variance of each row of ``vector`` that the simulator's scatter puts there (signature_noise_var);
+    # None: not known (a deterministic evaluator, or a caller that does not say)
+    noise_var: np.ndarray | None = None
 
 
 # signature batteries run at the confirmation seeds plus this (modulo the largest seed)
@@ -81,6 +84,36 @@ def signature_vector(res, on: list[dict], base: list[dict], step: float) -> np.n
     return np.concatenate([diff, np.zeros(len(res.prior_names))])
 
 
+def signature_noise_var(res, simulator_sd: dict, n_seeds: int, step: float) -> np.ndarray:
+    """Per row of a signature (``signature_vector``'s units), the variance the simulator's scatter gives it:
+    the signature is a difference of two means of ``n_seeds`` batteries, each of sd ``simulator_sd[key]``,
+    over the row's sd and the step, so 2 s_sim^2 / (n_seeds sd^2 step^2); zero where the simulator's sd is
+    unknown and on the prior rows."""
+    out = []
+    for i, key in enumerate(res.keys):
+        sd_sim = simulator_sd.get(key)
+        out.append(0.0 if not sd_sim or n_seeds < 1 else
+                   2.0 * sd_sim ** 2 / (n_seeds * float(res.sd[i]) ** 2 * step ** 2))
+    return np.concatenate([out, np.zeros(len(res.prior_names))])
+
+
+def noise_share(M: np.ndarray, signature: np.ndarray, noise_var: np.ndarray | None) -> float:
+    """The share of a projected signature's squared length the simulator's noise accounts for in
+    expectation, E|M e|^2 / |M s|^2 with e ~ N(0, diag(noise_var)) (trace(M D M^T) = sum_j D_j |M_:j|^2).
+
+    Why: noise in a signature attenuates its score the way a regressor measured with error does: with
+    s = true + e, u.r keeps the true projection's numerator while |M s| grows, so LM_observed ~
+    LM_true (1 - share). A share near 1 says the probe measured the packing's noise, not the effect."""
+    if noise_var is None:
+        return 0.0
+    projected = M @ np.asarray(signature, float)
+    length2 = float(projected @ projected)
+    noise = float(np.sum(np.asarray(noise_var, float) * np.sum(M * M, axis=0)))
+    if length2 <= 1e-300:
+        return math.inf if noise > 0 else 0.0
+    return noise / length2
+
+
 @dataclass
 class Ranked:
     name: str
@@ -92,6 +125,7 @@ class Ranked:
     plausible: bool
     alias_group: int | None = None
     projected: np.ndarray | None = field(default=None, repr=False)
+    signature_noise: float = 0.0  # noise_share of its signature (0: not known)
 
     def to_dict(self, candidate: Candidate) -> dict[str, Any]:
         return {"effect": self.name, "title": self.title, "factor": candidate.factor, "unit": candidate.unit,
@@ -100,7 +134,8 @@ class Ranked:
                 "strength": self.strength, "fraction_of_switch": self.fraction,
                 "plausible_range": list(candidate.plausible_range), "plausible": self.plausible,
                 "proposed_range": _proposed_range(candidate, self.strength),
-                "significant": bool(self.p_holm < ALPHA), "alias_group": self.alias_group}
+                "significant": bool(self.p_holm < ALPHA), "alias_group": self.alias_group,
+                "signature_noise": self.signature_noise}
 
 
 def _proposed_range(candidate: Candidate, strength: float | None) -> list[float] | None:
@@ -299,7 +334,8 @@ def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[
         else:
             strength, fraction = (c.off_value or 0.0) + score.gamma, None
         ranked.append(Ranked(c.name, c.title, score, 1.0, strength, fraction,
-                             _plausible(c, strength, fraction), projected=M @ sig.vector))
+                             _plausible(c, strength, fraction), projected=M @ sig.vector,
+                             signature_noise=noise_share(M, sig.vector, sig.noise_var)))
     for row, adj in zip(ranked, stats.holm([x.score.p_value for x in ranked])):
         row.p_holm = float(adj)
     ranked.sort(key=lambda x: (-(x.plausible and x.score.gamma > 0), -x.score.lm))

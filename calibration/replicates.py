@@ -13,6 +13,13 @@ go the other way. So the diagnosis runs in two stages:
      one made by collinear signatures is physics that more seeds cannot separate), and not every
      candidate is futile (Holm p above ``FUTILE_P``); a "no misfit" verdict is never close (more seeds
      cannot make a fitting model miss);
+   * or **the ranking is close**: the leader is claimed decisively but a rival also explains the misfit
+     (Holm p below alpha, in the direction the effect acts) and would reach the leader's score once the
+     attenuation its signature's noise causes is undone (``rivals``), while the simulator's scatter
+     matters (below). Noise in a signature shrinks its score as a regressor measured with error explains
+     less than the true one would, so a rival whose probe landed on an unlucky packing ranks below an
+     effect it would beat: which of two real contenders is named first is decided on every seed
+     (tier B shape_strong, docs/diagnosis.md);
    * **the simulator's scatter matters**: a signature is a difference of two battery means, variance
      2 s_sim^2 / m, and it is read against residuals of variance v (measurement, discrepancy and the
      confirmation's share of s_sim^2); where the median over targets of 2 s_sim^2 / v is below
@@ -50,8 +57,10 @@ def simulator_share(simulator_sd: dict, residual_sd: dict) -> float | None:
     return statistics.median(ratios) if ratios else None
 
 
-def decided(diagnosis: dict[str, Any]) -> str | None:
-    """Why one seed's diagnosis is final, or None when the decision is close (module docstring)."""
+def decided(diagnosis: dict[str, Any], share: float | None = None) -> str | None:
+    """Why one seed's diagnosis is final, or None when the decision is close (module docstring).
+    ``share``: the simulator's share of the residuals' variance (``simulator_share``; None: unknown, so
+    it may matter), which decides whether a significant rival keeps the ranking open."""
     verdict = diagnosis.get("verdict")
     if verdict == DiagnosisVerdict.NO_MISFIT:
         return "no misfit to explain"
@@ -60,11 +69,34 @@ def decided(diagnosis: dict[str, Any]) -> str | None:
         return "no candidate to rank"
     leader = ranking[0]
     if leader["effect"] in (diagnosis.get("indicated") or []) and leader["p_holm"] < ALPHA_FIRST \
-            and not _separable_by_seeds(diagnosis, leader["effect"]):
+            and not _separable_by_seeds(diagnosis, leader["effect"]) \
+            and not (rivals(diagnosis) and (share is None or share >= SIMULATOR_SHARE_MIN)):
         return f"{leader['effect']} indicated with Holm p {leader['p_holm']:.2g} < {ALPHA_FIRST:g}"
     if all(r["p_holm"] > FUTILE_P for r in ranking):
         return f"every candidate's Holm p above {FUTILE_P:g}"
     return None
+
+
+def rivals(diagnosis: dict[str, Any]) -> list[str]:
+    """The candidates after the leader that could outrank it once their signatures' noise is averaged away.
+
+    A rival explains the misfit too (Holm p below alpha, with a positive strength: a negative one would
+    undo the misfit's direction, which no effect that is off can do), and its score corrected for the
+    attenuation its signature's noise causes, LM / (1 - signature_noise) (``attribute.noise_share``),
+    reaches the leader's score as observed. A signature that is mostly noise (share >= 1) could be anything.
+    """
+    ranking = diagnosis.get("ranking") or []
+    if not ranking:
+        return []
+    lead = float(ranking[0].get("lm") or 0.0)
+    out = []
+    for r in ranking[1:]:
+        if not (r.get("p_holm", 1.0) < ALPHA and (r.get("gamma") is None or r["gamma"] > 0)):
+            continue
+        share = float(r.get("signature_noise") or 0.0)
+        if share >= 1.0 or float(r.get("lm") or 0.0) / (1.0 - share) >= lead:
+            out.append(r["effect"])
+    return out
 
 
 def _separable_by_seeds(diagnosis: dict[str, Any], effect: str) -> bool:
@@ -80,11 +112,14 @@ def _separable_by_seeds(diagnosis: dict[str, Any], effect: str) -> bool:
 
 def more_seeds(diagnosis: dict[str, Any], share: float | None) -> tuple[bool, str]:
     """(run the other seeds?, why), from one seed's diagnosis and the simulator's share of the noise."""
-    reason = decided(diagnosis)
+    reason = decided(diagnosis, share)
     if reason is not None:
         return False, f"one seed decides: {reason}"
     if share is not None and share < SIMULATOR_SHARE_MIN:
         return False, (f"one seed suffices: the measurements' scatter dominates (a signature's simulator noise "
                        f"{share:.2f} of the residuals' variance, below {SIMULATOR_SHARE_MIN:g})")
     where = "unknown" if share is None else f"{share:.2f} of the residuals' variance"
+    if decided(diagnosis, 0.0) is not None:  # decided but for a rival the first seed's noise may have sunk
+        return True, (f"the ranking is close ({', '.join(rivals(diagnosis))} also explain(s) the misfit) and the "
+                      f"simulator's scatter matters ({where}): the other seeds run")
     return True, f"the decision is close and the simulator's scatter matters ({where}): the other seeds run"

@@ -86,3 +86,47 @@ def test_one_seed_first_halves_a_decided_diagnosis():
         assert it.report["diagnosis"]["ranking"][0]["effect"] in ("rolling_epsd2", "particle_shape")
     assert counts[False] == seeds * counts[True]  # a baseline and each candidate, per seed
     assert machine.replicates is replicates
+
+
+
+def _ranked(lead_lm, rival_lm, rival_p, rival_noise, rival_gamma=0.2):
+    d = _diagnosis(ALPHA / 40, p_rest=rival_p)
+    d["ranking"][0].update(lm=lead_lm, gamma=0.3, signature_noise=0.05)
+    d["ranking"][1].update(lm=rival_lm, gamma=rival_gamma, signature_noise=rival_noise)
+    return d
+
+
+def test_a_rival_whose_noisy_signature_could_reach_the_leader_keeps_the_ranking_open():
+    """Noise attenuates a signature's score, LM_observed ~ LM_true (1 - share): a rival at LM 20 with 70 %
+    of its signature noise could stand at 67 > the leader's 60; at 50 % noise only at 40. The ranking is
+    then made on every seed, unless the measurements' scatter dominates (share of the simulator below 1/4)."""
+    close = _ranked(60.0, 20.0, ALPHA / 2, 0.7)
+    more, why = replicates.more_seeds(close, 1.8)
+    assert more is True and "ranking is close" in why and "particle_shape" in why
+    assert replicates.more_seeds(close, None)[0] is True
+    assert replicates.more_seeds(close, 0.2)[0] is False  # one seed's signature is as good as several
+    assert replicates.more_seeds(_ranked(60.0, 20.0, ALPHA / 2, 0.5), 1.8)[0] is False  # 40 < 60
+    assert replicates.more_seeds(_ranked(60.0, 1.0, ALPHA / 2, 1.2), 1.8)[0] is True    # pure noise
+    assert replicates.more_seeds(_ranked(60.0, 20.0, 2 * ALPHA, 0.9), 1.8)[0] is False  # not significant
+    assert replicates.more_seeds(_ranked(60.0, 20.0, ALPHA / 2, 0.9, rival_gamma=-0.2), 1.8)[0] is False
+
+
+def test_the_noise_share_of_a_signature_by_hand():
+    """E|M e|^2 / |M s|^2: with M removing the first row's direction, s = (1, 1, 0) projects to (0, 1, 0)
+    (length 1) and unit noise in every row leaves 2 after projection; unknown noise counts as none."""
+    import numpy as np
+
+    from calibration.attribute import noise_share, signature_noise_var
+
+    M = np.eye(3) - np.outer([1.0, 0, 0], [1.0, 0, 0])
+    assert noise_share(M, np.array([1.0, 1.0, 0.0]), np.ones(3)) == pytest.approx(2.0)
+    assert noise_share(np.eye(3), np.array([2.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0])) == pytest.approx(0.25)
+    assert noise_share(M, np.array([1.0, 1.0, 0.0]), None) == 0.0
+
+    class Res:  # two target rows (sd 2 and 4) and one prior row
+        keys = ["a", "b"]
+        sd = np.array([2.0, 4.0])
+        prior_names = ["density"]
+
+    # 2 s_sim^2 / (m sd^2 step^2): row a 2 x 1 / (2 x 4 x 0.25) = 1; row b unknown; the prior row 0
+    assert signature_noise_var(Res, {"a": 1.0}, 2, 0.5) == pytest.approx([1.0, 0.0, 0.0])
