@@ -101,6 +101,11 @@ function fingerprints(f, titles) {
       ...Object.entries(f.effects).map(([name, row]) => [titles[name] || name, ...cols.map((c) => cell(row[c] ?? ""))])]));
 }
 
+// the share of a signature the simulator's scatter accounts for: near 100 % the probe measured a packing's
+// noise, not the effect, and its score is attenuated by about 1 - this (calibration.attribute.noise_share)
+const probeNoise = (r) => (r.signature_noise ? h("span", { title: "share of the signature that is the simulator's scatter; the score is attenuated by about one minus this" },
+  r.signature_noise >= 1 ? "mostly noise" : `${fmt(100 * r.signature_noise, 2)} %`) : "–");
+
 // canAdd: the campaign is completed and this is its latest iteration.
 export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded }) {
   const groups = d.alias_groups || [];
@@ -112,10 +117,10 @@ export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded })
     h("p", {}, humanText(d.message)),
     rankingChart(d),
     h("h4", {}, "Fingerprints (sign of the change each effect makes)"), fingerprints(d.fingerprints, Object.fromEntries(d.ranking.map((r) => [r.effect, r.title]))),
-    h("div", { className: "scroll" }, table(["Effect", "LM", "Holm p", "Explained", "Strength (plausible range)", "Alias group", ""],
+    h("div", { className: "scroll" }, table(["Effect", "LM", "Holm p", "Explained", "Probe noise", "Strength (plausible range)", "Alias group", ""],
       d.ranking.map((r) => [
         h("span", {}, h("span", { className: "swatch", style: `background:${colourOf(r)}` }), ` ${r.title} `, h("code", {}, r.effect)),
-        r.lm, r.p_holm, `${fmt(100 * r.explained, 3)} %`, strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
+        r.lm, r.p_holm, `${fmt(100 * r.explained, 3)} %`, probeNoise(r), strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
         !r.significant ? h("span", { className: "muted" }, "not significant")
           : against ? h("span", { className: "muted" }, "not offered: against the diagnosis")
             : addEffectForm(campaignId, r, nextNumber, canAdd, onAdded)]))),
