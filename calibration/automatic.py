@@ -113,6 +113,38 @@ def builds_on(config, iterations: list, it, report: dict) -> bool:
     return not rejected and widening(config, iterations, it, report) is None
 
 
+def kept_alias(iterations: list, decision: dict | None, base_number: int | None) -> dict | None:
+    """{"effect", "aliases", "base", "separating", "message"} when the effect just kept shared an alias group
+    in its base iteration's diagnosis with candidates never fitted in its place, else None.
+
+    Why: an alias group says the measurements move alike under its members (tier B shape_strong: rolling
+    resistance 0.13 and elongation 1.7 explain the same residual shear and dilatancy, cos 0.91). The loop adds
+    the leader, and when it brings the fit into the noise it stops; the fit is then evidence that the model
+    with that effect is adequate, not that the effect is the one missing, and a stop reason that says only
+    "lack of fit passes" would present a stand-in as the answer. The message names the members not fitted and
+    the measurement that would separate them."""
+    if not decision or not decision.get("accepted") or base_number is None:
+        return None
+    base = next((p for p in iterations if p.number == base_number), None)
+    diagnosis = ((base.report or {}).get("diagnosis") or {}) if base is not None else {}
+    name = decision.get("effect")
+    group = next((g for g in diagnosis.get("alias_groups") or [] if name in g.get("effects", [])), None)
+    if group is None:
+        return None
+    fitted = _tried_from(iterations, base_number) | active_effects(base.parameters)
+    others = [e for e in group["effects"] if e != name and e not in fitted]
+    if not others:
+        return None
+    separating = sorted({s["separating_measurement"] for s in group.get("separators", [])
+                         if name in s.get("effects", [])})
+    message = (f"{name} was kept, but iteration {base_number}'s diagnosis found it aliased with "
+               f"{', '.join(others)}: these measurements change alike under them, so the fit does not say which is "
+               f"missing; fit {', '.join(others)} in its place"
+               + (f", or measure {' / '.join(separating)} more precisely, to tell them apart" if separating else
+                  " to tell them apart"))
+    return {"effect": name, "aliases": others, "base": base_number, "separating": separating, "message": message}
+
+
 def _tried_from(iterations: list, base_number: int) -> set[str]:
     return {_record(p).get("next_effect") for p in iterations if _record(p).get("next_base") == base_number} - {None}
 
@@ -148,6 +180,10 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         if report.get("verdict") == Verdict.PARTLY_CALIBRATED:
             # the whole passes but a test fails its own check: say so where the loop says why it stopped
             reason += f" ({report['verdict']}: {report.get('meaning')})"
+        alias = kept_alias(iterations, decision, base_number)
+        if alias is not None:
+            record["aliased"] = alias
+            reason += f"; {alias['message']}"
         return {**record, "stop_reason": reason}
     if it.number >= config.max_iterations:
         return {**record, "stop_reason": StopReason.MAX_ITERATIONS.value}

@@ -243,3 +243,38 @@ def test_the_loop_words_each_added_effect_by_the_verdict_it_leaves():
     assert decision["explains"] == expected
     entry = result.history()["iterations"][1]
     assert entry["explains"]["explains"] == expected
+
+
+# -- an effect kept from an alias group is not presented as the missing one -------------------------------
+def test_an_effect_kept_from_an_alias_group_says_its_aliases_were_not_fitted():
+    """Elongation and rolling resistance both resist grain rotation (Estrada et al. 2008), and on these targets
+    the stand-in's closed forms move them alike: the diagnosis groups the two, the loop adds the leader, the fit
+    passes, and the stop reason must say the partner was never fitted and what would separate them."""
+    case = make_case(8, "single", effects={"particle_shape": 1.8})
+    result = CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)), loop_settings(case)).run()
+    groups = [set(g["effects"]) for g in result.first.report["diagnosis"]["alias_groups"]]
+    assert {"particle_shape", "rolling_epsd2"} in groups
+    record = result.iterations[-1].report["automatic"]
+    kept = record["aliased"]["effect"]
+    assert record["decision"]["accepted"] and kept in ("particle_shape", "rolling_epsd2")
+    assert record["aliased"]["aliases"] == sorted({"particle_shape", "rolling_epsd2"} - {kept})
+    assert record["aliased"]["separating"] and record["aliased"]["base"] == 1
+    assert result.stop_reason.startswith(StopReason.PASSES) and "aliased with" in result.stop_reason
+
+
+def test_no_alias_note_without_a_kept_effect_or_with_every_partner_fitted():
+    diagnosis = {"alias_groups": [{"effects": ["rolling_epsd2", "particle_shape"],
+                                   "separators": [{"effects": ["rolling_epsd2", "particle_shape"],
+                                                   "separating_measurement": "cct confined_modulus_pa"}]}]}
+    base = SimpleNamespace(number=1, parameters={}, report={"diagnosis": diagnosis, "automatic": {}})
+    added = SimpleNamespace(number=2, parameters={"effects": {"rolling_epsd2": {}}},
+                            report={"automatic": {"next_effect": None}})
+    base.report["automatic"] = {"next_effect": "rolling_epsd2", "next_base": 1}
+    kept = {"effect": "rolling_epsd2", "accepted": True}
+    note = automatic.kept_alias([base, added], kept, 1)
+    assert note["aliases"] == ["particle_shape"] and note["separating"] == ["cct confined_modulus_pa"]
+    assert automatic.kept_alias([base, added], {**kept, "accepted": False}, 1) is None  # rejected: nothing kept
+    tried = SimpleNamespace(number=3, parameters={}, report={"automatic": {"next_effect": "particle_shape", "next_base": 1}})
+    assert automatic.kept_alias([base, added, tried], kept, 1) is None  # the partner was fitted from the same base
+    alone = SimpleNamespace(number=1, parameters={}, report={"diagnosis": {"alias_groups": []}})
+    assert automatic.kept_alias([alone], kept, 1) is None

@@ -209,6 +209,17 @@ class BoxWidening(Out):
     to: float = Field(description="the edge the next iteration gets, within the parameter's typical range")
 
 
+class KeptAlias(Out):
+    """An effect kept although its base iteration's diagnosis found it aliased with candidates never fitted in
+    its place (calibration.automatic.kept_alias)."""
+
+    effect: str = Field(description="the effect kept")
+    aliases: list[str] = Field(description="the alias group's other members, not fitted")
+    base: int = Field(description="the iteration whose diagnosis grouped them")
+    separating: list[str] = Field(description="the measurements that would tell them apart")
+    message: str
+
+
 class Automatic(Out):
     """The automatic mode's record of an iteration: its decision and the next step or why it stopped."""
 
@@ -223,6 +234,8 @@ class Automatic(Out):
     next_config: dict[str, Any] | None = Field(None, description="the next iteration's configuration (CampaignCreate)")
     tie_break: TieBreak | None = Field(None, description="the leading candidates the diagnosis could not tell apart "
                                                          "and why the next effect was tried first among them")
+    aliased: KeptAlias | None = Field(None, description="the effect kept shares an alias group with candidates "
+                                                        "never fitted: the fit does not say which is missing")
 
 
 class Trend(Out):
