@@ -122,6 +122,8 @@ def test_the_noise_share_of_a_signature_by_hand():
     assert noise_share(M, np.array([1.0, 1.0, 0.0]), np.ones(3)) == pytest.approx(2.0)
     assert noise_share(np.eye(3), np.array([2.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0])) == pytest.approx(0.25)
     assert noise_share(M, np.array([1.0, 1.0, 0.0]), None) == 0.0
+    # a signature the baseline parameters absorb whole has no length left: whatever noise it has is all of it
+    assert noise_share(M, np.array([1.0, 0.0, 0.0]), np.ones(3)) == float("inf")
 
     class Res:  # two target rows (sd 2 and 4) and one prior row
         keys = ["a", "b"]

@@ -11,9 +11,11 @@ every criterion is settled by then and a third iteration nearly doubled the batt
 
 Asked: the issue's pass criteria for the scenario. The model without the effect cannot follow the
 measurements (the lack of fit rejects), the diagnosis names it among its first two candidates, adding it
-halves the weighted error with chi2/dof <= 2, and particle density comes back within 5 % of the truth;
-and the calibrated model's weighted error is no larger than the truth's own (`--truth-floor`: the
-measuring world's parameters run at the calibration's seeds and judged the same way).
+brings the weighted error within 1.1 x the truth's own with chi2/dof <= 2 (issue 33's criterion for an effect
+of this strength, lambda ~ 30; halving is asked of the strong scenarios, and here the truth's own error is
+about the error before, so no right calibration could halve it), and particle density comes back within 5 %
+of the truth; and the calibrated model's weighted error is no larger than the truth's own (`--truth-floor`:
+the measuring world's parameters run at the calibration's seeds and judged the same way).
 And one loop: `--replay` runs the campaign's stored batteries through the notebook loop
 (`calibration.loop`), which must reproduce what the service stored.
 On 40 mm spheres the error fell only to 0.59 (docs/diagnosis.md), so the reduced form stops at 35 mm.
@@ -52,7 +54,7 @@ def test_hidden_rolling_resistance_is_found_on_the_dem_engine(tmp_path):
     assert figures["lof_rejects_effects"] == "1", out.stdout
     assert figures["true_top2"] == "1", out.stdout
     assert "added=rolling_epsd2" in row, row
-    assert figures["error_halved_chi2_le_2"] == "1", out.stdout
+    assert figures["within_truth_floor"] == "1" and figures["n_truth_floor"] == "1", out.stdout
     # and no worse than the measuring world's own parameters do at the calibration's seeds: a calibration
     # with the right effect fits at least as well as the truth (its fitted parameters absorb noise the
     # truth's cannot), so a calibrated model above the truth's error has stopped short of the optimum

@@ -29,9 +29,10 @@ class RankedEffect(Out):
     plausible: bool
     significant: bool = Field(description="p_holm below alpha")
     alias_group: int | None = Field(description="the alias group it belongs to, from 1")
-    signature_noise: float = Field(0.0, description=(
+    signature_noise: float | None = Field(0.0, description=(
         "share of its projected signature's squared length the simulator's scatter accounts for in expectation "
-        "(calibration.attribute.noise_share); the score is attenuated by about 1 - this; 0: not known"))
+        "(calibration.attribute.noise_share); the score is attenuated by about 1 - this; 0: not known; null: the "
+        "projected signature has no length (the baseline parameters absorb all of it), so there is no score"))
 
 
 class Separator(Out):
