@@ -28,12 +28,12 @@ from engine.effects.base import Candidate
 from engine.particles import templates as tpl
 
 # EDEM's angle-of-repose kit uses two-sphere clumps at aspect ratio 1.5; ballast models 1.2-2.0.
-# The diagnosis's secant step reaches the middle of that range (1.6), not its bottom: two spheres 0.3 of a
-# width apart still roll past each other much as one sphere does, so a battery at 1.3 moves the shear
-# box's strength by about what one packing differs from the next and the signature it yields is mostly
-# that packing's noise (tier B shape_strong, docs/diagnosis.md), while by 1.6 the grains interlock. The
-# step is also what a one-sided score's strength estimate is linear in, and 1.6 sits where the
-# estimate is wanted (the plausible range's middle) rather than at its edge.
+# The diagnosis's secant step reaches the middle of that range (1.6), not its bottom. A signature is a
+# difference of two single packings divided by the step, so its noise per unit strength halves when the
+# step doubles, while the response keeps growing past 1.3 (tier B shape_strong, docs/diagnosis.md: the
+# residual shear at 24 kPa moved -3.7 kPa at 1.3, within the packings' scatter, and +20.4 kPa at 1.6);
+# the strength a one-sided score estimates is a secant's too, and 1.6 sits where it is wanted (the
+# plausible range's middle) rather than at its edge.
 CANDIDATE = Candidate(
     name="particle_shape", title="particle shape (elongation)", factor="clump_aspect_ratio",
     unit="1", plausible_range=(1.2, 2.0), step=0.6, off_value=1.0,
