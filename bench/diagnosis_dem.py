@@ -488,6 +488,12 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
     out["tried"] = [(h.get("added_effect") or [None])[0] for h in later]
     accepted = [h for h in later if (h.get("decision") or {}).get("accepted")]
     final = accepted[-1] if accepted else (later[-1] if later else first)
+    # an alias fitted in place of an effect that passed: the comparison names the iteration kept
+    kept_number = history[-1].get("kept_iteration")
+    if kept_number is not None:
+        final = next(h for h in history if h["number"] == kept_number)
+        accepted = [final] if final is not first else []
+    out["undistinguished"] = history[-1].get("undistinguished")
     if later:
         out["added"] = (final.get("added_effect") or [None])[0] if accepted else None
         # the criterion's weighted error: RMS of the targets' standardised residuals (priors apart);
@@ -673,6 +679,8 @@ def false_alarm(o: dict) -> bool:
 
 def weak_end_right(o: dict) -> bool:
     """Issue 33: a weak scenario ends with its true effect added or with "inconclusive", never a wrong effect kept."""
+    if o.get("undistinguished"):  # two aliases fitted, as good as each other: right when the truth is one of them
+        return o["effect"] in o["undistinguished"]
     if o.get("added"):
         return o["added"] == o["effect"]
     return "inconclusive" in (o.get("stop_reason") or "") or bool(

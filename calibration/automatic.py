@@ -9,7 +9,10 @@ An iteration that added an effect is judged against the iteration it was built o
 A rejected effect leaves the model as it was: the next candidate indicated by that earlier
 iteration's diagnosis is tried instead, and when none is left nothing improves. An added strength
 pinned at the top of its range (the optimum wants more than the range allows) is first given a range twice as wide on the same base, once (``calibration.decisions.widened_top``,
-as the library loop does), and that iteration is the one judged. A base factor pinned on a box edge short
+as the library loop does), and that iteration is the one judged. An effect that brings the fit into the noise
+but shares an alias group with candidates never fitted has its first such partner fitted in its place on the
+same base (``alias_refit``) before the loop stops; the lower chi2 is kept, and two fits the measurements cannot
+tell apart are reported as undistinguished (``settle_alias``). A base factor pinned on a box edge short
 of its typical range gets the box's width more on that side, once (``box_widening``): beside the next
 effect, or alone when the diagnosis indicates none (it counted such a factor as absorbing). Pure functions of
 what the database holds, so the runner stays resumable.
@@ -106,11 +109,13 @@ def box_widening(iterations: list, it, report: dict, priors=()) -> tuple[list[di
 def builds_on(config, iterations: list, it, report: dict) -> bool:
     """Will the automatic mode build on iteration ``it``? Not when the effect it added did not earn its
     place (the next candidate then comes from the diagnosis of the iteration it was built on), nor when
-    that effect's strength is pinned at the top of its range (the iteration is redone on a wider one):
+    that effect's strength is pinned at the top of its range (the iteration is redone on a wider one), nor
+    when it fits an alias in place of an effect that already passed (the loop stops after comparing the two):
     such an iteration needs no diagnosis of its own."""
     decision, _ = judge_iteration(iterations, it, report)
     rejected = decision is not None and not decision["accepted"]
-    return not rejected and widening(config, iterations, it, report) is None
+    refit = _refit_plan(iterations, it) is not None
+    return not rejected and not refit and widening(config, iterations, it, report) is None
 
 
 def kept_alias(iterations: list, decision: dict | None, base_number: int | None) -> dict | None:
@@ -145,6 +150,83 @@ def kept_alias(iterations: list, decision: dict | None, base_number: int | None)
     return {"effect": name, "aliases": others, "base": base_number, "separating": separating, "message": message}
 
 
+# two fits with as many free parameters each whose chi2 differ by less than this are not told apart by the
+# measurements: the likelihood ratio is below e (Burnham & Anderson 2002, sec. 2.6: models within 2 of the best
+# AIC keep substantial support)
+UNDISTINGUISHED_CHI2 = 2.0
+
+
+def _refit_plan(iterations: list, it) -> dict | None:
+    """The ``alias_refit`` plan iteration ``it`` carries out (the previous iteration's record), else None."""
+    previous = next((p for p in iterations if p.number == it.number - 1), None)
+    return _record(previous).get("alias_refit") if previous is not None else None
+
+
+def alias_refit(config, campaign_config: dict, iterations: list, it, alias: dict,
+                validate: Validate) -> dict[str, Any] | None:
+    """The record that fits ``alias``'s first unfitted partner (in the base diagnosis's ranking order) on the
+    base model, in place of the effect iteration ``it`` kept; None when no further iteration is allowed or the
+    partner's iteration cannot be configured (the stop reason then keeps ``kept_alias``'s advice).
+
+    Why: when the leader of an alias group brings the fit into the noise, the fit says the model with it is
+    adequate, not that it is the effect missing (tier B shape_strong: rolling resistance kept where elongation
+    was hidden, cos 0.91 between their signatures). Fitting the partner on the same base costs one iteration
+    and answers the question the diagnosis could not: which of the two fits the measurements better."""
+    if it.number >= config.max_iterations:
+        return None
+    base = next(p for p in iterations if p.number == alias["base"])
+    base_report = base.report or {}
+    order = [row.get("effect") for row in (base_report.get("diagnosis") or {}).get("ranking") or []]
+    partner = sorted(alias["aliases"], key=lambda e: order.index(e) if e in order else len(order))[0]
+    factors, _ = box_widening(iterations, base, base_report, config.priors)
+    base_config = {**campaign_config, "factors": factors, "fixed_parameters": _fixed(base.parameters)}
+    try:
+        nxt = with_effect_factor(base_config, partner, **effect_hints(base_report, partner))
+    except ValueError:  # SettingsError included: the partner cannot run on this base
+        return None
+    plan = {"leader": alias["effect"], "leader_iteration": it.number, "partner": partner, "base": alias["base"],
+            "message": (f"{alias['effect']} brings the fit into the noise, but iteration {alias['base']}'s diagnosis "
+                        f"found it aliased with {partner}: {partner} is fitted in its place on iteration "
+                        f"{alias['base']}'s model, and the better fit is kept")}
+    record = _configured({"alias_refit": plan}, partner, alias["base"], nxt, validate)
+    return None if record.get("stop_reason") else record
+
+
+def settle_alias(iterations: list, it, report: dict, decision: dict | None, plan: dict) -> dict[str, Any]:
+    """{"kept_iteration", "kept_effect", "undistinguished", "chi2", "message"} once iteration ``it`` has fitted
+    ``plan``'s partner in place of its leader: the partner is kept when its effect earned its place, the fit
+    passes, and its chi2 is lower; two fits within ``UNDISTINGUISHED_CHI2`` are named undistinguished (the lower
+    one kept, the other as good an answer), with the measurement that would separate them."""
+    leader_it = next(p for p in iterations if p.number == plan["leader_iteration"])
+    leader, partner = plan["leader"], plan["partner"]
+    chi2_leader = _lof(leader_it.report or {}).get("statistic")
+    chi2_partner = _lof(report).get("statistic")
+    chi2 = {leader: chi2_leader, partner: chi2_partner}
+    partner_passes = (bool(decision and decision.get("accepted")) and not model_fails(report)
+                      and report.get("verdict") != Verdict.OUT_OF_REACH and chi2_partner is not None)
+    fits = f"chi2 {chi2_leader:.3g} with {leader} (iteration {leader_it.number})" + (
+        f", {chi2_partner:.3g} with {partner} (iteration {it.number})" if chi2_partner is not None else "")
+    if not partner_passes:
+        why = "was not kept" if not (decision and decision.get("accepted")) else "leaves a misfit"
+        return {"kept_iteration": leader_it.number, "kept_effect": leader, "undistinguished": None, "chi2": chi2,
+                "message": f"{leader} kept: {partner}, aliased with it, fitted in its place {why} ({fits})"}
+    kept_number, kept, other = ((it.number, partner, leader) if chi2_partner < chi2_leader
+                                else (leader_it.number, leader, partner))
+    if abs(chi2_partner - chi2_leader) < UNDISTINGUISHED_CHI2:
+        base = next((p for p in iterations if p.number == plan["base"]), None)
+        group = next((g for g in (((base.report or {}).get("diagnosis") or {}).get("alias_groups") or [])
+                      if {leader, partner} <= set(g.get("effects", []))), None) if base is not None else None
+        separating = sorted({s["separating_measurement"] for s in (group or {}).get("separators", [])
+                             if {leader, partner} & set(s.get("effects", []))})
+        return {"kept_iteration": kept_number, "kept_effect": kept, "undistinguished": sorted(chi2), "chi2": chi2,
+                "message": (f"undistinguished: {leader} and {partner} both bring the fit into the noise ({fits}): "
+                            f"these measurements cannot tell which is missing; iteration {kept_number} ({kept}) is "
+                            f"shown" + (f"; measure {' / '.join(separating)} more precisely to decide" if separating
+                                        else "; a test that moves them differently would decide"))}
+    return {"kept_iteration": kept_number, "kept_effect": kept, "undistinguished": None, "chi2": chi2,
+            "message": f"{kept} kept: it fits better than its alias {other} ({fits})"}
+
+
 def _tried_from(iterations: list, base_number: int) -> set[str]:
     return {_record(p).get("next_effect") for p in iterations if _record(p).get("next_base") == base_number} - {None}
 
@@ -161,6 +243,7 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         # physics (or widening an added one) would only bend the parameters towards a wrong number
         return {**record, "stop_reason": StopReason.SUSPECT_MEASUREMENT.value + "; ".join(
             s["message"] for s in report.get("suspect_measurements") or [])}
+    refit = _refit_plan(iterations, it)
     wide = widening(config, iterations, it, report)
     if wide is not None:
         params = it.parameters
@@ -168,8 +251,15 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         factors = [{**f, "high": wide["high"]} if f["name"] == wide["factor"] else f for f in factors]
         if box:
             record["widened_box"] = box
+        if refit is not None:  # the partner's strength wants more room: the comparison waits for it
+            record["alias_refit"] = refit
         return _configured({**record, "widened": True}, wide["effect"], wide["base"],
                            {**campaign_config, "factors": factors, "fixed_parameters": _fixed(params)}, validate)
+    if refit is not None:
+        # an alias fitted in place of an effect that passed: keep the better of the two and stop
+        settled = settle_alias(iterations, it, report, decision, refit)
+        return {**record, "alias_settled": settled, "kept_iteration": settled["kept_iteration"],
+                "stop_reason": f"{StopReason.PASSES.value}; {settled['message']}"}
     rejected = decision is not None and not decision["accepted"]
     base = next(p for p in iterations if p.number == base_number) if rejected else it
     base_report = report if base is it else (base.report or {})
@@ -182,6 +272,9 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
             reason += f" ({report['verdict']}: {report.get('meaning')})"
         alias = kept_alias(iterations, decision, base_number)
         if alias is not None:
+            again = alias_refit(config, campaign_config, iterations, it, alias, validate)
+            if again is not None:
+                return {**record, **again}
             record["aliased"] = alias
             reason += f"; {alias['message']}"
         return {**record, "stop_reason": reason}

@@ -51,6 +51,10 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
             "decision": (report.get("automatic") or {}).get("decision"),
             "stop_reason": (report.get("automatic") or {}).get("stop_reason"),
             "tie_break": ((report.get("automatic") or {}).get("tie_break") or {}).get("message"),
+            # an alias fitted in place of an effect that passed, compared with it: the iteration kept, and the
+            # two effects when the measurements could not tell them apart
+            "kept_iteration": (report.get("automatic") or {}).get("kept_iteration"),
+            "undistinguished": ((report.get("automatic") or {}).get("alias_settled") or {}).get("undistinguished"),
             "range_widened": bool(plan.get("widened")),
             # base factors whose box this iteration ran wider than the one it was built on (automatic mode)
             "box_widened": [w["parameter"] for w in plan.get("widened_box") or []],

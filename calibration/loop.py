@@ -40,9 +40,12 @@ class LoopResult:
     @property
     def final(self) -> IterationState:
         """The model the loop ends with: the last iteration, unless the effect it added was rejected,
-        then the iteration it was built on."""
+        then the iteration it was built on, or an alias fitted in place of an effect that passed was compared
+        with it, then the one the comparison kept (``calibration.automatic.settle_alias``)."""
         last = self.iterations[-1]
         record = (last.report or {}).get("automatic") or {}
+        if record.get("kept_iteration") is not None:
+            return next(it for it in self.iterations if it.number == record["kept_iteration"])
         decision = record.get("decision")
         if decision is not None and not decision.get("accepted"):
             return next(it for it in self.iterations if it.number == record["base_iteration"])

@@ -20,6 +20,7 @@ from engine.lab.spec import MicroParameters
 
 from . import parameters as params_mod
 from . import standin, stats
+from .analysis import active_effects
 from .conditions import standin_conditions
 from .discrepancy import from_comparison
 from .intervals import covers
@@ -260,7 +261,10 @@ def outcome(case: Case, result: LoopResult, runs: int) -> dict[str, Any]:
     top = ranking[0] if ranking else None
     top_group = {r["effect"] for r in ranking if top is not None and top.get("alias_group") is not None
                  and r.get("alias_group") == top["alias_group"]}
-    accepted = [d["effect"] for d in result.decisions if d["accepted"]]
+    # the effects the final model keeps: an alias fitted in place of a kept effect and beaten by it was accepted
+    # against the base, but is not the loop's answer
+    kept = active_effects(final.parameters)
+    accepted = [d["effect"] for d in result.decisions if d["accepted"] and d["effect"] in kept]
     tried = [d["effect"] for d in result.decisions]
     strengths = {}
     for name, true in case.effects.items():

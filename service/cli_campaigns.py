@@ -169,6 +169,8 @@ def _status_text(c: dict, progress: str | None = None) -> str:
     text = f"campaign {c['id']} {c['name']!r}: {c['status']}, iteration {c['current_iteration']}, {progress}"
     if c.get("stop_reason"):
         text += f"\nautomatic mode stopped: {c['stop_reason']}"
+    if c.get("kept_iteration") is not None:
+        text += f"\nthe model kept is iteration {c['kept_iteration']}'s"
     return text + (f"\nerror: {c['error']}" if c.get("error") else "")
 
 

@@ -282,6 +282,7 @@ def campaign_summary(campaign: Campaign) -> dict[str, Any]:
         "created_at": _iso(campaign.created_at), "started_at": _iso(campaign.started_at),
         "finished_at": _iso(campaign.finished_at), "config": campaign.config,
         "stop_reason": (((current.report or {}).get("automatic") or {}).get("stop_reason") if current else None),
+        "kept_iteration": (((current.report or {}).get("automatic") or {}).get("kept_iteration") if current else None),
         "warnings": settings_warnings(campaign.config or {}) + resolution_warnings(campaign),
     }
 

@@ -22,6 +22,7 @@ from calibration.evaluators import StandinEvaluator
 from calibration.loop import CalibrationLoop
 from calibration.suspect import SUSPECT_FACTOR, extrapolated_candidates, reach, suspects
 from calibration.testbed import OPTIONS, loop_settings, make_case
+from calibration.testbed import outcome as case_outcome
 from calibration.verdict import verdict
 from calibration.vocabulary import DiagnosisVerdict, Explains, StopReason, Verdict
 
@@ -246,20 +247,65 @@ def test_the_loop_words_each_added_effect_by_the_verdict_it_leaves():
 
 
 # -- an effect kept from an alias group is not presented as the missing one -------------------------------
-def test_an_effect_kept_from_an_alias_group_says_its_aliases_were_not_fitted():
+def test_an_effect_kept_from_an_alias_group_has_its_partner_fitted_in_its_place():
     """Elongation and rolling resistance both resist grain rotation (Estrada et al. 2008), and on these targets
-    the stand-in's closed forms move them alike: the diagnosis groups the two, the loop adds the leader, the fit
-    passes, and the stop reason must say the partner was never fitted and what would separate them."""
+    the stand-in's closed forms move them alike: the diagnosis groups the two, the loop adds the leader and the
+    fit passes. With an iteration to spare the partner is fitted on the same base, and the model kept is the one
+    with the lower chi2; with none, the stop reason says the partner was never fitted and what would separate
+    them."""
     case = make_case(8, "single", effects={"particle_shape": 1.8})
     result = CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)), loop_settings(case)).run()
     groups = [set(g["effects"]) for g in result.first.report["diagnosis"]["alias_groups"]]
     assert {"particle_shape", "rolling_epsd2"} in groups
-    record = result.iterations[-1].report["automatic"]
+    leader_it, partner_it = result.iterations[1], result.iterations[2]
+    plan = leader_it.report["automatic"]["alias_refit"]
+    assert plan["base"] == 1 and {plan["leader"], plan["partner"]} == {"particle_shape", "rolling_epsd2"}
+    assert leader_it.report["automatic"]["next_base"] == 1 and leader_it.report["automatic"]["stop_reason"] is None
+    settled = partner_it.report["automatic"]["alias_settled"]
+    chi2 = {it.number: it.report["lack_of_fit"]["statistic"] for it in (leader_it, partner_it)}
+    assert result.final.number == settled["kept_iteration"] == min(chi2, key=chi2.get)
+    assert result.stop_reason.startswith(StopReason.PASSES) and settled["message"] in result.stop_reason
+    # the truth, elongation, is the model kept, and the loop's outcome counts only it as added
+    assert settled["kept_effect"] == "particle_shape"
+    assert case_outcome(case, result, 0)["accepted"] == ["particle_shape"]
+
+    short = CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)),
+                            loop_settings(case, max_iterations=2)).run()
+    record = short.iterations[-1].report["automatic"]
     kept = record["aliased"]["effect"]
     assert record["decision"]["accepted"] and kept in ("particle_shape", "rolling_epsd2")
     assert record["aliased"]["aliases"] == sorted({"particle_shape", "rolling_epsd2"} - {kept})
     assert record["aliased"]["separating"] and record["aliased"]["base"] == 1
-    assert result.stop_reason.startswith(StopReason.PASSES) and "aliased with" in result.stop_reason
+    assert short.stop_reason.startswith(StopReason.PASSES) and "aliased with" in short.stop_reason
+
+
+def _settle(chi2_leader, chi2_partner, accepted=True, partner_p=0.5):
+    diagnosis = {"alias_groups": [{"effects": ["rolling_epsd2", "particle_shape"],
+                                   "separators": [{"effects": ["rolling_epsd2", "particle_shape"],
+                                                   "separating_measurement": "cct confined_modulus_pa"}]}]}
+    base = SimpleNamespace(number=1, parameters={}, report={"diagnosis": diagnosis})
+    leader = SimpleNamespace(number=2, parameters={}, report={"lack_of_fit": {"statistic": chi2_leader}})
+    partner = SimpleNamespace(number=3, parameters={}, report=None)
+    report = {"verdict": Verdict.CALIBRATED.value, "lack_of_fit": {"statistic": chi2_partner, "p_value": partner_p}}
+    plan = {"leader": "rolling_epsd2", "leader_iteration": 2, "partner": "particle_shape", "base": 1}
+    return automatic.settle_alias([base, leader, partner], partner, report, {"accepted": accepted}, plan)
+
+
+@pytest.mark.parametrize("chi2_leader, chi2_partner, accepted, partner_p, kept, undistinguished", [
+    (10.0, 4.0, True, 0.5, 3, None),         # the partner fits better by 6: it is kept
+    (4.0, 10.0, True, 0.2, 2, None),         # the leader fits better by 6: it stays
+    (5.0, 3.5, True, 0.5, 3, ["particle_shape", "rolling_epsd2"]),  # 1.5 apart: likelihood ratio below e
+    (10.0, 4.0, False, 0.5, 2, None),        # the partner did not earn its place against the base
+    (10.0, 4.0, True, 0.01, 2, None),        # the partner's fit fails the lack of fit: the leader stays
+])
+def test_the_better_of_two_aliases_is_kept_and_near_equals_are_named(chi2_leader, chi2_partner, accepted,
+                                                                     partner_p, kept, undistinguished):
+    """Two fits with one strength each on the same base: chi2 differences are log-likelihood ratios x 2, and
+    below 2 neither is preferred (Burnham & Anderson 2002, sec. 2.6)."""
+    settled = _settle(chi2_leader, chi2_partner, accepted, partner_p)
+    assert settled["kept_iteration"] == kept and settled["undistinguished"] == undistinguished
+    if undistinguished:
+        assert settled["message"].startswith("undistinguished") and "cct confined_modulus_pa" in settled["message"]
 
 
 def test_no_alias_note_without_a_kept_effect_or_with_every_partner_fitted():

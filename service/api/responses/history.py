@@ -57,6 +57,10 @@ class HistoryEntry(Out):
     effect_added_next: list[str] | None = Field(description="what the next iteration added")
     tie_break: str | None = Field(None, description="automatic mode: the candidates the diagnosis could not tell "
                                                     "apart and why the next effect went first among them")
+    kept_iteration: int | None = Field(None, description="automatic mode, where the loop fitted an alias in place of "
+                                                         "an effect that passed: the iteration whose model it keeps")
+    undistinguished: list[str] | None = Field(None, description="the two aliased effects whose fits the measurements "
+                                                                "could not tell apart (chi2 within 2)")
     explains: Explanation | None = Field(None, description="how much of the misfit the added effect explains")
     batteries: IterationBatteries | None = Field(None, description="batteries run per phase, design rows reused, and why")
 

@@ -96,6 +96,9 @@ export async function campaignPage(view, id, params) {
   if (c.warnings?.length) parts.push(h("ul", { className: "campaign-warnings" }, c.warnings.map((w) => h("li", {}, humanText(w)))));
   if (c.error) parts.push(h("p", { className: "job-error" }, h("b", {}, "Failed: "), humanText(c.error)));
   if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), humanText(c.stop_reason)));
+  // an alias fitted in place of an effect that passed: the model kept may be an earlier iteration's
+  if (c.kept_iteration != null && c.kept_iteration !== c.current_iteration) parts.push(h("p", { className: "kept-iteration" },
+    h("b", {}, "Model kept: "), `iteration ${c.kept_iteration}'s (see the history); iteration ${c.current_iteration} fitted its alias for comparison.`));
   if (c.status === "running" || c.status === "paused") parts.push(progressCard(c));
   if (it) {
     const effects = it.effects;
