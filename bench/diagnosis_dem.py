@@ -546,7 +546,13 @@ def replay(svc: Service, cid: int, body: dict) -> list[str]:
     material = svc.call("GET", f"/materials/{svc.call('GET', f'/campaigns/{cid}')['material_id']}")
     targets = [Measured.from_record(m) for m in material["measurements"]]
     settings = LoopSettings.model_validate({k: v for k, v in body.items() if k in LoopSettings.model_fields})
-    replayed = CalibrationLoop(targets, ReplayEvaluator(stored), settings).run()
+    try:
+        replayed = CalibrationLoop(targets, ReplayEvaluator(stored), settings).run()
+    except KeyError as exc:
+        # the notebook loop asked for a battery the campaign never ran: the loop's code changed while the campaign
+        # ran (a campaign resumed across commits), so the two cannot be the same loop; say so rather than stop
+        return [f"the notebook loop asks for a battery the campaign did not run ({exc.args[0]}): the loop's code "
+                "changed since the campaign ran"]
     return differences(stored, replayed.iterations)
 
 
