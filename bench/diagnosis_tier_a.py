@@ -42,13 +42,14 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="write every case's outcome to this file")
     ap.add_argument("--from-json", help="print the table of outcomes written earlier by --json (no runs)")
     args = ap.parse_args(argv)
-    from calibration.testbed import acceptance, case_kinds, machine_line, table_text
+    from calibration.testbed import acceptance, case_kinds, machine_line, refit_line, table_text
 
     if args.from_json:
         with open(args.from_json) as fh:
             outcomes = json.load(fh)
         rows = acceptance(outcomes)
         print(table_text(rows))
+        print(refit_line(outcomes))
         print(machine_line(rows))
         return 0
 
@@ -72,6 +73,7 @@ def main(argv=None) -> int:
           f"({args.jobs} processes); batteries per case: median "
           f"{sorted(o['batteries'] for o in outcomes)[len(outcomes) // 2]}")
     print(table_text(rows))
+    print(refit_line(outcomes))
     print(machine_line(rows))
     return 0
 

@@ -19,9 +19,8 @@ what the database holds, so the runner stays resumable.
 """
 from __future__ import annotations
 
-from typing import Any
-
-from typing import Callable
+import json
+from typing import Any, Callable
 
 from calibration.adding import effect_hints, with_effect_factor
 from calibration.analysis import active_effects, model_fails
@@ -114,7 +113,7 @@ def builds_on(config, iterations: list, it, report: dict) -> bool:
     such an iteration needs no diagnosis of its own."""
     decision, _ = judge_iteration(iterations, it, report)
     rejected = decision is not None and not decision["accepted"]
-    refit = _refit_plan(iterations, it) is not None
+    refit = refit_plan(iterations, it) is not None
     return not rejected and not refit and widening(config, iterations, it, report) is None
 
 
@@ -156,7 +155,7 @@ def kept_alias(iterations: list, decision: dict | None, base_number: int | None)
 UNDISTINGUISHED_CHI2 = 2.0
 
 
-def _refit_plan(iterations: list, it) -> dict | None:
+def refit_plan(iterations: list, it) -> dict | None:
     """The ``alias_refit`` plan iteration ``it`` carries out (the previous iteration's record), else None."""
     previous = next((p for p in iterations if p.number == it.number - 1), None)
     return _record(previous).get("alias_refit") if previous is not None else None
@@ -192,39 +191,88 @@ def alias_refit(config, campaign_config: dict, iterations: list, it, alias: dict
     return None if record.get("stop_reason") else record
 
 
+def common_chi2(report_a: dict, report_b: dict) -> tuple[float | None, float | None]:
+    """Two iterations' chi2 over the measured targets with one variance per target for both: the measurement's
+    plus the simulator's scatter of a mean over the confirmation seeds, pooled over the two iterations.
+
+    Why not each report's own lack-of-fit statistic: each divides by its own simulator sd, estimated from a few
+    batteries, so a fit could look better only because its noise came out larger. The common variance makes the
+    difference a difference of squared misfits (with the partner confirming at the leader's seeds, mostly of the
+    models, not of the packings). Targets either report lacks are left out of both; with
+    none in common, each report's lack-of-fit statistic is returned."""
+    def rows(report: dict) -> dict:
+        return {(r["test"], r["quantity"], json.dumps(r.get("condition") or {}, sort_keys=True)): r
+                for r in report.get("targets") or [] if r.get("status") == "modelled"
+                and r.get("confirmed") is not None and r.get("measured_uncertainty") is not None}
+
+    a, b = rows(report_a), rows(report_b)
+    seeds = max(1, min(len(report_a.get("confirmation_seeds") or [1]), len(report_b.get("confirmation_seeds") or [1])))
+    common = [k for k in a if k in b]
+    if not common:
+        return _lof(report_a).get("statistic"), _lof(report_b).get("statistic")
+    chi2_a = chi2_b = 0.0
+    for k in common:
+        sim_var = 0.5 * ((a[k].get("simulator_sd") or 0.0) ** 2 + (b[k].get("simulator_sd") or 0.0) ** 2) / seeds
+        var = a[k]["measured_uncertainty"] ** 2 + sim_var
+        if var <= 0:
+            continue
+        chi2_a += (a[k]["confirmed"] - a[k]["measured"]) ** 2 / var
+        chi2_b += (b[k]["confirmed"] - b[k]["measured"]) ** 2 / var
+    return chi2_a, chi2_b
+
+
 def settle_alias(iterations: list, it, report: dict, decision: dict | None, plan: dict) -> dict[str, Any]:
     """{"kept_iteration", "kept_effect", "undistinguished", "chi2", "message"} once iteration ``it`` has fitted
-    ``plan``'s partner in place of its leader: the partner is kept when its effect earned its place, the fit
-    passes, and its chi2 is lower; two fits within ``UNDISTINGUISHED_CHI2`` are named undistinguished (the lower
-    one kept, the other as good an answer), with the measurement that would separate them."""
+    ``plan``'s partner in place of its leader, by their chi2 on one variance (``common_chi2``):
+
+    * the partner did not earn its place, or its fit fails: the leader is kept;
+    * the partner fits worse by ``UNDISTINGUISHED_CHI2`` or more: the leader is kept, the fits agreeing with the
+      diagnosis's order;
+    * within ``UNDISTINGUISHED_CHI2``: undistinguished, the leader shown, with the measurement that would decide;
+    * the partner fits better by more: it is kept when the diagnosis's order rested on noisy probes (either
+      signature's noise share, ``calibration.attribute.noise_share``, at least ``SIMULATOR_SHARE_MIN``), where
+      the fits are the better evidence; otherwise the two pieces of evidence disagree, and it is undistinguished.
+
+    Why the diagnosis may outvote the fit: the two fits come from response surfaces, a confirmation and a polish,
+    each with its own error, and on the stand-in's test bed (probe noise about 1 %) a partner fitting better by
+    more than 2 was the truth in 2 of 6 refits, the leader in 4 (tier A, session 26); on DEM the probes' own
+    scatter can order the ranking (tier B shape_strong: shape's noise 0.34) and the fits decide there."""
+    from calibration.replicates import SIMULATOR_SHARE_MIN
+
     leader_it = next(p for p in iterations if p.number == plan["leader_iteration"])
     leader, partner = plan["leader"], plan["partner"]
-    chi2_leader = _lof(leader_it.report or {}).get("statistic")
-    chi2_partner = _lof(report).get("statistic")
+    chi2_leader, chi2_partner = common_chi2(leader_it.report or {}, report)
     chi2 = {leader: chi2_leader, partner: chi2_partner}
     partner_passes = (bool(decision and decision.get("accepted")) and not model_fails(report)
                       and report.get("verdict") != Verdict.OUT_OF_REACH and chi2_partner is not None)
     fits = f"chi2 {chi2_leader:.3g} with {leader} (iteration {leader_it.number})" + (
         f", {chi2_partner:.3g} with {partner} (iteration {it.number})" if chi2_partner is not None else "")
+    out = {"kept_iteration": leader_it.number, "kept_effect": leader, "undistinguished": None, "chi2": chi2}
     if not partner_passes:
         why = "was not kept" if not (decision and decision.get("accepted")) else "leaves a misfit"
-        return {"kept_iteration": leader_it.number, "kept_effect": leader, "undistinguished": None, "chi2": chi2,
-                "message": f"{leader} kept: {partner}, aliased with it, fitted in its place {why} ({fits})"}
-    kept_number, kept, other = ((it.number, partner, leader) if chi2_partner < chi2_leader
-                                else (leader_it.number, leader, partner))
-    if abs(chi2_partner - chi2_leader) < UNDISTINGUISHED_CHI2:
-        base = next((p for p in iterations if p.number == plan["base"]), None)
-        group = next((g for g in (((base.report or {}).get("diagnosis") or {}).get("alias_groups") or [])
-                      if {leader, partner} <= set(g.get("effects", []))), None) if base is not None else None
-        separating = sorted({s["separating_measurement"] for s in (group or {}).get("separators", [])
-                             if {leader, partner} & set(s.get("effects", []))})
-        return {"kept_iteration": kept_number, "kept_effect": kept, "undistinguished": sorted(chi2), "chi2": chi2,
-                "message": (f"undistinguished: {leader} and {partner} both bring the fit into the noise ({fits}): "
-                            f"these measurements cannot tell which is missing; iteration {kept_number} ({kept}) is "
-                            f"shown" + (f"; measure {' / '.join(separating)} more precisely to decide" if separating
-                                        else "; a test that moves them differently would decide"))}
-    return {"kept_iteration": kept_number, "kept_effect": kept, "undistinguished": None, "chi2": chi2,
-            "message": f"{kept} kept: it fits better than its alias {other} ({fits})"}
+        return {**out, "message": f"{leader} kept: {partner}, aliased with it, fitted in its place {why} ({fits})"}
+    gain = chi2_leader - chi2_partner  # > 0: the partner fits better
+    if gain <= -UNDISTINGUISHED_CHI2:
+        return {**out, "message": f"{leader} kept: it fits better than its alias {partner} ({fits})"}
+    base = next((p for p in iterations if p.number == plan["base"]), None)
+    diagnosis = ((base.report or {}).get("diagnosis") or {}) if base is not None else {}
+    noise = {row.get("effect"): row.get("signature_noise") for row in diagnosis.get("ranking") or []}
+    noisy = [e for e in (leader, partner) if (noise.get(e) or 0.0) >= SIMULATOR_SHARE_MIN]
+    if gain >= UNDISTINGUISHED_CHI2 and noisy:
+        return {**out, "kept_iteration": it.number, "kept_effect": partner,
+                "message": (f"{partner} kept: it fits better than its alias {leader} ({fits}); the diagnosis's "
+                            f"order rested on noisy probes ({', '.join(f'{e} noise {noise[e]:.2g}' for e in noisy)})")}
+    group = next((g for g in diagnosis.get("alias_groups") or [] if {leader, partner} <= set(g.get("effects", []))),
+                 None)
+    separating = sorted({s["separating_measurement"] for s in (group or {}).get("separators", [])
+                         if {leader, partner} & set(s.get("effects", []))})
+    why = ("both bring the fit into the noise" if gain < UNDISTINGUISHED_CHI2 else
+           f"{partner} fits better, where the diagnosis ranked {leader} first on probes with little noise")
+    return {**out, "undistinguished": sorted(chi2),
+            "message": (f"undistinguished: {leader} and {partner}: {why} ({fits}); these measurements do not tell "
+                        f"which is missing; iteration {leader_it.number} ({leader}) is shown"
+                        + (f"; measure {' / '.join(separating)} more precisely to decide" if separating
+                           else "; a test that moves them differently would decide"))}
 
 
 def _tried_from(iterations: list, base_number: int) -> set[str]:
@@ -243,7 +291,7 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         # physics (or widening an added one) would only bend the parameters towards a wrong number
         return {**record, "stop_reason": StopReason.SUSPECT_MEASUREMENT.value + "; ".join(
             s["message"] for s in report.get("suspect_measurements") or [])}
-    refit = _refit_plan(iterations, it)
+    refit = refit_plan(iterations, it)
     wide = widening(config, iterations, it, report)
     if wide is not None:
         params = it.parameters

@@ -153,7 +153,10 @@ def _analysis(ctx: Context, it) -> Transition:
         raise LoopFailed(f"iteration {it.number}: {exc}") from exc
     opt = result["optimum"]
     taken = {r.seed for r in it.runs}
-    seed = (s.seed + CONFIRMATION_SEED_STRIDE * it.number) % SEED_MAX
+    # an alias fitted in place of an effect that passed confirms at that effect's seeds: the two fits are then
+    # compared on the same packings (common random numbers), not on two draws of the simulator's scatter
+    refit = automatic.refit_plan(ctx.iterations, it) if s.automatic else None
+    seed = (s.seed + CONFIRMATION_SEED_STRIDE * (refit["leader_iteration"] if refit else it.number)) % SEED_MAX
     runs = []
     for k in range(s.confirmation_seeds):
         while seed in taken:

@@ -284,8 +284,31 @@ def outcome(case: Case, result: LoopResult, runs: int) -> dict[str, Any]:
             "top_alias_group": sorted(top_group), "tried": tried, "accepted": accepted,
             "rms_before": _rms(first), "rms_after": _rms(final), "strength_within_30": strengths,
             "stop_reason": result.stop_reason, "batteries": runs,
+            # an alias fitted in place of an effect that passed (calibration.automatic.settle_alias)
+            "alias_refit": _refit(result),
             "top_p_holm": top.get("p_holm") if top else None,
             "coverage": _coverage(case, final)}
+
+
+def _refit(result: LoopResult) -> dict[str, Any] | None:
+    """{"leader", "partner", "kept", "undistinguished"} where the loop ended comparing two aliases, else None."""
+    record = (result.iterations[-1].report or {}).get("automatic") or {}
+    settled = record.get("alias_settled")
+    if not settled:
+        return None
+    leader, partner = list(settled["chi2"])
+    return {"leader": leader, "partner": partner, "kept": settled["kept_effect"],
+            "undistinguished": bool(settled["undistinguished"])}
+
+
+def refit_line(outcomes: list[dict]) -> str:
+    """What the alias refits did over the single-effect cases: how often the leader (the diagnosis's choice) and
+    the model kept after the refit hold the hidden effect, and how many ended undistinguished."""
+    singles = [o for o in outcomes if len(o["effects"]) == 1 and o.get("alias_refit")]
+    truth = lambda o, name: name in o["effects"]  # noqa: E731
+    return (f"alias refits (single effects): {len(singles)}; leader is the truth {sum(truth(o, o['alias_refit']['leader']) for o in singles)}, "
+            f"kept is the truth {sum(truth(o, o['alias_refit']['kept']) for o in singles)}, "
+            f"undistinguished {sum(o['alias_refit']['undistinguished'] for o in singles)}")
 
 
 def _coverage(case: Case, final) -> dict[str, bool]:

@@ -279,10 +279,12 @@ def test_an_effect_kept_from_an_alias_group_has_its_partner_fitted_in_its_place(
     assert short.stop_reason.startswith(StopReason.PASSES) and "aliased with" in short.stop_reason
 
 
-def _settle(chi2_leader, chi2_partner, accepted=True, partner_p=0.5):
+def _settle(chi2_leader, chi2_partner, accepted=True, partner_p=0.5, noise=0.01):
     diagnosis = {"alias_groups": [{"effects": ["rolling_epsd2", "particle_shape"],
                                    "separators": [{"effects": ["rolling_epsd2", "particle_shape"],
-                                                   "separating_measurement": "cct confined_modulus_pa"}]}]}
+                                                   "separating_measurement": "cct confined_modulus_pa"}]}],
+                 "ranking": [{"effect": "rolling_epsd2", "signature_noise": 0.1},
+                             {"effect": "particle_shape", "signature_noise": noise}]}
     base = SimpleNamespace(number=1, parameters={}, report={"diagnosis": diagnosis})
     leader = SimpleNamespace(number=2, parameters={}, report={"lack_of_fit": {"statistic": chi2_leader}})
     partner = SimpleNamespace(number=3, parameters={}, report=None)
@@ -291,36 +293,36 @@ def _settle(chi2_leader, chi2_partner, accepted=True, partner_p=0.5):
     return automatic.settle_alias([base, leader, partner], partner, report, {"accepted": accepted}, plan)
 
 
-@pytest.mark.parametrize("chi2_leader, chi2_partner, accepted, partner_p, kept, undistinguished", [
-    (10.0, 4.0, True, 0.5, 3, None),         # the partner fits better by 6: it is kept
-    (4.0, 10.0, True, 0.2, 2, None),         # the leader fits better by 6: it stays
-    (5.0, 3.5, True, 0.5, 3, ["particle_shape", "rolling_epsd2"]),  # 1.5 apart: likelihood ratio below e
-    (10.0, 4.0, False, 0.5, 2, None),        # the partner did not earn its place against the base
-    (10.0, 4.0, True, 0.01, 2, None),        # the partner's fit fails the lack of fit: the leader stays
+BOTH = ["particle_shape", "rolling_epsd2"]
+
+
+@pytest.mark.parametrize("chi2_leader, chi2_partner, accepted, partner_p, noise, kept, undistinguished", [
+    (10.0, 4.0, True, 0.5, 0.34, 3, None),   # better by 6, the diagnosis's probes noisy (shape_strong's 0.34)
+    (10.0, 4.0, True, 0.5, 0.01, 2, BOTH),   # better by 6, but the diagnosis's quiet probes said otherwise
+    (4.0, 10.0, True, 0.2, 0.34, 2, None),   # the leader fits better by 6: it stays
+    (5.0, 3.5, True, 0.5, 0.34, 2, BOTH),    # 1.5 apart: a likelihood ratio below e, the diagnosis's order stands
+    (10.0, 4.0, False, 0.5, 0.34, 2, None),  # the partner did not earn its place against the base
+    (10.0, 4.0, True, 0.01, 0.34, 2, None),  # the partner's fit fails the lack of fit: the leader stays
 ])
 def test_the_better_of_two_aliases_is_kept_and_near_equals_are_named(chi2_leader, chi2_partner, accepted,
-                                                                     partner_p, kept, undistinguished):
+                                                                     partner_p, noise, kept, undistinguished):
     """Two fits with one strength each on the same base: chi2 differences are log-likelihood ratios x 2, and
     below 2 neither is preferred (Burnham & Anderson 2002, sec. 2.6)."""
-    settled = _settle(chi2_leader, chi2_partner, accepted, partner_p)
+    settled = _settle(chi2_leader, chi2_partner, accepted, partner_p, noise)
     assert settled["kept_iteration"] == kept and settled["undistinguished"] == undistinguished
     if undistinguished:
         assert settled["message"].startswith("undistinguished") and "cct confined_modulus_pa" in settled["message"]
 
 
-def test_no_alias_note_without_a_kept_effect_or_with_every_partner_fitted():
-    diagnosis = {"alias_groups": [{"effects": ["rolling_epsd2", "particle_shape"],
-                                   "separators": [{"effects": ["rolling_epsd2", "particle_shape"],
-                                                   "separating_measurement": "cct confined_modulus_pa"}]}]}
-    base = SimpleNamespace(number=1, parameters={}, report={"diagnosis": diagnosis, "automatic": {}})
-    added = SimpleNamespace(number=2, parameters={"effects": {"rolling_epsd2": {}}},
-                            report={"automatic": {"next_effect": None}})
-    base.report["automatic"] = {"next_effect": "rolling_epsd2", "next_base": 1}
-    kept = {"effect": "rolling_epsd2", "accepted": True}
-    note = automatic.kept_alias([base, added], kept, 1)
-    assert note["aliases"] == ["particle_shape"] and note["separating"] == ["cct confined_modulus_pa"]
-    assert automatic.kept_alias([base, added], {**kept, "accepted": False}, 1) is None  # rejected: nothing kept
-    tried = SimpleNamespace(number=3, parameters={}, report={"automatic": {"next_effect": "particle_shape", "next_base": 1}})
-    assert automatic.kept_alias([base, added, tried], kept, 1) is None  # the partner was fitted from the same base
-    alone = SimpleNamespace(number=1, parameters={}, report={"diagnosis": {"alias_groups": []}})
-    assert automatic.kept_alias([alone], kept, 1) is None
+def test_two_fits_are_compared_on_one_variance_per_target():
+    """A fit whose simulator scatter came out large must not win for it: by hand, one target measured 10 +- 1, the
+    leader's mean of two seeds 12 with simulator sd 1, the partner's 12 with sd 3. Own variances: 4/1.5 = 2.67
+    against 4/5.5 = 0.73; common variance 1 + (1 + 9)/2/2 = 3.5: 4/3.5 = 1.14 for both."""
+    def report(confirmed, sim_sd):
+        return {"confirmation_seeds": [1, 2], "targets": [
+            {"test": "fill", "quantity": "bulk_density_kg_m3", "condition": {}, "status": "modelled",
+             "measured": 10.0, "measured_uncertainty": 1.0, "confirmed": confirmed, "simulator_sd": sim_sd}]}
+    a, b = automatic.common_chi2(report(12.0, 1.0), report(12.0, 3.0))
+    assert a == pytest.approx(4 / 3.5) and b == pytest.approx(4 / 3.5)
+    a, b = automatic.common_chi2(report(12.0, 1.0), report(11.0, 3.0))
+    assert a == pytest.approx(4 / 3.5) and b == pytest.approx(1 / 3.5)
