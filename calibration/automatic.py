@@ -11,8 +11,9 @@ iteration's diagnosis is tried instead, and when none is left nothing improves. 
 pinned at the top of its range (the optimum wants more than the range allows) is first given a range twice as wide on the same base, once (``calibration.decisions.widened_top``,
 as the library loop does), and that iteration is the one judged. An effect that brings the fit into the noise
 but shares an alias group with candidates never fitted has its first such partner fitted in its place on the
-same base (``alias_refit``) before the loop stops; the lower chi2 is kept, and two fits the measurements cannot
-tell apart are reported as undistinguished (``settle_alias``). A base factor pinned on a box edge short
+same base (``alias_refit``) before the loop stops, and the two fits are compared (``settle_alias``: the leader
+stays unless the partner fits clearly better against noisy probes; fits the measurements cannot tell apart are
+reported as undistinguished). A base factor pinned on a box edge short
 of its typical range gets the box's width more on that side, once (``box_widening``): beside the next
 effect, or alone when the diagnosis indicates none (it counted such a factor as absorbing). Pure functions of
 what the database holds, so the runner stays resumable.
@@ -186,7 +187,7 @@ def alias_refit(config, campaign_config: dict, iterations: list, it, alias: dict
     plan = {"leader": alias["effect"], "leader_iteration": it.number, "partner": partner, "base": alias["base"],
             "message": (f"{alias['effect']} brings the fit into the noise, but iteration {alias['base']}'s diagnosis "
                         f"found it aliased with {partner}: {partner} is fitted in its place on iteration "
-                        f"{alias['base']}'s model, and the better fit is kept")}
+                        f"{alias['base']}'s model, and the two fits are compared")}
     record = _configured({"alias_refit": plan}, partner, alias["base"], nxt, validate)
     return None if record.get("stop_reason") else record
 
@@ -245,6 +246,9 @@ def settle_alias(iterations: list, it, report: dict, decision: dict | None, plan
     chi2 = {leader: chi2_leader, partner: chi2_partner}
     partner_passes = (bool(decision and decision.get("accepted")) and not model_fails(report)
                       and report.get("verdict") != Verdict.OUT_OF_REACH and chi2_partner is not None)
+    if chi2_leader is None:  # the leader's report holds no chi2 to compare with: it stays, said plainly
+        return {"kept_iteration": leader_it.number, "kept_effect": leader, "undistinguished": None, "chi2": chi2,
+                "message": f"{leader} kept: its iteration {leader_it.number} has no chi2 to compare {partner} with"}
     fits = f"chi2 {chi2_leader:.3g} with {leader} (iteration {leader_it.number})" + (
         f", {chi2_partner:.3g} with {partner} (iteration {it.number})" if chi2_partner is not None else "")
     out = {"kept_iteration": leader_it.number, "kept_effect": leader, "undistinguished": None, "chi2": chi2}
