@@ -344,3 +344,39 @@ def test_the_history_counts_an_added_effect_from_its_base_and_marks_a_widened_ra
     # the record's widening reads back through the report's response model ("from" is a keyword in Python)
     report = client.get(f"{API}/campaigns/{cid}/report", params={"number": 2}).json()
     assert report["automatic"]["widened_box"] == plans[1]["widened_box"]
+
+
+def test_the_summary_and_history_name_the_model_kept_after_an_alias_refit(s2):
+    """Automatic mode kept rolling resistance (iteration 2), fitted its alias shape on iteration 1 (iteration 3)
+    and kept iteration 2: the campaign's summary, its history and the CLI status say which model is the answer,
+    and the undistinguished pair where the fits could not tell them apart."""
+    from service.cli_campaigns import _status_text
+    from service.models.campaign import Campaign, CampaignIteration
+
+    client, app, _ = s2
+    body = campaign_body(thesis_material_id(client), automatic=True, max_iterations=3)
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    box = body["factors"]
+    lof = {"statistic": 8.0, "dof": 8, "chi2_per_dof": 1.0, "p_value": 0.43}
+    settled = {"kept_iteration": 2, "kept_effect": "rolling_epsd2", "undistinguished": ["particle_shape", "rolling_epsd2"],
+               "chi2": {"rolling_epsd2": 8.0, "particle_shape": 7.2}, "message": "undistinguished: ..."}
+    plans = [{"next_effect": "rolling_epsd2", "next_base": 1},
+             {"next_effect": "particle_shape", "next_base": 1, "alias_refit": {
+                 "leader": "rolling_epsd2", "leader_iteration": 2, "partner": "particle_shape", "base": 1}},
+             {"stop_reason": "lack of fit passes; undistinguished: ...", "kept_iteration": 2, "alias_settled": settled}]
+    effects = [box, box + [{"name": "effects.rolling_epsd2.rolling_friction", "low": 0.0, "high": 0.5, "unit": "1"}],
+               box + [{"name": "clump_aspect_ratio", "low": 1.0, "high": 2.0, "unit": "1"}]]
+    with app.state.session_factory() as session:
+        for number, (factors, plan) in enumerate(zip(effects, plans), start=1):
+            session.add(CampaignIteration(campaign_id=cid, number=number, phase="done",
+                                          parameters={"factors": factors, "fixed": {}, "effects": {}},
+                                          report={"verdict": "calibrated", "lack_of_fit": lof, "targets": [],
+                                                  "automatic": plan}))
+        session.get(Campaign, cid).current_iteration = 3
+        session.commit()
+    summary = client.get(f"{API}/campaigns/{cid}").json()
+    assert summary["kept_iteration"] == 2 and summary["stop_reason"].startswith("lack of fit passes; undistinguished")
+    entries = client.get(f"{API}/campaigns/{cid}/history").json()["iterations"]
+    assert [e["kept_iteration"] for e in entries] == [None, None, 2]
+    assert entries[-1]["undistinguished"] == ["particle_shape", "rolling_epsd2"]
+    assert "the model kept is iteration 2's" in _status_text(summary)

@@ -75,6 +75,17 @@ function batteriesCell(b) {
     `${b.total}${b.reused ? ` (+${b.reused} reused)` : ""}`);
 }
 
+// Whether the effect an iteration added was kept against its base (calibration.decisions) and, where the loop
+// ended fitting an alias in its place, which iteration's model it keeps (calibration.automatic.settle_alias).
+function automaticCell(it) {
+  const parts = [];
+  if (it.decision) parts.push(h("span", { className: it.decision.accepted ? "good" : "bad" },
+    `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`));
+  if (it.kept_iteration != null) parts.push(h("span", { className: it.undistinguished ? "kept-iteration bad" : "kept-iteration", title: it.stop_reason || "" },
+    ` · model kept: iteration ${it.kept_iteration}` + (it.undistinguished ? ` (undistinguished: ${it.undistinguished.join(" / ")})` : "")));
+  return parts.length ? h("span", {}, ...parts) : "–";
+}
+
 export function historySection(history, iterations, priors) {
   const its = history.iterations;
   if (!its.length) return "";
@@ -89,7 +100,7 @@ export function historySection(history, iterations, priors) {
           it.effect_added_next ? (it.tie_break ? h("span", { className: "tie-break", title: it.tie_break },
             `+ ${it.effect_added_next.join(", ")} (tie: fewest spheres)`) : `+ ${it.effect_added_next.join(", ")}`) : "–",
           // automatic mode: whether the effect this iteration added was kept (calibration.decisions)
-          it.decision ? h("span", { className: it.decision.accepted ? "good" : "bad" }, `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`) : "–",
+          automaticCell(it),
           // an added effect explains the misfit only when every check holds; otherwise what it leaves
           it.explains ? h("span", { className: `explains ${it.explains.explains === "explains" ? "good" : "bad"}`, title: it.explains.explains_message }, it.explains.explains) : "–",
           batteriesCell(it.batteries)]))),
