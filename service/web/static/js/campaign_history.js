@@ -79,8 +79,10 @@ function batteriesCell(b) {
 // ended fitting an alias in its place, which iteration's model it keeps (calibration.automatic.settle_alias).
 function automaticCell(it) {
   const parts = [];
+  // an alias fitted for comparison earned its place against the base, but another iteration's model is kept
+  const compared = it.kept_iteration != null && it.kept_iteration !== it.number;
   if (it.decision) parts.push(h("span", { className: it.decision.accepted ? "good" : "bad" },
-    `${it.decision.effect} ${it.decision.accepted ? "kept" : "rejected"}`));
+    `${it.decision.effect} ${it.decision.accepted ? (compared ? "beats the base" : "kept") : "rejected"}`));
   if (it.kept_iteration != null) parts.push(h("span", { className: it.undistinguished ? "kept-iteration bad" : "kept-iteration", title: it.stop_reason || "" },
     ` · model kept: iteration ${it.kept_iteration}` + (it.undistinguished ? ` (undistinguished: ${it.undistinguished.join(" / ")})` : "")));
   return parts.length ? h("span", {}, ...parts) : "–";
