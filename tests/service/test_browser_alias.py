@@ -59,3 +59,4 @@ def test_the_page_names_the_model_kept_after_an_alias_refit(page, service, shots
     expect_text(page, "p.kept-iteration", f"iteration {kept}'s")
     expect_text(page, "section.history", f"model kept: iteration {kept}")
     section_shot(page, shots, "Across iterations", "campaign-history-alias-refit")
+

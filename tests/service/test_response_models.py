@@ -213,3 +213,22 @@ def test_health_keeps_its_keys(s2, path):
     body = client.get(f"{API}{path}").json()
     assert {"status", "version", "executor", "local_workers_alive", "local_worker_pids", "database",
             "schema_revision", "jobs"} <= body.keys() and "dask" not in body
+
+
+def test_an_alias_refit_s_records_survive_the_report_s_model():
+    """The automatic record of a loop that fitted an alias in place of a kept effect (the test bed's elongation 1.8,
+    seed 8: tests/calibration/test_verdict_rules.py) keeps every key through ``Automatic``."""
+    from calibration.conditions import standin_conditions
+    from calibration.evaluators import StandinEvaluator
+    from calibration.loop import CalibrationLoop
+    from calibration.testbed import OPTIONS, loop_settings, make_case
+    from service.api.responses.report import Automatic
+
+    case = make_case(8, "single", effects={"particle_shape": 1.8})
+    result = CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)), loop_settings(case)).run()
+    leader, partner = (it.report["automatic"] for it in result.iterations[1:3])
+    assert "alias_refit" in leader and "alias_settled" in partner
+    for record in (leader, partner):
+        typed = Automatic.model_validate(record).model_dump(exclude_none=True)
+        assert {k for k, v in record.items() if v is not None} - {"next_config"} <= set(typed), sorted(record)
+    assert Automatic.model_validate(partner).alias_settled.kept_iteration == result.final.number

@@ -220,6 +220,27 @@ class KeptAlias(Out):
     message: str
 
 
+class AliasRefit(Out):
+    """The next iteration fits ``partner`` in place of ``leader``, which passed, on the same base
+    (calibration.automatic.alias_refit)."""
+
+    leader: str = Field(description="the effect kept, whose fit passed")
+    leader_iteration: int
+    partner: str = Field(description="its alias, never fitted, fitted next on the same base")
+    base: int = Field(description="the iteration both are fitted on")
+    message: str
+
+
+class AliasSettled(Out):
+    """The two aliases' fits compared (calibration.automatic.settle_alias)."""
+
+    kept_iteration: int = Field(description="the iteration whose model the loop keeps")
+    kept_effect: str
+    undistinguished: list[str] | None = Field(description="both, where the measurements could not tell them apart")
+    chi2: dict[str, float | None] = Field(description="per effect: its fit's chi2 on one variance per target")
+    message: str
+
+
 class Automatic(Out):
     """The automatic mode's record of an iteration: its decision and the next step or why it stopped."""
 
@@ -236,6 +257,11 @@ class Automatic(Out):
                                                          "and why the next effect was tried first among them")
     aliased: KeptAlias | None = Field(None, description="the effect kept shares an alias group with candidates "
                                                         "never fitted: the fit does not say which is missing")
+    alias_refit: AliasRefit | None = Field(None, description="the next iteration fits the kept effect's alias in "
+                                                             "its place on the same base")
+    alias_settled: AliasSettled | None = Field(None, description="the two aliases' fits compared: which is kept")
+    kept_iteration: int | None = Field(None, description="the iteration whose model the loop keeps (after an "
+                                                         "alias refit)")
 
 
 class Trend(Out):
