@@ -20,13 +20,13 @@ what the database holds, so the runner stays resumable.
 """
 from __future__ import annotations
 
-import json
 from typing import Any, Callable
 
 from calibration.adding import effect_hints, with_effect_factor
 from calibration.analysis import active_effects, model_fails
 from calibration.decisions import explanation, judge, widened_box, widened_top
 from calibration.errors import SettingsError
+from calibration.keys import ResponseKey
 from calibration.settings import validated
 from calibration.vocabulary import AGAINST_ADDING, DiagnosisVerdict, StopReason, Verdict
 from engine.candidates import get as get_candidate
@@ -140,8 +140,7 @@ def kept_alias(iterations: list, decision: dict | None, base_number: int | None)
     others = [e for e in group["effects"] if e != name and e not in fitted]
     if not others:
         return None
-    separating = sorted({s["separating_measurement"] for s in group.get("separators", [])
-                         if name in s.get("effects", [])})
+    separating = _separating(group, {name})
     message = (f"{name} was kept, but iteration {base_number}'s diagnosis found it aliased with "
                f"{', '.join(others)}: these measurements change alike under them, so the fit does not say which is "
                f"missing; fit {', '.join(others)} in its place"
@@ -202,8 +201,7 @@ def common_chi2(report_a: dict, report_b: dict) -> tuple[float | None, float | N
     models, not of the packings). Targets either report lacks are left out of both; with
     none in common, each report's lack-of-fit statistic is returned."""
     def rows(report: dict) -> dict:
-        return {(r["test"], r["quantity"], json.dumps(r.get("condition") or {}, sort_keys=True)): r
-                for r in report.get("targets") or [] if r.get("status") == "modelled"
+        return {ResponseKey.from_record(r): r for r in report.get("targets") or [] if r.get("status") == "modelled"
                 and r.get("confirmed") is not None and r.get("measured_uncertainty") is not None}
 
     a, b = rows(report_a), rows(report_b)
@@ -223,8 +221,8 @@ def common_chi2(report_a: dict, report_b: dict) -> tuple[float | None, float | N
 
 
 def settle_alias(iterations: list, it, report: dict, decision: dict | None, plan: dict) -> dict[str, Any]:
-    """{"kept_iteration", "kept_effect", "undistinguished", "chi2", "message"} once iteration ``it`` has fitted
-    ``plan``'s partner in place of its leader, by their chi2 on one variance (``common_chi2``):
+    """{"leader", "partner", "kept_iteration", "kept_effect", "undistinguished", "chi2", "message"} once iteration
+    ``it`` has fitted ``plan``'s partner in place of its leader, by their chi2 on one variance (``common_chi2``):
 
     * the partner did not earn its place, or its fit fails: the leader is kept;
     * the partner fits worse by ``UNDISTINGUISHED_CHI2`` or more: the leader is kept, the fits agreeing with the
@@ -246,12 +244,12 @@ def settle_alias(iterations: list, it, report: dict, decision: dict | None, plan
     chi2 = {leader: chi2_leader, partner: chi2_partner}
     partner_passes = (bool(decision and decision.get("accepted")) and not model_fails(report)
                       and report.get("verdict") != Verdict.OUT_OF_REACH and chi2_partner is not None)
+    out = {"leader": leader, "partner": partner, "kept_iteration": leader_it.number, "kept_effect": leader,
+           "undistinguished": None, "chi2": chi2}
     if chi2_leader is None:  # the leader's report holds no chi2 to compare with: it stays, said plainly
-        return {"kept_iteration": leader_it.number, "kept_effect": leader, "undistinguished": None, "chi2": chi2,
-                "message": f"{leader} kept: its iteration {leader_it.number} has no chi2 to compare {partner} with"}
+        return {**out, "message": f"{leader} kept: its iteration {leader_it.number} has no chi2 to compare {partner} with"}
     fits = f"chi2 {chi2_leader:.3g} with {leader} (iteration {leader_it.number})" + (
         f", {chi2_partner:.3g} with {partner} (iteration {it.number})" if chi2_partner is not None else "")
-    out = {"kept_iteration": leader_it.number, "kept_effect": leader, "undistinguished": None, "chi2": chi2}
     if not partner_passes:
         why = "was not kept" if not (decision and decision.get("accepted")) else "leaves a misfit"
         return {**out, "message": f"{leader} kept: {partner}, aliased with it, fitted in its place {why} ({fits})"}
@@ -268,8 +266,7 @@ def settle_alias(iterations: list, it, report: dict, decision: dict | None, plan
                             f"order rested on noisy probes ({', '.join(f'{e} noise {noise[e]:.2g}' for e in noisy)})")}
     group = next((g for g in diagnosis.get("alias_groups") or [] if {leader, partner} <= set(g.get("effects", []))),
                  None)
-    separating = sorted({s["separating_measurement"] for s in (group or {}).get("separators", [])
-                         if {leader, partner} & set(s.get("effects", []))})
+    separating = _separating(group, {leader, partner})
     why = ("both bring the fit into the noise" if gain < UNDISTINGUISHED_CHI2 else
            f"{partner} fits better, where the diagnosis ranked {leader} first on probes with little noise")
     return {**out, "undistinguished": sorted(chi2),
@@ -277,6 +274,12 @@ def settle_alias(iterations: list, it, report: dict, decision: dict | None, plan
                         f"which is missing; iteration {leader_it.number} ({leader}) is shown"
                         + (f"; measure {' / '.join(separating)} more precisely to decide" if separating
                            else "; a test that moves them differently would decide"))}
+
+
+def _separating(group: dict | None, effects: set[str]) -> list[str]:
+    """The measurements an alias group's diagnosis names as separating any of ``effects`` from the others."""
+    return sorted({s["separating_measurement"] for s in (group or {}).get("separators", [])
+                   if effects & set(s.get("effects", []))})
 
 
 def _tried_from(iterations: list, base_number: int) -> set[str]:

@@ -296,8 +296,7 @@ def _refit(result: LoopResult) -> dict[str, Any] | None:
     settled = record.get("alias_settled")
     if not settled:
         return None
-    leader, partner = list(settled["chi2"])
-    return {"leader": leader, "partner": partner, "kept": settled["kept_effect"],
+    return {"leader": settled["leader"], "partner": settled["partner"], "kept": settled["kept_effect"],
             "undistinguished": bool(settled["undistinguished"])}
 
 

@@ -358,7 +358,7 @@ def test_the_summary_and_history_name_the_model_kept_after_an_alias_refit(s2):
     cid = client.post(f"{API}/campaigns", json=body).json()["id"]
     box = body["factors"]
     lof = {"statistic": 8.0, "dof": 8, "chi2_per_dof": 1.0, "p_value": 0.43}
-    settled = {"kept_iteration": 2, "kept_effect": "rolling_epsd2", "undistinguished": ["particle_shape", "rolling_epsd2"],
+    settled = {"leader": "rolling_epsd2", "partner": "particle_shape", "kept_iteration": 2, "kept_effect": "rolling_epsd2", "undistinguished": ["particle_shape", "rolling_epsd2"],
                "chi2": {"rolling_epsd2": 8.0, "particle_shape": 7.2}, "message": "undistinguished: ..."}
     plans = [{"next_effect": "rolling_epsd2", "next_base": 1},
              {"next_effect": "particle_shape", "next_base": 1, "alias_refit": {

@@ -234,6 +234,8 @@ class AliasRefit(Out):
 class AliasSettled(Out):
     """The two aliases' fits compared (calibration.automatic.settle_alias)."""
 
+    leader: str = Field(description="the effect first kept")
+    partner: str = Field(description="its alias, fitted in its place")
     kept_iteration: int = Field(description="the iteration whose model the loop keeps")
     kept_effect: str
     undistinguished: list[str] | None = Field(description="both, where the measurements could not tell them apart")
