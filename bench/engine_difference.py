@@ -1,0 +1,76 @@
+"""Where demcal and LIGGGHTS differ: the CCT on the same packings, removing one difference at a time.
+
+    python3 bench/engine_difference.py                    # every step below, seeds 1 2 3
+    python3 bench/engine_difference.py --steps exported no_tangential_dashpot --seeds 1 2 3 4 5
+    python3 bench/engine_difference.py --json out.json
+
+Issue 30, item 4. demcal's lab builds each packing (screening rig, thesis Table 4.9 set, 20 mm spheres,
+linear law); both engines run the confined compression test on it (calibration.export.paired), so the
+paired difference of E' carries the engines' and the lid's differences and not the packings' scatter.
+Each step switches one more thing off in both engines:
+
+    exported               the material as exported (verify_export's linear case)
+    no_tangential_dashpot  damping_ratio_shear 0 for the CCT: the codes cap spring + dashpot differently
+    no_wall_friction       and friction_pw 0 for the whole run (fill and CCT)
+    frictionless           and friction_pp 0 for the CCT: normal springs and dashpots only
+
+Needs Debian's ``liggghts``. About 1.5-2 min per seed and step on 2 free cores.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+# step -> (material changes for the whole run, contact changes for the CCT); each adds to the one before
+STEPS = {
+    "exported": ({}, {}),
+    "no_tangential_dashpot": ({}, {"damping_ratio_shear": 0.0}),
+    "no_wall_friction": ({"friction_pw": 0.0}, {"damping_ratio_shear": 0.0}),
+    "frictionless": ({"friction_pw": 0.0}, {"damping_ratio_shear": 0.0, "friction_pp": 0.0}),
+}
+
+
+def main(argv: list[str] | None = None) -> int:
+    from calibration.export.material import from_micro_parameters
+    from calibration.export.paired import paired_cct
+    from calibration.export.rig_liggghts import liggghts_executable
+    from engine.lab.spec import MicroParameters
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", nargs="+", choices=list(STEPS), default=list(STEPS))
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
+    ap.add_argument("--cycles", type=int, default=2)
+    ap.add_argument("--params", help="MicroParameters as JSON (screening spheres); default the thesis Table 4.9 set")
+    ap.add_argument("--json", help="write the reports here")
+    args = ap.parse_args(argv)
+    if liggghts_executable() is None:
+        print("engine_difference: liggghts not found (apt-get install -y liggghts)", file=sys.stderr)
+        return 2
+    base = MicroParameters.model_validate(json.load(open(args.params))) if args.params else MicroParameters()
+    reports = []
+    for step in args.steps:
+        whole_run, cct = STEPS[step]
+        params = base.model_copy(update=whole_run)
+        material = from_micro_parameters(params, "screening")
+        report = paired_cct(material, args.seeds, args.cycles, contact_changes=cct, label=step,
+                            progress=lambda m: print(f"  [{step}] {m}", file=sys.stderr, flush=True))
+        print(report.text(), flush=True)
+        reports.append({"step": step, "whole_run": whole_run, **report.to_dict()})
+    print("\nsummary: E' on the same packings, paired relative difference (mean +- standard error)")
+    print(f"  {'step':24s} {'LIGGGHTS vs demcal restarted':>30s} {'demcal restarted vs kept':>26s} {'demcal kept, MPa':>17s}")
+    for r in reports:
+        lig, restart = r["differences"][0], r["differences"][1]
+        print(f"  {r['step']:24s} {lig['mean'] * 100:+17.1f} % +- {lig['se'] * 100:4.1f} % "
+              f"{restart['mean'] * 100:+13.1f} % +- {restart['se'] * 100:4.1f} % {restart['base_mean'] / 1e6:17.3f}")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(reports, fh, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

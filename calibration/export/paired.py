@@ -1,0 +1,238 @@
+"""Both engines' confined compression on the same packing (issue 30, item 4: where the engines differ).
+
+``verify_export`` compares the engines over independent packings, one per seed in each: with ~680
+spheres in the screening rig the confined modulus of single packings spreads +-14-20 %, so three seeds
+cannot tell a 10 % engine difference from the packings' scatter. Here demcal builds each packing (its
+lab's fill), and both engines run the CCT on that same packing: demcal from its fill's checkpoint,
+LIGGGHTS from the spheres' positions and radii (``rig_liggghts.run_packing_cct``: the exported include,
+a settle to KE/(M g d) < 1e-5 because its contacts start without tangential history, then the same lid
+and cycles). The difference per packing is then paired and its scatter is the engines' and the lid's,
+not the packings'.
+
+``contact_changes`` switches a contact setting in both engines for the CCT only (the packing is built
+with the material as it is), so a set-up or convention can be removed one at a time on the same packings:
+``damping_ratio_shear`` 0 takes the tangential dashpot out, whose Coulomb cap the two codes apply
+differently (demcal caps spring + dashpot at mu Fn and keeps the capped force as the spring's stretch;
+LIGGGHTS caps the spring alone and adds the dashpot only while sticking); ``friction_pp`` changes the
+inter-particle friction.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from calibration.export.liggghts import render
+from calibration.export.material import ExportMaterial
+from calibration.export.rig_liggghts import run_packing_cct, screening_rig
+from calibration.export.verify import to_micro_parameters
+
+# the contact settings demcal can change on a built packing (engine.simulation.Simulation.set_material),
+# named as the material card names them, with the engine's own name
+CCT_CHANGES = {"damping_ratio_shear": "damping_ratio_shear", "damping_ratio_normal": "damping_ratio_normal",
+               "friction_pp": "friction"}
+
+
+@dataclass
+class PairedPacking:
+    """One packing's CCT in demcal as the lab runs it (``kept``: the fill's contact history), in demcal
+    restarted as LIGGGHTS starts (history dropped, settled again) and in LIGGGHTS."""
+
+    seed: int
+    particle_count: int
+    height_demcal_m: float
+    height_liggghts_m: float  # after LIGGGHTS' own settle of the same packing
+    modulus_kept_pa: float
+    modulus_restarted_pa: float
+    modulus_liggghts_pa: float
+    window_stress_mid_pa: list[float]
+    window_modulus_kept_pa: list[float]
+    window_modulus_restarted_pa: list[float]
+    window_modulus_liggghts_pa: list[float]
+    wall_time_s: float
+
+
+@dataclass
+class PairedDifference:
+    """(other - base) / base per packing: mean, standard deviation and standard error of the mean, with the
+    two sides' own means."""
+
+    quantity: str
+    base_mean: float
+    other_mean: float
+    mean: float
+    sd: float
+    se: float
+    n: int
+
+    @property
+    def distinguishable(self) -> bool:
+        """The mean difference lies more than twice its standard error from zero."""
+        return self.n > 1 and abs(self.mean) > 2.0 * self.se
+
+
+@dataclass
+class PairedReport:
+    material: str
+    label: str
+    contact_changes: dict
+    seeds: list[int]
+    cct_cycles: int
+    packings: list[PairedPacking] = field(default_factory=list)
+    differences: list[PairedDifference] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def text(self) -> str:
+        changes = ", ".join(f"{k} {v:g}" for k, v in self.contact_changes.items()) or "none"
+        lines = [f"paired CCT ({self.label}): {self.material}; changed for the CCT in both engines: {changes}; "
+                 f"seeds {self.seeds}, {self.cct_cycles} cycles; E' of demcal as the lab runs it (history kept), "
+                 "demcal restarted as LIGGGHTS starts (history dropped, settled again), LIGGGHTS"]
+        for p in self.packings:
+            lines.append(f"  seed {p.seed}: N {p.particle_count}  H {p.height_demcal_m * 1000:.1f} / "
+                         f"{p.height_liggghts_m * 1000:.1f} mm  E' kept {p.modulus_kept_pa / 1e6:.3f}  restarted "
+                         f"{p.modulus_restarted_pa / 1e6:.3f}  LIGGGHTS {p.modulus_liggghts_pa / 1e6:.3f} MPa  "
+                         f"[{p.wall_time_s:.0f} s]")
+        for d in self.differences:
+            lines.append(f"  {d.quantity:44s} {d.base_mean:11.5g} -> {d.other_mean:11.5g}  paired difference "
+                         f"{d.mean * 100:+6.1f} % +- {d.se * 100:.1f} % (sd {d.sd * 100:.1f} %, n {d.n})"
+                         f"{'  DIFFERS' if d.distinguishable else ''}")
+        return "\n".join(lines)
+
+
+def paired_difference(quantity: str, demcal: list[float], liggghts: list[float]) -> PairedDifference:
+    """Mean relative difference over pairs, with its standard error (sd / sqrt(n))."""
+    d_arr, l_arr = np.asarray(demcal, float), np.asarray(liggghts, float)
+    rel = (l_arr - d_arr) / d_arr
+    n = rel.size
+    sd = float(np.std(rel, ddof=1)) if n > 1 else 0.0
+    return PairedDifference(quantity, float(np.mean(d_arr)), float(np.mean(l_arr)), float(np.mean(rel)), sd,
+                            sd / math.sqrt(n) if n > 1 else math.inf, n)
+
+
+def _with_changes(material: ExportMaterial, changes: dict) -> ExportMaterial:
+    unknown = sorted(set(changes) - set(CCT_CHANGES))
+    if unknown:
+        raise ValueError(f"contact_changes {unknown} cannot be changed on a built packing; only {sorted(CCT_CHANGES)}")
+    contact = material.contact.model_copy(update=dict(changes))
+    return material.model_copy(update={"contact": type(material.contact).model_validate(contact.model_dump())})
+
+
+def without_history(checkpoint: dict) -> dict:
+    """The checkpoint with every contact's history zeroed (tangential springs unloaded) and every body at rest:
+    the state LIGGGHTS starts from when it reads the packing's positions."""
+    state = dict(checkpoint)
+    for key in ("p_hist", "c_hist", "pending_pair_hist", "pending_wall_hist"):
+        if key in state:
+            state[key] = np.zeros_like(state[key])
+    for key in ("b_vel", "b_omega", "s_vel"):
+        if key in state:
+            state[key] = np.zeros_like(state[key])
+    return state
+
+
+@dataclass
+class _DemcalSide:
+    positions_m: np.ndarray
+    radii_m: np.ndarray
+    packing_height_m: float
+    kept: object  # the CCT's reduction with the fill's contact history, as the lab runs it
+    restarted: object  # the CCT's reduction after the history is dropped and the packing settles again
+
+
+def _demcal_fill_and_cct(params, seed: int, cct_cycles: int, speed_factor: float | None, changes: dict) -> _DemcalSide:
+    """demcal's lab: the fill, then (with ``changes`` applied to the settled packing) the CCT twice: once as
+    the lab runs it, once restarted as LIGGGHTS is (history dropped, bodies at rest, settled to KE/(M g d) <
+    1e-5). The second is the like-for-like partner of LIGGGHTS' run; the difference of the two demcal runs is
+    what a restart alone does to E' on the same packing, the comparison's own scatter."""
+    from engine.lab import sim as labsim
+    from engine.lab.context import RunContext
+    from engine.lab.procedures.cct import run_cct
+    from engine.lab.procedures.fill import FillOutcome
+    from engine.lab.registry import Bench, plan
+    from engine.lab.spec import JobSpec, TestOptions
+
+    spec = JobSpec(test="cct", fidelity="screening", seed=seed, parameters=params,
+                   options=TestOptions(cct_cycles=cct_cycles, speed_factor=speed_factor))
+    ctx = RunContext.from_spec(spec)
+    ctx.validate()
+    bench = Bench(ctx)
+    steps = dict((test.name, test) for test, _ in plan(spec))
+    ctx.phase(0.0, 1.0)
+    fill = steps["fill"].run(bench, 0.0, 1.0).outcome
+    sim = labsim.restore(fill.checkpoint)
+    if sim.n_bodies != sim.n_spheres:
+        raise ValueError("the paired CCT takes single spheres (LIGGGHTS reads the packing sphere by sphere)")
+    positions, radii = sim.sphere_positions_m(), sim.sphere_radii_m()
+    if changes:
+        sim.set_material(0, **{CCT_CHANGES[k]: v for k, v in changes.items()})
+    kept = run_cct(ctx, FillOutcome(sim.checkpoint(), fill.properties, fill.packing_height_m)).reduction
+    again = labsim.restore(without_history(sim.checkpoint()))
+    labsim.settle(ctx, again, "paired: settling the restarted packing", threshold=1e-5, min_time_s=0.05)
+    restarted = run_cct(ctx, FillOutcome(again.checkpoint(), fill.properties, fill.packing_height_m)).reduction
+    return _DemcalSide(positions, radii, float(fill.packing_height_m), kept, restarted)
+
+
+def paired_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int = 2,
+               speed_factor: float | None = None, contact_changes: dict | None = None, label: str = "",
+               workdir: str | None = None, progress=None) -> PairedReport:
+    """demcal builds one packing per seed; both engines run the CCT on it (see the module doc)."""
+    from engine.lab.reducers.cct import reduce_cct
+
+    if not isinstance(material, ExportMaterial):
+        material = ExportMaterial.model_validate(material)
+    changes = dict(contact_changes or {})
+    params = to_micro_parameters(material)
+    if material.particles.clumps:
+        raise ValueError("the paired CCT takes sphere materials (LIGGGHTS reads the packing sphere by sphere)")
+    export = render(_with_changes(material, changes))
+    rig = screening_rig(cct_cycles, speed_factor)
+    report = PairedReport(material.name, label or ("as exported" if not changes else "changed"), changes,
+                          list(seeds), cct_cycles)
+    for seed in seeds:
+        t0 = time.monotonic()
+        if progress:
+            progress(f"seed {seed}: demcal fill and CCT (history kept, then restarted)")
+        dem = _demcal_fill_and_cct(params, seed, cct_cycles, speed_factor, changes)
+        if progress:
+            progress(f"seed {seed}: LIGGGHTS CCT on the same {dem.radii_m.size} spheres")
+        run = run_packing_cct(export, rig, dem.positions_m, dem.radii_m, material.particles.solid_density_kg_m3,
+                              workdir)
+        stress = run.lid_force_n / rig.area_m2
+        touching = np.nonzero(stress > 0)[0]
+        z_contact = run.lid_z_m[touching[0]] if touching.size else run.lid_z_m[0]
+        # strains over demcal's height, as demcal's own two runs: a height change in LIGGGHTS' settle (printed)
+        # does not enter the moduli
+        lig = reduce_cct((z_contact - run.lid_z_m) / dem.packing_height_m, stress, rig.area_m2, dem.packing_height_m)
+        reds = (dem.kept, dem.restarted, lig)
+        n_win = min(len(r.window_modulus_pa) for r in reds)
+        packing = PairedPacking(
+            seed, int(dem.radii_m.size), dem.packing_height_m, float(run.packing_height_m),
+            float(dem.kept.confined_modulus_pa), float(dem.restarted.confined_modulus_pa),
+            float(lig.confined_modulus_pa),
+            [float(np.mean([r.window_stress_mid_pa[k] for r in reds])) for k in range(n_win)],
+            *[list(map(float, r.window_modulus_pa[:n_win])) for r in reds], time.monotonic() - t0)
+        report.packings.append(packing)
+        if progress:
+            progress(f"seed {seed}: E' kept {packing.modulus_kept_pa / 1e6:.3f}, restarted "
+                     f"{packing.modulus_restarted_pa / 1e6:.3f}, LIGGGHTS {packing.modulus_liggghts_pa / 1e6:.3f} MPa")
+    ps = report.packings
+    pairs = (("LIGGGHTS vs demcal restarted", "restarted", "liggghts"),
+             ("demcal restarted vs kept", "kept", "restarted"),
+             ("LIGGGHTS vs demcal kept", "kept", "liggghts"))
+    for name, base, other in pairs:
+        report.differences.append(paired_difference(f"E' (cycles 2..N), {name}",
+                                                    [getattr(p, f"modulus_{base}_pa") for p in ps],
+                                                    [getattr(p, f"modulus_{other}_pa") for p in ps]))
+    report.differences.append(paired_difference("packing height, LIGGGHTS vs demcal", [p.height_demcal_m for p in ps],
+                                                [p.height_liggghts_m for p in ps]))
+    n_win = min(len(p.window_modulus_kept_pa) for p in ps)
+    for k in range(n_win):
+        mid = float(np.mean([p.window_stress_mid_pa[k] for p in ps]))
+        report.differences.append(paired_difference(f"E' at {mid / 1000:.1f} kPa, LIGGGHTS vs restarted",
+                                                    [p.window_modulus_restarted_pa[k] for p in ps],
+                                                    [p.window_modulus_liggghts_pa[k] for p in ps]))
+    return report

@@ -1,0 +1,92 @@
+"""The CCT of a given packing in LIGGGHTS (calibration/export/rig_liggghts.run_packing_cct) and the paired
+comparison of the two engines (calibration/export/paired.py), issue 30 item 4.
+
+The analytic case: one layer of spheres, apart from each other, resting on the floor and pressed by the lid.
+Each sphere is two particle-wall springs in series, k_pw = kp kw / (kp + kw) at each end, so the layer's
+stress is N (k_pw / 2) delta / A at lid travel delta, over a height 2 r: E' = N k_pw r / A exactly.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from liggghts_support import require_liggghts
+
+
+def _layer(radius_m: float, spacing_m: float, container_radius_m: float) -> np.ndarray:
+    """Sphere centres on a square grid on the floor, each at least a radius clear of the cylinder."""
+    span = np.arange(-container_radius_m, container_radius_m + 1e-12, spacing_m)
+    xy = np.array([(x, y) for x in span for y in span if math.hypot(x, y) <= container_radius_m - 1.5 * radius_m])
+    return np.column_stack([xy, np.full(len(xy), radius_m)])
+
+
+def test_packing_data_holds_each_sphere_as_liggghts_reads_it():
+    from calibration.export.rig_liggghts import packing_data
+
+    pos = np.array([[0.0, 0.0, 0.02], [0.05, -0.01, 0.021]])
+    rad = np.array([0.02, 0.021])
+    text = packing_data(pos, rad, 2650.0, 1, 2, (-0.25, 0.25, -0.25, 0.25, -0.01, 0.5))
+    lines = text.splitlines()
+    assert "2 atoms" in lines and "2 atom types" in lines
+    assert "-0.25 0.25 xlo xhi" in lines and "-0.01 0.5 zlo zhi" in lines
+    atoms = [ln.split() for ln in lines[lines.index("Atoms") + 2:]]
+    # atom_style granular: id type diameter density x y z; the diameter is twice the radius
+    assert [int(a[0]) for a in atoms] == [1, 2]
+    assert [float(a[2]) for a in atoms] == [0.04, 0.042]
+    assert all(float(a[3]) == 2650.0 for a in atoms)
+    assert [float(a[6]) for a in atoms] == [0.02, 0.021]
+    with pytest.raises(ValueError):
+        packing_data(pos, rad[:1], 2650.0, 1, 2, (-1, 1, -1, 1, 0, 1))
+
+
+def test_paired_difference_by_hand():
+    from calibration.export.paired import paired_difference
+
+    # relative differences (3 - 2) / 2 = 0.5 and (3 - 4) / 4 = -0.25: mean 0.125, sd |0.75| / sqrt(2), se sd / sqrt(2)
+    d = paired_difference("x", [2.0, 4.0], [3.0, 3.0])
+    assert d.mean == pytest.approx(0.125)
+    assert d.sd == pytest.approx(0.75 / math.sqrt(2))
+    assert d.se == pytest.approx(0.375)
+    assert not d.distinguishable
+    assert paired_difference("x", [1.0, 1.0, 1.0], [1.3, 1.31, 1.29]).distinguishable
+
+
+def test_contact_changes_outside_what_a_built_packing_can_change_are_refused():
+    from calibration.export.material import from_micro_parameters
+    from calibration.export.paired import paired_cct
+    from engine.lab.spec import MicroParameters
+
+    with pytest.raises(ValueError, match="friction_pw"):
+        paired_cct(from_micro_parameters(MicroParameters()), seeds=(1,), contact_changes={"friction_pw": 0.0})
+
+
+def test_a_layer_of_spheres_under_the_lid_has_the_series_springs_modulus_in_liggghts():
+    require_liggghts()
+    from calibration.export.liggghts import render
+    from calibration.export.material import from_micro_parameters
+    from calibration.export.rig_liggghts import Rig, run_packing_cct
+    from engine.lab.reducers.cct import reduce_cct
+    from engine.lab.spec import MicroParameters
+
+    r = 0.02
+    params = MicroParameters(particle_radius_m=r)  # thesis Table 4.9: kp 1.72 MN/m, kw 10 MN/m
+    container = 0.2
+    centres = _layer(r, 2.5 * r, container)
+    rig = Rig(container_radius_m=container, packing_height_m=2 * r, cct_max_stress_pa=40e3, lid_speed_m_s=0.004,
+              cct_cycles=2, lid_travel_per_sample_m=2e-6)
+    export = render(from_micro_parameters(params, "screening"))
+    run = run_packing_cct(export, rig, centres, np.full(len(centres), r), params.particle_density_kg_m3)
+    n = len(centres)
+    assert run.particle_count == n
+    assert run.bulk_mass_kg == pytest.approx(n * params.particle_density_kg_m3 * 4 / 3 * math.pi * r ** 3, rel=1e-9)
+    assert run.packing_height_m == pytest.approx(2 * r, abs=1e-4)  # the layer rests on the floor
+    k_pw = params.particle_stiffness_n_per_m * params.wall_stiffness_n_per_m / (
+        params.particle_stiffness_n_per_m + params.wall_stiffness_n_per_m)
+    expected = n * k_pw * r / rig.area_m2
+    stress = run.lid_force_n / rig.area_m2
+    z_contact = run.lid_z_m[np.nonzero(stress > 0)[0][0]]
+    red = reduce_cct((z_contact - run.lid_z_m) / run.packing_height_m, stress, rig.area_m2, run.packing_height_m)
+    print(f"{n} spheres: E' {red.confined_modulus_pa / 1e6:.4f} MPa, analytic {expected / 1e6:.4f} MPa")
+    assert red.confined_modulus_pa == pytest.approx(expected, rel=0.005)
