@@ -44,6 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--steps", nargs="+", choices=list(STEPS), default=list(STEPS))
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     ap.add_argument("--cycles", type=int, default=2)
+    ap.add_argument("--speed-factor", type=float, default=None, help="lid speed = lab speed x this (default: the rig's)")
     ap.add_argument("--params", help="MicroParameters as JSON (screening spheres); default the thesis Table 4.9 set")
     ap.add_argument("--json", help="write the reports here")
     args = ap.parse_args(argv)
@@ -56,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         whole_run, cct = STEPS[step]
         params = base.model_copy(update=whole_run)
         material = from_micro_parameters(params, "screening")
-        report = paired_cct(material, args.seeds, args.cycles, contact_changes=cct, label=step,
+        report = paired_cct(material, args.seeds, args.cycles, args.speed_factor, contact_changes=cct, label=step,
                             progress=lambda m: print(f"  [{step}] {m}", file=sys.stderr, flush=True))
         print(report.text(), flush=True)
         reports.append({"step": step, "whole_run": whole_run, **report.to_dict()})

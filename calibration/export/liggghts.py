@@ -270,7 +270,10 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
     pair_line = f"{model_line} {settings}"
     conv.append(f"pair_style gran {pair_line}")
     conv.append("tangential history: an incremental spring capped at the Coulomb limit in both codes; demcal "
-                "rotates the stored spring into the new tangent plane keeping its length, as LIGGGHTS does")
+                "rotates the stored spring into the new tangent plane keeping its length, as LIGGGHTS does. The "
+                "cap differs where a tangential dashpot acts: demcal caps spring + dashpot at mu Fn, LIGGGHTS the "
+                "spring alone, adding the dashpot only while the contact sticks (measured: no effect on E', "
+                "docs/export.md)")
 
     dt = demcal_timestep_s(material) if timestep_s is None else float(timestep_s)
     conv.append(f"time step {_fmt(dt)} s: demcal's rule, {DEMCAL_SAFETY_FACTOR} x the critical step of the normal and "
