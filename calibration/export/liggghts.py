@@ -49,6 +49,32 @@ class LiggghtsExport:
     has_clumps: bool = False
 
 
+# What the two engines were measured to differ by, on the same packings (docs/export.md, "E' on the same packings";
+# bench/engine_difference.py, 2026-11-28): (LIGGGHTS - demcal) / demcal, mean +- standard error over packings of the
+# screening rig's CCT, 20 mm spheres, 4 cycles. Carried in the include's header so that a user comparing a production
+# run with the calibration knows what is the engines' and what is not.
+MEASURED_DIFFERENCES = {
+    "hooke/stiffness": (
+        "E' (confined modulus, mean of CCT cycles 2-4) on the same packing: LIGGGHTS -1.8 % +- 1.9 % (12 packings; "
+        "with the tangential dashpot, the wall friction, then all friction switched off in both: -2.5, -3.4, "
+        "+3.0 % +- 2-3 %); with EPSD2 rolling resistance 0.2: -3.7 % +- 1.7 % (10 packings); in the window just "
+        "below the CCT's peak stress -6.8 % +- 1.9 % (without rolling) and -3.9 % +- 2.0 % (with)",
+        "one packing's E' differs between the engines by sd 6.6 % (4 cycles) to 13 % (one cycle), as much as "
+        "between two restarts of demcal on the same packing: compare means over packings, never one run",
+        "bulk density of each engine's own fill: LIGGGHTS 1.4-1.9 % lighter (docs/export.md)",
+    ),
+    "hertz": (
+        "E' (mean of CCT cycles 2-4) on the same packing: LIGGGHTS +1.0 % +- 3.1 % (10 packings); in the window "
+        "just below the CCT's peak stress -11.6 % +- 2.2 %",
+        "one packing's E' differs between the engines by sd 10 %, as much as between two restarts of demcal: "
+        "compare means over packings, never one run",
+        "bulk density of each engine's own fill: LIGGGHTS 1.4 % lighter (docs/export.md)",
+    ),
+}
+CLUMP_DIFFERENCE = ("clumps: not measured on the same packings; one packing each gave E' 30 % lower in LIGGGHTS, "
+                    "with a lid force that jumps +-5 % between samples (docs/export.md): check before relying on it")
+
+
 def _primes_above(start: int, count: int) -> list[int]:
     """LIGGGHTS wants distinct prime seeds > 10000 for its templates and distributions."""
     out, n = [], start
@@ -337,6 +363,11 @@ def render(material: ExportMaterial, timestep_s: float | None = None) -> Liggght
         header += [f"#   ! {line}" for line in inexact]
     else:
         header.append("# Every demcal effect of this material has an exact LIGGGHTS counterpart.")
+    law = "hertz" if hertz is not None else "hooke/stiffness"
+    header.append(f"# Expected differences from demcal at these parameters (measured, {law}):")
+    header += [f"#   ~ {line}" for line in MEASURED_DIFFERENCES[law]]
+    if p.clumps:
+        header.append(f"#   ~ {CLUMP_DIFFERENCE}")
     body = [
         "",
         f"variable demcal_wall_type equal {wall}",

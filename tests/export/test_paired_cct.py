@@ -90,3 +90,23 @@ def test_a_layer_of_spheres_under_the_lid_has_the_series_springs_modulus_in_ligg
     red = reduce_cct((z_contact - run.lid_z_m) / run.packing_height_m, stress, rig.area_m2, run.packing_height_m)
     print(f"{n} spheres: E' {red.confined_modulus_pa / 1e6:.4f} MPa, analytic {expected / 1e6:.4f} MPa")
     assert red.confined_modulus_pa == pytest.approx(expected, rel=0.005)
+
+
+def test_the_include_carries_the_measured_engine_difference_of_its_own_contact_law():
+    from calibration.export.liggghts import CLUMP_DIFFERENCE, MEASURED_DIFFERENCES, render
+    from calibration.export.material import from_micro_parameters
+    from engine.lab.spec import MicroParameters
+
+    def expected(text: str) -> list[str]:
+        lines = text.splitlines()
+        start = next(k for k, ln in enumerate(lines) if ln.startswith("# Expected differences"))
+        return [ln[len("#   ~ "):] for ln in lines[start + 1:] if ln.startswith("#   ~ ")]
+
+    linear = render(from_micro_parameters(MicroParameters(), "screening")).text
+    assert expected(linear) == list(MEASURED_DIFFERENCES["hooke/stiffness"])
+    hertz = render(from_micro_parameters(MicroParameters(
+        damping_ratio=0.6, effects={"hertz_mindlin": {"young_modulus_pa": 8.8e8, "poisson_ratio": 0.25}}),
+        "screening")).text
+    assert expected(hertz) == list(MEASURED_DIFFERENCES["hertz"])
+    clumps = render(from_micro_parameters(MicroParameters(clump_aspect_ratio=1.5), "screening")).text
+    assert expected(clumps)[-1] == CLUMP_DIFFERENCE
