@@ -1,13 +1,16 @@
 """Both engines' confined compression on the same packing (issue 30, item 4: where the engines differ).
 
-``verify_export`` compares the engines over independent packings, one per seed in each: with ~680
+``verify_export`` compares the engines over independent packings, one per seed in each: with ~740
 spheres in the screening rig the confined modulus of single packings spreads +-14-20 %, so three seeds
 cannot tell a 10 % engine difference from the packings' scatter. Here demcal builds each packing (its
-lab's fill), and both engines run the CCT on that same packing: demcal from its fill's checkpoint,
-LIGGGHTS from the spheres' positions and radii (``rig_liggghts.run_packing_cct``: the exported include,
-a settle to KE/(M g d) < 1e-5 because its contacts start without tangential history, then the same lid
-and cycles). The difference per packing is then paired and its scatter is the engines' and the lid's,
-not the packings'.
+lab's fill), and both engines run the CCT on that same packing: LIGGGHTS from the spheres' positions and
+radii (``rig_liggghts.run_packing_cct``: the exported include, a settle to KE/(M g d) < 1e-5 because its
+contacts start without tangential history, then the same lid and cycles), demcal twice, from its fill's
+checkpoint as the lab runs it and restarted as LIGGGHTS starts (``without_history``, settled again). The
+like-for-like pair is LIGGGHTS against demcal restarted; demcal restarted against demcal as run measures
+what a restart alone does to one packing's E', the CCT's own chaotic scatter (measured: sd 14 % for one
+cycle, as large as the engines' difference per packing; docs/export.md), so only means over packings
+compare engines.
 
 ``contact_changes`` switches a contact setting in both engines for the CCT only (the packing is built
 with the material as it is), so a set-up or convention can be removed one at a time on the same packings:
@@ -107,9 +110,9 @@ class PairedReport:
         return "\n".join(lines)
 
 
-def paired_difference(quantity: str, demcal: list[float], liggghts: list[float]) -> PairedDifference:
-    """Mean relative difference over pairs, with its standard error (sd / sqrt(n))."""
-    d_arr, l_arr = np.asarray(demcal, float), np.asarray(liggghts, float)
+def paired_difference(quantity: str, base: list[float], other: list[float]) -> PairedDifference:
+    """Mean relative difference (other - base) / base over pairs, with its standard error (sd / sqrt(n))."""
+    d_arr, l_arr = np.asarray(base, float), np.asarray(other, float)
     rel = (l_arr - d_arr) / d_arr
     n = rel.size
     sd = float(np.std(rel, ddof=1)) if n > 1 else 0.0

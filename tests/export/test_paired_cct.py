@@ -110,3 +110,22 @@ def test_the_include_carries_the_measured_engine_difference_of_its_own_contact_l
     assert expected(hertz) == list(MEASURED_DIFFERENCES["hertz"])
     clumps = render(from_micro_parameters(MicroParameters(clump_aspect_ratio=1.5), "screening")).text
     assert expected(clumps)[-1] == CLUMP_DIFFERENCE
+
+
+def test_a_restart_without_history_zeroes_the_tangential_springs_and_the_motion_of_a_real_checkpoint():
+    from calibration.export.paired import without_history
+    from engine.config import MaterialSpec, SimulationConfig
+    from engine.simulation import Simulation
+
+    # two spheres pressed together and sliding past each other: the contact's tangential spring is loaded
+    sim = Simulation(SimulationConfig(materials=[MaterialSpec()], gravity_m_s2=(0.0, 0.0, 0.0)))
+    sim.add_spheres([[0.0, 0.0, 0.0], [0.03999, 0.0, 0.0]], [0.02, 0.02],
+                    velocities_m_s=[[0.001, 0.01, 0.0], [-0.001, -0.01, 0.0]])
+    sim.run(steps=5)
+    assert sim.contact_count()[0] == 1
+    state = sim.checkpoint()
+    assert np.any(state["p_hist"][:, :3] != 0.0) and np.any(state["b_vel"] != 0.0)
+    cleared = without_history(state)
+    assert not np.any(cleared["p_hist"]) and not np.any(cleared["b_vel"]) and not np.any(cleared["b_omega"])
+    assert np.array_equal(cleared["b_pos"], state["b_pos"])  # the packing itself is untouched
+    assert np.any(state["p_hist"][:, :3] != 0.0)  # and the original checkpoint too
