@@ -193,3 +193,18 @@ def test_every_registered_effect_has_an_export():
     from engine.effects import REGISTRY
 
     assert set(REGISTRY) == set(_HANDLED_EFFECTS)
+
+
+def test_clumps_run_at_half_demcals_step_in_liggghts_and_spheres_at_demcals():
+    from calibration.export.liggghts import MULTISPHERE_STEP_FACTOR, demcal_timestep_s, render
+    from calibration.export.material import from_micro_parameters
+    from engine.lab.spec import MicroParameters
+
+    spheres = from_micro_parameters(MicroParameters(), "screening")
+    clumps = from_micro_parameters(MicroParameters(clump_aspect_ratio=1.5), "screening")
+    assert render(spheres).timestep_s == demcal_timestep_s(spheres)
+    assert MULTISPHERE_STEP_FACTOR == 0.5
+    exported = render(clumps)
+    assert exported.timestep_s == 0.5 * demcal_timestep_s(clumps)
+    assert f"variable demcal_dt equal {exported.timestep_s:.10g}" in exported.text
+    assert render(clumps, timestep_s=1e-5).timestep_s == 1e-5  # a step the user gives is taken as given
