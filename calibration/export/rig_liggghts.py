@@ -12,6 +12,10 @@ CCT) and the lid is a square mesh plate covering the cylinder (demcal: a disc of
 radius), and a clump is deleted when any of its spheres has its centre above the level (LIGGGHTS' fix
 multisphere removes a body with its first sphere; demcal deletes by the body's centre of mass). The
 include itself is ``calibration.export.liggghts.render``'s text, unchanged.
+
+``packing_cct_input`` / ``run_packing_cct`` run the same CCT from a packing of single spheres built
+elsewhere (demcal's fill, read with ``read_data``), so that both engines can be compared on one packing
+(``calibration.export.paired``).
 """
 from __future__ import annotations
 
