@@ -75,8 +75,9 @@ MEASURED_DIFFERENCES = {
         "bulk density of each engine's own fill: LIGGGHTS 1.4 % lighter (docs/export.md)",
     ),
 }
-CLUMP_DIFFERENCE = ("clumps: not measured on the same packings; one packing each gave E' 30 % lower in LIGGGHTS, "
-                    "with a lid force that jumps +-5 % between samples (docs/export.md): check before relying on it")
+CLUMP_DIFFERENCE = ("clumps (two-sphere, aspect 1.5, each engine's own fills, 6 packings, at half demcal's step): "
+                    "LIGGGHTS' E' -18 % +- 5.5 % (-28 to -33 % above 45 kPa), bulk density -2.1 % +- 0.5 %; not yet "
+                    "compared on the same packings, not understood (docs/export.md): check before relying on it")
 
 
 def _primes_above(start: int, count: int) -> list[int]:
