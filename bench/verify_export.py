@@ -9,7 +9,7 @@ Runs the screening rig's fill and confined compression test, one packing per see
 engine at a time, and prints bulk density, porosity and E' (mean and per stress window) of both with
 their differences, scatter and the verdict. Needs Debian's ``liggghts`` (apt-get install -y liggghts).
 Wall time on the shared 2-core project machine: spheres ~1.7 min per seed (demcal ~45 s, LIGGGHTS ~45 s);
-two-sphere clumps (--params with clump_aspect_ratio) LIGGGHTS ~2 min, demcal 15 min or more per seed.
+two-sphere clumps (--params with clump_aspect_ratio) LIGGGHTS ~2 min (at half demcal's step), demcal 21-68 s per seed.
 """
 from __future__ import annotations
 
