@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import Literal, Union
+from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
 
 from engine.lab.errors import SpecFieldError
 from engine.lab.rigs import MIN_DIAMETER_PER_PARTICLE, MIN_THICKNESS_PER_PARTICLE, Rig
@@ -74,8 +74,17 @@ class Resolution(BaseModel):
         return self
 
 
+def _form(value) -> str:
+    """Which branch a value is judged by: a string by the names, anything else by the object. Without it
+    pydantic tries both and a bad object was answered with the names' "Input should be 'thesis', ..." beside
+    its real error (a client sending ``{"mode": "as_measured", "target_particles": 430}`` was told both)."""
+    return "name" if isinstance(value, str) else "object"
+
+
 # What a job or campaign sends: an old preset name, "as_measured", "coarse" (the default target), or the object.
-ResolutionIn = Union[Literal["thesis", "screening", "as_measured", "coarse"], Resolution]
+# An error's location names the branch judged: ``resolution.name`` or ``resolution.object``.
+ResolutionIn = Annotated[Union[Annotated[Literal["thesis", "screening", "as_measured", "coarse"], Tag("name")],
+                               Annotated[Resolution, Tag("object")]], Discriminator(_form)]
 
 
 def is_preset(resolution: ResolutionIn | None) -> bool:

@@ -39,10 +39,21 @@ pytestmark = pytest.mark.postgres  # runs on SQLite and on PostgreSQL (backends.
 SEED = 32
 MAX_SCENARIOS = 60
 MAX_STEPS = 8
-# Chains must have reached rows that exist: operations on an id (a path parameter) answered 2xx this often. Which
-# ones varies: Hypothesis is derandomized, but schemathesis orders its rules by name sets, so by the process's
-# string hashing (a material read or copied through the links of its 201, a job read, a copy of the bundled one).
+# Chains must have reached rows that exist: operations on an id (a path parameter) answered this often with a
+# status the service gives only after finding the row: 2xx, 403 (another user's) or 409 (its state refuses the
+# call: a bundled material is read-only, a material not imported from a card has no card). The routes look the id
+# up first (404) and only then judge the state, so a 409 is a row reached as surely as a 200; counting 2xx alone
+# fell to 2 in CI and on PYTHONHASHSEED 0-2 once the schema changed (Hypothesis draws along another path).
+# Which operations varies: Hypothesis is derandomized, but schemathesis orders its rules by name sets, so by the
+# process's string hashing (a material read, copied or refused its card through the links of its 201, a job read).
 MIN_ROWS_REACHED = 3
+
+
+def row_found(status: int) -> bool:
+    """A status the service answers only once the path's id named an existing row."""
+    return 200 <= status < 300 or status in (403, 409)
+
+
 # what schema-valid input may be answered: the defaults, and 422 for a rule the schema cannot state (no 5xx)
 POSITIVE_STATUSES = ["2xx", "3xx", "401", "403", "404", "409", "422", "429"]
 RULE_ERRORS = {"value_error"}  # service.errors.Invalid and the models' validators
@@ -109,6 +120,6 @@ def test_stateful_chains_pass_every_check(db_url):
         shutdown_lifespans()
     calls = sum(statuses.values())
     assert calls >= MAX_SCENARIOS * 2, statuses  # each chain made calls
-    reached = sum(n for (label, status), n in statuses.items() if "{" in label and 200 <= status < 300)
+    reached = sum(n for (label, status), n in statuses.items() if "{" in label and row_found(status))
     assert reached >= MIN_ROWS_REACHED, f"chains rarely reached an existing row: {sorted(statuses.items())}"
     assert not [key for key in statuses if key[1] >= 500]

@@ -93,6 +93,10 @@ def test_bad_resolutions_are_422s_naming_the_field(s2):
         assert refused.status_code == 422 and _loc(refused)[:2] == ["body", "resolution"], refused.text
         refused = client.post(f"{API}/jobs", json={"evaluator": "analytic", "resolution": resolution})
         assert refused.status_code == 422 and _loc(refused)[:2] == ["body", "resolution"], refused.text
+        # one branch judged: a bad object is not also told the names, nor a bad name the object's fields
+        details = refused.json()["detail"]
+        branch = "name" if isinstance(resolution, str) else "object"
+        assert {tuple(d["loc"][:3]) for d in details} == {("body", "resolution", branch)}, refused.text
     # a job at a material resolution needs its rig and particles
     refused = client.post(f"{API}/jobs", json={"evaluator": "analytic", "resolution": "coarse"})
     assert refused.status_code == 422 and _loc(refused) == ["body", "rig"], refused.text
