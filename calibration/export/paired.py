@@ -29,7 +29,7 @@ import numpy as np
 
 from calibration.export.liggghts import render
 from calibration.export.material import ExportMaterial
-from calibration.export.rig_liggghts import run_packing_cct, screening_rig
+from calibration.export.rig_liggghts import RigidBodies, run_packing_cct, screening_rig
 from calibration.export.verify import to_micro_parameters
 
 # the contact settings demcal can change on a built packing (engine.simulation.Simulation.set_material),
@@ -145,6 +145,7 @@ def without_history(checkpoint: dict) -> dict:
 class _DemcalSide:
     positions_m: np.ndarray
     radii_m: np.ndarray
+    bodies: RigidBodies | None  # clumps: each sphere's body and each body's mass
     packing_height_m: float
     kept: object  # the CCT's reduction with the fill's contact history, as the lab runs it
     restarted: object  # the CCT's reduction after the history is dropped and the packing settles again
@@ -171,16 +172,19 @@ def _demcal_fill_and_cct(params, seed: int, cct_cycles: int, speed_factor: float
     ctx.phase(0.0, 1.0)
     fill = steps["fill"].run(bench, 0.0, 1.0).outcome
     sim = labsim.restore(fill.checkpoint)
-    if sim.n_bodies != sim.n_spheres:
-        raise ValueError("the paired CCT takes single spheres (LIGGGHTS reads the packing sphere by sphere)")
     positions, radii = sim.sphere_positions_m(), sim.sphere_radii_m()
+    bodies = None
+    if sim.n_bodies != sim.n_spheres:  # clumps: LIGGGHTS reads them as rigid bodies (rig_liggghts.RigidBodies)
+        ids = np.asarray(sim.sphere_body_ids())
+        _, dense = np.unique(ids, return_inverse=True)  # public ids, in body order, as 0..n_bodies-1
+        bodies = RigidBodies(dense.astype(int), np.asarray(sim.body_masses_kg(), float))
     if changes:
         sim.set_material(0, **{CCT_CHANGES[k]: v for k, v in changes.items()})
     kept = run_cct(ctx, FillOutcome(sim.checkpoint(), fill.properties, fill.packing_height_m)).reduction
     again = labsim.restore(without_history(sim.checkpoint()))
     labsim.settle(ctx, again, "paired: settling the restarted packing", threshold=1e-5, min_time_s=0.05)
     restarted = run_cct(ctx, FillOutcome(again.checkpoint(), fill.properties, fill.packing_height_m)).reduction
-    return _DemcalSide(positions, radii, float(fill.packing_height_m), kept, restarted)
+    return _DemcalSide(positions, radii, bodies, float(fill.packing_height_m), kept, restarted)
 
 
 def paired_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int = 2,
@@ -193,8 +197,6 @@ def paired_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int
         material = ExportMaterial.model_validate(material)
     changes = dict(contact_changes or {})
     params = to_micro_parameters(material)
-    if material.particles.clumps:
-        raise ValueError("the paired CCT takes sphere materials (LIGGGHTS reads the packing sphere by sphere)")
     export = render(_with_changes(material, changes))
     rig = screening_rig(cct_cycles, speed_factor)
     report = PairedReport(material.name, label or ("as exported" if not changes else "changed"), changes,
@@ -205,9 +207,11 @@ def paired_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int
             progress(f"seed {seed}: demcal fill and CCT (history kept, then restarted)")
         dem = _demcal_fill_and_cct(params, seed, cct_cycles, speed_factor, changes)
         if progress:
-            progress(f"seed {seed}: LIGGGHTS CCT on the same {dem.radii_m.size} spheres")
+            what = f"{dem.radii_m.size} spheres" if dem.bodies is None else \
+                f"{dem.bodies.body_masses_kg.size} clumps (fix rigid)"
+            progress(f"seed {seed}: LIGGGHTS CCT on the same {what}")
         run = run_packing_cct(export, rig, dem.positions_m, dem.radii_m, material.particles.solid_density_kg_m3,
-                              workdir)
+                              workdir, bodies=dem.bodies)
         stress = run.lid_force_n / rig.area_m2
         touching = np.nonzero(stress > 0)[0]
         z_contact = run.lid_z_m[touching[0]] if touching.size else run.lid_z_m[0]
@@ -217,7 +221,8 @@ def paired_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int
         reds = (dem.kept, dem.restarted, lig)
         n_win = min(len(r.window_modulus_pa) for r in reds)
         packing = PairedPacking(
-            seed, int(dem.radii_m.size), dem.packing_height_m, float(run.packing_height_m),
+            seed, int(dem.radii_m.size if dem.bodies is None else dem.bodies.body_masses_kg.size),
+            dem.packing_height_m, float(run.packing_height_m),
             float(dem.kept.confined_modulus_pa), float(dem.restarted.confined_modulus_pa),
             float(lig.confined_modulus_pa),
             [float(np.mean([r.window_stress_mid_pa[k] for r in reds])) for k in range(n_win)],

@@ -90,11 +90,11 @@ variable mass_total equal atoms/{clump.spheres_per_body}*{clump.mass_kg:.10g}
 variable ke_ratio equal (c_kems+c_rkems)/((v_mass_total+1e-30)*9.81*{mean_diameter_m:.8g})"""
 
 
-def _container_lines(r: float) -> str:
+def _container_lines(r: float, integrator: str = "fix integ all nve/sphere") -> str:
     """Material, integration, gravity and the container (floor plane and one primitive cylinder)."""
     return f"""include      material.in
 timestep     ${{demcal_dt}}
-fix integ all nve/sphere
+{integrator}
 fix grav all gravity 9.81 vector 0.0 0.0 -1.0
 fix floor all wall/gran ${{demcal_wall_model}} primitive type ${{demcal_wall_type}} zplane 0.0 ${{demcal_wall_settings}}
 fix cyl all wall/gran ${{demcal_wall_model}} primitive type ${{demcal_wall_type}} zcylinder {r:.6g} 0.0 0.0 ${{demcal_wall_settings}}
@@ -209,21 +209,55 @@ delete_atoms region above
 {_settle_lines("s2", 1e-5, chunk_settle, 0, MAX_SETTLE_CHUNKS)}{_cct_lines(rig, r_min_m, dt)}"""
 
 
-def packing_data(positions_m: np.ndarray, radii_m: np.ndarray, density_kg_m3: float, atom_type: int,
-                 n_atom_types: int, box_m: tuple[float, float, float, float, float, float]) -> str:
-    """A LIGGGHTS ``read_data`` file of single spheres (atom_style granular: id type diameter density x y z),
-    so that LIGGGHTS can start from a packing demcal built (``packing_cct_input``)."""
+@dataclass(frozen=True)
+class RigidBodies:
+    """The clumps of a packing demcal built, for LIGGGHTS' ``fix rigid molecule``: each sphere's body (a
+    molecule id) and each body's mass. Why not fix multisphere, which the include uses: LIGGGHTS-PUBLIC builds
+    multisphere bodies only by inserting them from templates, at random places and orientations, so it cannot
+    start from demcal's packing; fix rigid can, from ``read_data`` with a molecule id per sphere."""
+
+    body_ids: np.ndarray  # per sphere, 0-based, the sphere order of the positions
+    body_masses_kg: np.ndarray  # per body
+
+
+def rigid_sphere_densities_kg_m3(radii_m: np.ndarray, bodies: RigidBodies) -> np.ndarray:
+    """Per sphere, the density that makes each body's spheres weigh the body's mass. fix rigid takes a body's
+    mass as the sum of its atoms' masses, which counts the overlap of a clump's spheres twice; demcal's (and the
+    multisphere template's) body mass counts it once. Scaling the density keeps mass and weight exact; the
+    inertia then counts the overlap's share twice too (a few per cent of a rotation's inertia, at quasi-static
+    rates without effect on E')."""
+    rad = np.asarray(radii_m, float)
+    ids = np.asarray(bodies.body_ids, int)
+    sphere_volume = 4.0 / 3.0 * np.pi * rad ** 3
+    summed = np.bincount(ids, weights=sphere_volume, minlength=len(bodies.body_masses_kg))
+    return np.asarray(bodies.body_masses_kg, float)[ids] / summed[ids]
+
+
+def packing_data(positions_m: np.ndarray, radii_m: np.ndarray, density_kg_m3: float | np.ndarray, atom_type: int,
+                 n_atom_types: int, box_m: tuple[float, float, float, float, float, float],
+                 body_ids: np.ndarray | None = None) -> str:
+    """A LIGGGHTS ``read_data`` file of a packing demcal built (``packing_cct_input``): single spheres in
+    atom_style granular (id type diameter density x y z), or, with ``body_ids``, clumps' spheres in atom_style
+    hybrid granular molecular (id type x y z diameter density molecule; molecule = body id + 1)."""
     pos = np.asarray(positions_m, float)
     rad = np.asarray(radii_m, float)
     if pos.ndim != 2 or pos.shape[1] != 3 or rad.shape != (pos.shape[0],):
         raise ValueError("positions must be (N, 3) and radii (N,)")
+    rho = np.broadcast_to(np.asarray(density_kg_m3, float), rad.shape)
     lo_x, hi_x, lo_y, hi_y, lo_z, hi_z = box_m
     lines = ["LIGGGHTS data file: a packing built by demcal (calibration/export/rig_liggghts.py)", "",
              f"{pos.shape[0]} atoms", f"{n_atom_types} atom types", "",
              f"{lo_x:.8g} {hi_x:.8g} xlo xhi", f"{lo_y:.8g} {hi_y:.8g} ylo yhi", f"{lo_z:.8g} {hi_z:.8g} zlo zhi", "",
              "Atoms", ""]
-    lines += [f"{k + 1} {atom_type} {2.0 * rad[k]:.12g} {density_kg_m3:.10g} {pos[k, 0]:.12g} {pos[k, 1]:.12g} "
-              f"{pos[k, 2]:.12g}" for k in range(pos.shape[0])]
+    if body_ids is None:
+        lines += [f"{k + 1} {atom_type} {2.0 * rad[k]:.12g} {rho[k]:.10g} {pos[k, 0]:.12g} {pos[k, 1]:.12g} "
+                  f"{pos[k, 2]:.12g}" for k in range(pos.shape[0])]
+    else:
+        ids = np.asarray(body_ids, int)
+        if ids.shape != rad.shape:
+            raise ValueError("body_ids must give one body per sphere")
+        lines += [f"{k + 1} {atom_type} {pos[k, 0]:.12g} {pos[k, 1]:.12g} {pos[k, 2]:.12g} {2.0 * rad[k]:.12g} "
+                  f"{rho[k]:.10g} {ids[k] + 1}" for k in range(pos.shape[0])]
     return "\n".join(lines) + "\n"
 
 
@@ -234,20 +268,46 @@ def packing_box_m(rig: Rig, positions_m: np.ndarray, radii_m: np.ndarray) -> tup
     return (-r - 0.05, r + 0.05, -r - 0.05, r + 0.05, -0.01, top)
 
 
+RIGID_INCLUDE_DROPS = ("fix demcal_ms all multisphere",)  # the include's lines fix rigid replaces
+
+
+def rigid_include(export: LiggghtsExport) -> str:
+    """The include for a packing of rigid clumps read from a data file: as exported, without ``fix
+    multisphere`` (which refuses the molecular atom style fix rigid needs; its templates stay, unused)."""
+    kept = [line for line in export.text.splitlines() if line.strip() not in RIGID_INCLUDE_DROPS]
+    if len(kept) == len(export.text.splitlines()):
+        raise ValueError("a clump include without 'fix demcal_ms all multisphere': not calibration.export.liggghts'")
+    return "\n".join(kept) + "\n"
+
+
 def packing_cct_input(export: LiggghtsExport, rig: Rig, r_min_m: float, mean_diameter_m: float,
-                      settle_min_s: float = 0.05) -> str:
+                      settle_min_s: float = 0.05, rigid: bool = False) -> str:
     """The CCT alone, from a packing read from ``packing.data`` (``packing_data``): the spheres settle
     under the exported contact law until KE/(M g d) < 1e-5 (at least ``settle_min_s``: the contacts'
     tangential springs start unloaded, as demcal's would after a restart without history), then the lid
     and cycles exactly as ``rig_input``'s. Why: the two engines' confined moduli can then be compared on
-    the same packing, and the scatter of packings (+-14-20 % of E' over three seeds) leaves the comparison."""
-    if export.has_clumps:
-        raise ValueError("packing_cct_input takes single spheres; clumps need fix multisphere's own input")
+    the same packing, and the scatter of packings (+-14-20 % of E' over three seeds) leaves the comparison.
+
+    ``rigid``: the packing's clumps are rigid bodies (``RigidBodies``, molecule ids in the data file) moved by
+    ``fix rigid molecule`` with the spheres of one body excluded from each other's neighbour lists, in place of
+    fix multisphere (``rigid_include``). The pair style, its per-type-pair tables and the step are the include's;
+    LIGGGHTS' pair gran takes a rigid body's mass as m* (checked in 3.8.0: a two-sphere body dropped on one of
+    its spheres rebounds at the damping ratio the include's gamma gives for the body's mass, not the sphere's).
+    The settle's kinetic energy is the atoms' (translation of each sphere: a body's rotation counted about the
+    origin of its spheres, not its centre; a threshold, not a measurement)."""
+    if export.has_clumps != rigid:
+        raise ValueError("a clump material's packing needs rigid=True (its bodies), a sphere material's rigid=False")
     dt = export.timestep_s
     chunk_settle = max(1, round(0.02 / dt))
     min_chunks = max(1, math.ceil(settle_min_s / (chunk_settle * dt)))
+    style = "hybrid granular molecular" if rigid else "granular"
+    integrator = ("neigh_modify exclude molecule all\nfix integ all rigid molecule" if rigid
+                  else "fix integ all nve/sphere")
+    energy = f"""variable mass_total equal mass(all)
+variable ke_ratio equal ke/((v_mass_total+1e-30)*9.81*{mean_diameter_m:.8g})""" if rigid else \
+        _energy_lines(mean_diameter_m, None)
     return f"""# demcal CCT from a packing demcal built, in LIGGGHTS; generated by calibration/export/rig_liggghts.py
-atom_style   granular
+atom_style   {style}
 atom_modify  map array
 boundary     f f f
 newton       off
@@ -256,7 +316,7 @@ units        si
 read_data    packing.data
 neighbor     {0.5 * r_min_m:.6g} bin
 neigh_modify delay 0 every 1 check yes
-{_container_lines(rig.container_radius_m)}{_energy_lines(mean_diameter_m, None)}
+{_container_lines(rig.container_radius_m, integrator)}{energy}
 {_TOP_LINES}thermo_style custom step time atoms ke v_ke_ratio c_ztop
 thermo       {chunk_settle * 10}
 thermo_modify lost ignore norm no
@@ -284,18 +344,32 @@ def run_rig(export: LiggghtsExport, rig: Rig, seed_prime: int, r_min_m: float, r
 
 
 def run_packing_cct(export: LiggghtsExport, rig: Rig, positions_m: np.ndarray, radii_m: np.ndarray,
-                    density_kg_m3: float, workdir: str | None = None, timeout_s: float = 3600.0) -> RigRun:
-    """The CCT in LIGGGHTS from a packing of single spheres built elsewhere (``packing_cct_input``)."""
+                    density_kg_m3: float, workdir: str | None = None, timeout_s: float = 3600.0,
+                    bodies: RigidBodies | None = None) -> RigRun:
+    """The CCT in LIGGGHTS from a packing built elsewhere (``packing_cct_input``): single spheres, or with
+    ``bodies`` the clumps as rigid bodies."""
     radii = np.asarray(radii_m, float)
-    data = packing_data(positions_m, radii, density_kg_m3, export.particle_types[0], export.n_atom_types,
-                        packing_box_m(rig, positions_m, radii))
-    mean_d = float(2.0 * np.mean(radii))  # single spheres: the lab's mean volume-equivalent diameter
-    text = packing_cct_input(export, rig, float(np.min(radii)), mean_d)
-    return _run(export, rig, text, {"packing.data": data}, workdir, timeout_s, 1)
+    box = packing_box_m(rig, positions_m, radii)
+    if bodies is None:
+        data = packing_data(positions_m, radii, density_kg_m3, export.particle_types[0], export.n_atom_types, box)
+        mean_d = float(2.0 * np.mean(radii))  # single spheres: the lab's mean volume-equivalent diameter
+        text = packing_cct_input(export, rig, float(np.min(radii)), mean_d)
+        return _run(export, rig, text, {"packing.data": data}, workdir, timeout_s, 1)
+    if len(export.particle_types) != 1:
+        raise ValueError("the rigid packing takes a material of one clump type (the screening rig's)")
+    data = packing_data(positions_m, radii, rigid_sphere_densities_kg_m3(radii, bodies), export.particle_types[0],
+                        export.n_atom_types, box, body_ids=bodies.body_ids)
+    # the lab's mean volume-equivalent diameter of the bodies
+    masses = np.asarray(bodies.body_masses_kg, float)
+    mean_d = float(np.mean(np.cbrt(6.0 * masses / (np.pi * density_kg_m3))))
+    text = packing_cct_input(export, rig, float(np.min(radii)), mean_d, rigid=True)
+    n_spheres = radii.size / masses.size
+    return _run(export, rig, text, {"packing.data": data}, workdir, timeout_s, n_spheres,
+                include=rigid_include(export))
 
 
 def _run(export: LiggghtsExport, rig: Rig, main_text: str, files: dict[str, str], workdir: str | None,
-         timeout_s: float, spheres_per_body: int) -> RigRun:
+         timeout_s: float, spheres_per_body: float, include: str | None = None) -> RigRun:
     import time
 
     from engine.io.stl import plate, write_stl
@@ -304,7 +378,8 @@ def _run(export: LiggghtsExport, rig: Rig, main_text: str, files: dict[str, str]
     if exe is None:
         raise FileNotFoundError("liggghts not found (apt-get install -y liggghts)")
     work = tempfile.mkdtemp(prefix="demcal_lig_", dir=workdir)
-    for name, text in {"material.in": export.text, "in.rig": main_text, **files}.items():
+    for name, text in {"material.in": export.text if include is None else include, "in.rig": main_text,
+                       **files}.items():
         with open(os.path.join(work, name), "w") as fh:
             fh.write(text)
     write_stl(os.path.join(work, "lid.stl"), plate(rig.container_radius_m * 1.2))
@@ -322,7 +397,7 @@ def _run(export: LiggghtsExport, rig: Rig, main_text: str, files: dict[str, str]
     data = np.loadtxt(os.path.join(work, "lid.txt"), ndmin=2)
     atoms = int(fields["atoms"])
     return RigRun(packing_height_m=float(fields["height"]), bulk_mass_kg=float(fields["mass"]),
-                  particle_count=atoms // spheres_per_body, time_s=data[:, 0], lid_z_m=data[:, 1],
+                  particle_count=round(atoms / spheres_per_body), time_s=data[:, 0], lid_z_m=data[:, 1],
                   lid_force_n=data[:, 2], workdir=work, wall_time_s=wall)
 
 

@@ -3,7 +3,9 @@ comparison of the two engines (calibration/export/paired.py), issue 30 item 4.
 
 The analytic case: one layer of spheres, apart from each other, resting on the floor and pressed by the lid.
 Each sphere is two particle-wall springs in series, k_pw = kp kw / (kp + kw) at each end, so the layer's
-stress is N (k_pw / 2) delta / A at lid travel delta, over a height 2 r: E' = N k_pw r / A exactly.
+stress is N (k_pw / 2) delta / A at lid travel delta, over a height 2 r: E' = N k_pw r / A exactly. The same
+for clumps standing on end, rigid bodies between the two springs, over their length (fix rigid's path for
+packings of clumps, which fix multisphere cannot read).
 """
 from __future__ import annotations
 
@@ -129,3 +131,90 @@ def test_a_restart_without_history_zeroes_the_tangential_springs_and_the_motion_
     assert not np.any(cleared["p_hist"]) and not np.any(cleared["b_vel"]) and not np.any(cleared["b_omega"])
     assert np.array_equal(cleared["b_pos"], state["b_pos"])  # the packing itself is untouched
     assert np.any(state["p_hist"][:, :3] != 0.0)  # and the original checkpoint too
+
+
+def _upright_clumps(template, container_radius_m: float, spacing_m: float):
+    """Two-sphere clumps standing on end on the floor, on a square grid: centres, radii, body ids and the
+    distance of each sphere's centre from the body's."""
+    r = float(template.sphere_radii_m[0])
+    half = float(np.linalg.norm(template.sphere_offsets_m[0]))  # the spheres' centres are +-half from the body's
+    span = np.arange(-container_radius_m, container_radius_m + 1e-12, spacing_m)
+    xy = [(x, y) for x in span for y in span if math.hypot(x, y) <= container_radius_m - 1.5 * r]
+    centres = [(x, y, z) for x, y in xy for z in (r, r + 2 * half)]
+    return np.array(centres), np.full(len(centres), r), np.repeat(np.arange(len(xy)), 2), half
+
+
+def test_rigid_clump_densities_weigh_each_body_at_its_union_mass():
+    from calibration.export.rig_liggghts import RigidBodies, rigid_sphere_densities_kg_m3
+
+    # two spheres of radius r with centres r apart: the union is 2 V - lens, lens = pi (4r + d)(2r - d)^2 / 12
+    r, d, rho = 0.0168, 0.0168, 2650.0
+    sphere = 4.0 / 3.0 * math.pi * r ** 3
+    union = 2 * sphere - math.pi * (4 * r + d) * (2 * r - d) ** 2 / 12
+    bodies = RigidBodies(np.array([0, 0, 1]), np.array([rho * union, rho * sphere]))  # a clump and a single sphere
+    densities = rigid_sphere_densities_kg_m3(np.array([r, r, r]), bodies)
+    assert densities[:2] == pytest.approx([rho * union / (2 * sphere)] * 2, rel=1e-12)
+    assert densities[2] == pytest.approx(rho, rel=1e-12)
+    assert 2 * sphere * densities[0] == pytest.approx(rho * union, rel=1e-12)
+
+
+def test_packing_data_of_clumps_names_each_spheres_body_and_the_include_loses_only_fix_multisphere():
+    from calibration.export.liggghts import render
+    from calibration.export.material import from_micro_parameters
+    from calibration.export.rig_liggghts import packing_data, rigid_include
+    from engine.lab.spec import MicroParameters
+
+    pos = np.array([[0.0, 0.0, 0.02], [0.0, 0.0, 0.04], [0.1, 0.0, 0.02]])
+    text = packing_data(pos, np.full(3, 0.0168), np.array([2000.0, 2000.0, 2100.0]), 1, 2,
+                        (-0.25, 0.25, -0.25, 0.25, -0.01, 0.5), body_ids=np.array([0, 0, 1]))
+    lines = text.splitlines()
+    atoms = [ln.split() for ln in lines[lines.index("Atoms") + 2:]]
+    # atom_style hybrid granular molecular: id type x y z diameter density molecule (molecule = body + 1)
+    assert [a[7] for a in atoms] == ["1", "1", "2"]
+    assert [float(a[4]) for a in atoms] == [0.02, 0.04, 0.02]
+    assert [float(a[5]) for a in atoms] == [0.0336] * 3 and [float(a[6]) for a in atoms] == [2000.0, 2000.0, 2100.0]
+    with pytest.raises(ValueError, match="one body per sphere"):
+        packing_data(pos, np.full(3, 0.0168), 2650.0, 1, 2, (-1, 1, -1, 1, 0, 1), body_ids=np.array([0, 1]))
+    export = render(from_micro_parameters(MicroParameters(clump_aspect_ratio=1.5), "screening"))
+    exported, rigid = export.text.splitlines(), rigid_include(export).splitlines()
+    assert [ln for ln in exported if ln not in rigid] == ["fix demcal_ms all multisphere"]
+    with pytest.raises(ValueError, match="multisphere"):
+        rigid_include(render(from_micro_parameters(MicroParameters(), "screening")))
+
+
+def test_a_layer_of_upright_clumps_under_the_lid_has_the_series_springs_modulus_in_liggghts():
+    """Each clump stands on one sphere and carries the lid on the other, a rigid body between two
+    particle-wall springs: k_pw / 2 per clump over the clump's length H = 2 r + d, so E' = N k_pw H / (2 A);
+    and the layer weighs N clump masses (the union's, overlap counted once)."""
+    require_liggghts()
+    from calibration.export.liggghts import render
+    from calibration.export.material import from_micro_parameters
+    from calibration.export.rig_liggghts import Rig, RigidBodies, run_packing_cct
+    from engine.lab.reducers.cct import reduce_cct
+    from engine.lab.spec import MicroParameters
+
+    params = MicroParameters(clump_aspect_ratio=1.5)  # thesis Table 4.9: kp 1.72 MN/m, kw 10 MN/m
+    material = from_micro_parameters(params, "screening")
+    template = material.particles.clumps[0].template()
+    rho = material.particles.solid_density_kg_m3
+    container = 0.2
+    r = float(template.sphere_radii_m[0])
+    centres, radii, ids, half = _upright_clumps(template, container, 2.5 * r)
+    n = int(ids.max()) + 1
+    body_mass = template.mass_kg(rho)
+    height = 2 * r + 2 * half
+    rig = Rig(container_radius_m=container, packing_height_m=height, cct_max_stress_pa=40e3, lid_speed_m_s=0.004,
+              cct_cycles=2, lid_travel_per_sample_m=2e-6)
+    run = run_packing_cct(render(material), rig, centres, radii, rho,
+                          bodies=RigidBodies(ids, np.full(n, body_mass)))
+    assert run.particle_count == n
+    assert run.bulk_mass_kg == pytest.approx(n * body_mass, rel=1e-9)
+    assert run.packing_height_m == pytest.approx(height, abs=1e-4)  # they stand, they did not topple
+    k_pw = params.particle_stiffness_n_per_m * params.wall_stiffness_n_per_m / (
+        params.particle_stiffness_n_per_m + params.wall_stiffness_n_per_m)
+    expected = n * k_pw * height / (2 * rig.area_m2)
+    stress = run.lid_force_n / rig.area_m2
+    z_contact = run.lid_z_m[np.nonzero(stress > 0)[0][0]]
+    red = reduce_cct((z_contact - run.lid_z_m) / run.packing_height_m, stress, rig.area_m2, run.packing_height_m)
+    print(f"{n} upright clumps: E' {red.confined_modulus_pa / 1e6:.4f} MPa, analytic {expected / 1e6:.4f} MPa")
+    assert red.confined_modulus_pa == pytest.approx(expected, rel=0.005)
