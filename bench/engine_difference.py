@@ -46,7 +46,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     ap.add_argument("--cycles", type=int, default=2)
     ap.add_argument("--speed-factor", type=float, default=None, help="lid speed = lab speed x this (default: the rig's)")
-    ap.add_argument("--params", help="MicroParameters as JSON (screening spheres); default the thesis Table 4.9 set")
+    ap.add_argument("--params", help="MicroParameters as JSON (screening spheres, or clumps with "
+                                     "clump_aspect_ratio); default the thesis Table 4.9 set")
     ap.add_argument("--json", help="write the reports here")
     args = ap.parse_args(argv)
     if liggghts_executable() is None:

@@ -7,7 +7,8 @@ lab's fill), and both engines run the CCT on that same packing: LIGGGHTS from th
 radii (``rig_liggghts.run_packing_cct``: the exported include, a settle to KE/(M g d) < 1e-5 because its
 contacts start without tangential history, then the same lid and cycles), demcal twice, from its fill's
 checkpoint as the lab runs it and restarted as LIGGGHTS starts (``without_history``, settled again). The
-like-for-like pair is LIGGGHTS against demcal restarted; demcal restarted against demcal as run measures
+like-for-like pair is LIGGGHTS against demcal restarted (a clump packing's bodies are read as fix rigid
+bodies, ``rig_liggghts.RigidBodies``); demcal restarted against demcal as run measures
 what a restart alone does to one packing's E', the CCT's own chaotic scatter (measured: sd 14 % for one
 cycle, as large as the engines' difference per packing; docs/export.md), so only means over packings
 compare engines.
@@ -191,8 +192,6 @@ def paired_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int
                speed_factor: float | None = None, contact_changes: dict | None = None, label: str = "",
                workdir: str | None = None, progress=None) -> PairedReport:
     """demcal builds one packing per seed; both engines run the CCT on it (see the module doc)."""
-    from engine.lab.reducers.cct import reduce_cct
-
     if not isinstance(material, ExportMaterial):
         material = ExportMaterial.model_validate(material)
     changes = dict(contact_changes or {})
@@ -212,12 +211,9 @@ def paired_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int
             progress(f"seed {seed}: LIGGGHTS CCT on the same {what}")
         run = run_packing_cct(export, rig, dem.positions_m, dem.radii_m, material.particles.solid_density_kg_m3,
                               workdir, bodies=dem.bodies)
-        stress = run.lid_force_n / rig.area_m2
-        touching = np.nonzero(stress > 0)[0]
-        z_contact = run.lid_z_m[touching[0]] if touching.size else run.lid_z_m[0]
         # strains over demcal's height, as demcal's own two runs: a height change in LIGGGHTS' settle (printed)
         # does not enter the moduli
-        lig = reduce_cct((z_contact - run.lid_z_m) / dem.packing_height_m, stress, rig.area_m2, dem.packing_height_m)
+        lig = run.reduction(rig, dem.packing_height_m)
         reds = (dem.kept, dem.restarted, lig)
         n_win = min(len(r.window_modulus_pa) for r in reds)
         packing = PairedPacking(
@@ -246,3 +242,90 @@ def paired_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int
                                                     [p.window_modulus_restarted_pa[k] for p in ps],
                                                     [p.window_modulus_liggghts_pa[k] for p in ps]))
     return report
+
+
+def clumps_of_liggghts_packing(run, template, body_mass_kg: float) -> RigidBodies:
+    """The bodies of a LIGGGHTS multisphere packing (``RigRun.settled_spheres``): fix multisphere gives a body's
+    spheres consecutive atom ids, so each run of ``n_spheres`` ids is one body; checked against the template's
+    own sphere distances (to 1e-6 of a radius), so a numbering that did not hold would be refused, not guessed."""
+    ids, radii, centres = run.settled_spheres()
+    n = int(template.n_spheres)
+    if ids.size % n:
+        raise ValueError(f"{ids.size} spheres are not whole bodies of {n}")
+    offsets = np.asarray(template.sphere_offsets_m, float)
+    expected = np.linalg.norm(offsets[:, None, :] - offsets[None, :, :], axis=2)
+    groups = centres.reshape(-1, n, 3)
+    found = np.linalg.norm(groups[:, :, None, :] - groups[:, None, :, :], axis=3)
+    scale = float(np.min(template.sphere_radii_m))
+    if np.max(np.abs(found - expected[None])) > 1e-6 * scale:
+        raise ValueError("LIGGGHTS' atom ids do not run body by body: consecutive spheres are not the template's")
+    return RigidBodies(np.repeat(np.arange(groups.shape[0]), n), np.full(groups.shape[0], body_mass_kg))
+
+
+@dataclass
+class RestartPacking:
+    """One LIGGGHTS packing's CCT as LIGGGHTS runs it (fix multisphere, the fill's history) and restarted from
+    its settled spheres as rigid bodies (fix rigid, history dropped), as the paired CCT starts from demcal's."""
+
+    seed: int
+    bodies: int
+    height_m: float
+    modulus_multisphere_pa: float
+    modulus_rigid_restarted_pa: float
+    window_stress_mid_pa: list[float]
+    window_modulus_multisphere_pa: list[float]
+    window_modulus_rigid_restarted_pa: list[float]
+    wall_time_s: float
+
+
+def liggghts_restart_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int = 2,
+                         speed_factor: float | None = None, workdir: str | None = None,
+                         progress=None) -> tuple[list[RestartPacking], list[PairedDifference]]:
+    """LIGGGHTS' own clump packings (verify_export's, same seeds) run twice: as filled (fix multisphere) and
+    restarted as rigid bodies (fix rigid). With ``paired_cct`` on demcal's packings this splits the engines'
+    E' difference of clumps into the packing each fill builds, the integrator of the bodies and the restart:
+    paired_cct compares the engines' contact mechanics on one packing; this compares LIGGGHTS' two rigid-body
+    integrators (with the restart) on one packing."""
+    from calibration.export.verify import liggghts_rig_run
+
+    if not isinstance(material, ExportMaterial):
+        material = ExportMaterial.model_validate(material)
+    if not material.particles.clumps or material.particles.spheres or len(material.particles.clumps) != 1:
+        raise ValueError("liggghts_restart_cct takes a material of one clump shape (fix multisphere's packing)")
+    params = to_micro_parameters(material)
+    export = render(material)
+    rig = screening_rig(cct_cycles, speed_factor)
+    template = material.particles.clumps[0].template()
+    rho = material.particles.solid_density_kg_m3
+    body_mass = template.mass_kg(rho)
+    out: list[RestartPacking] = []
+    for seed in seeds:
+        t0 = time.monotonic()
+        if progress:
+            progress(f"seed {seed}: LIGGGHTS fill and CCT (fix multisphere)")
+        run = liggghts_rig_run(export, rig, params, material, seed, workdir)
+        bodies = clumps_of_liggghts_packing(run, template, body_mass)
+        _, radii, centres = run.settled_spheres()
+        if progress:
+            progress(f"seed {seed}: LIGGGHTS CCT restarted on its {bodies.body_masses_kg.size} clumps (fix rigid)")
+        again = run_packing_cct(export, rig, centres, radii, rho, workdir, bodies=bodies)
+        ms, rigid = run.reduction(rig), again.reduction(rig, run.packing_height_m)
+        n_win = min(len(ms.window_modulus_pa), len(rigid.window_modulus_pa))
+        out.append(RestartPacking(seed, int(bodies.body_masses_kg.size), float(run.packing_height_m),
+                                  float(ms.confined_modulus_pa), float(rigid.confined_modulus_pa),
+                                  [float(0.5 * (ms.window_stress_mid_pa[k] + rigid.window_stress_mid_pa[k]))
+                                   for k in range(n_win)],
+                                  list(map(float, ms.window_modulus_pa[:n_win])),
+                                  list(map(float, rigid.window_modulus_pa[:n_win])), time.monotonic() - t0))
+        if progress:
+            progress(f"seed {seed}: E' multisphere {out[-1].modulus_multisphere_pa / 1e6:.3f}, rigid restarted "
+                     f"{out[-1].modulus_rigid_restarted_pa / 1e6:.3f} MPa")
+    diffs = [paired_difference("E' (cycles 2..N), LIGGGHTS rigid restarted vs multisphere",
+                               [p.modulus_multisphere_pa for p in out], [p.modulus_rigid_restarted_pa for p in out])]
+    n_win = min(len(p.window_modulus_multisphere_pa) for p in out)
+    for k in range(n_win):
+        mid = float(np.mean([p.window_stress_mid_pa[k] for p in out]))
+        diffs.append(paired_difference(f"E' at {mid / 1000:.1f} kPa, rigid restarted vs multisphere",
+                                       [p.window_modulus_multisphere_pa[k] for p in out],
+                                       [p.window_modulus_rigid_restarted_pa[k] for p in out]))
+    return out, diffs

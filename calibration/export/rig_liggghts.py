@@ -13,9 +13,10 @@ radius), and a clump is deleted when any of its spheres has its centre above the
 multisphere removes a body with its first sphere; demcal deletes by the body's centre of mass). The
 include itself is ``calibration.export.liggghts.render``'s text, unchanged.
 
-``packing_cct_input`` / ``run_packing_cct`` run the same CCT from a packing of single spheres built
-elsewhere (demcal's fill, read with ``read_data``), so that both engines can be compared on one packing
-(``calibration.export.paired``).
+``packing_cct_input`` / ``run_packing_cct`` run the same CCT from a packing built elsewhere (demcal's fill,
+read with ``read_data``), so that both engines can be compared on one packing (``calibration.export.paired``):
+single spheres as they are, clumps as ``fix rigid`` bodies (``RigidBodies``), since fix multisphere only
+inserts its bodies from templates at random.
 """
 from __future__ import annotations
 
@@ -333,6 +334,24 @@ class RigRun:
     lid_force_n: np.ndarray
     workdir: str
     wall_time_s: float
+
+    def reduction(self, rig: Rig, height_m: float | None = None):
+        """The CCT's reduction (engine.lab.reducers.cct) of the lid record: strain from the lid's first touch
+        (the particles push the lid up: its force is +z on the mesh) over ``height_m`` (default the packing
+        height LIGGGHTS printed)."""
+        from engine.lab.reducers.cct import reduce_cct
+
+        height = self.packing_height_m if height_m is None else float(height_m)
+        stress = self.lid_force_n / rig.area_m2
+        touching = np.nonzero(stress > 0)[0]
+        z_contact = self.lid_z_m[touching[0]] if touching.size else self.lid_z_m[0]
+        return reduce_cct((z_contact - self.lid_z_m) / height, stress, rig.area_m2, height)
+
+    def settled_spheres(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The packing as LIGGGHTS had it before the lid (``settled.txt``): atom ids, radii and centres, by id."""
+        rows = np.loadtxt(os.path.join(self.workdir, "settled.txt"), skiprows=9, ndmin=2)
+        rows = rows[np.argsort(rows[:, 0])]
+        return rows[:, 0].astype(int), rows[:, 2], rows[:, 4:7]
 
 
 def run_rig(export: LiggghtsExport, rig: Rig, seed_prime: int, r_min_m: float, r_max_m: float,

@@ -148,11 +148,8 @@ def _demcal_packing(params, seed: int, cct_cycles: int, speed_factor: float | No
                           time.monotonic() - t0)
 
 
-def _liggghts_packing(export, rig: Rig, params, material: ExportMaterial, seed: int,
-                      workdir: str | None) -> PackingFigures:
-    from engine.lab.reducers.cct import reduce_cct
-    from engine.lab.reducers.packing import PackingState, bulk_properties
-
+def liggghts_rig_run(export, rig: Rig, params, material: ExportMaterial, seed: int, workdir: str | None):
+    """LIGGGHTS' own fill and CCT of the screening rig for ``seed`` (its insertion seed a prime from it)."""
     r_equivalent = float(params.particle_radius_m)  # the volume-equivalent radius of a body
     clump = None
     r_sphere = r_equivalent
@@ -160,18 +157,19 @@ def _liggghts_packing(export, rig: Rig, params, material: ExportMaterial, seed: 
         template = material.particles.clumps[0].template()
         clump = ClumpBody(template.n_spheres, template.mass_kg(params.particle_density_kg_m3))
         r_sphere = float(np.min(template.sphere_radii_m))
-    run = run_rig(export, rig, _primes_above(32452843 + 7919 * seed, 1)[0], r_sphere, r_sphere, 2.0 * r_equivalent,
-                  workdir, clump=clump)
+    return run_rig(export, rig, _primes_above(32452843 + 7919 * seed, 1)[0], r_sphere, r_sphere,
+                   2.0 * r_equivalent, workdir, clump=clump)
+
+
+def _liggghts_packing(export, rig: Rig, params, material: ExportMaterial, seed: int,
+                      workdir: str | None) -> PackingFigures:
+    from engine.lab.reducers.packing import PackingState, bulk_properties
+
+    run = liggghts_rig_run(export, rig, params, material, seed, workdir)
     rho = params.particle_density_kg_m3
     props = bulk_properties(PackingState(run.bulk_mass_kg / rho, rho, run.packing_height_m, rig.area_m2,
                                          run.particle_count))
-    # the particles push the lid up: its force is +z on the mesh
-    stress = run.lid_force_n / rig.area_m2
-    z = run.lid_z_m
-    touching = np.nonzero(stress > 0)[0]
-    z_contact = z[touching[0]] if touching.size else z[0]
-    strain = (z_contact - z) / run.packing_height_m
-    red = reduce_cct(strain, stress, rig.area_m2, run.packing_height_m)
+    red = run.reduction(rig)
     return PackingFigures("LIGGGHTS", seed, props["bulk_density_kg_m3"], props["porosity"], run.packing_height_m,
                           run.particle_count, float(red.confined_modulus_pa),
                           list(map(float, red.window_stress_mid_pa)), list(map(float, red.window_modulus_pa)),

@@ -218,3 +218,37 @@ def test_a_layer_of_upright_clumps_under_the_lid_has_the_series_springs_modulus_
     red = reduce_cct((z_contact - run.lid_z_m) / run.packing_height_m, stress, rig.area_m2, run.packing_height_m)
     print(f"{n} upright clumps: E' {red.confined_modulus_pa / 1e6:.4f} MPa, analytic {expected / 1e6:.4f} MPa")
     assert red.confined_modulus_pa == pytest.approx(expected, rel=0.005)
+
+
+def _settled(folder, ids, radius_m: float, centres) -> None:
+    """A settled.txt as rig_liggghts' dump writes it (id type radius mass x y z after nine header lines)."""
+    lines = ["ITEM: TIMESTEP", "0", "ITEM: NUMBER OF ATOMS", str(len(ids)), "ITEM: BOX BOUNDS ff ff ff",
+             "-1 1", "-1 1", "-1 1", "ITEM: ATOMS id type radius mass x y z"]
+    lines += [f"{i} 1 {radius_m} 0.08 {x} {y} {z}" for i, (x, y, z) in zip(ids, centres)]
+    (folder / "settled.txt").write_text("\n".join(lines) + "\n")
+
+
+def test_a_liggghts_clump_packing_is_read_body_by_body_and_a_numbering_that_does_not_hold_is_refused(tmp_path):
+    from calibration.export.material import from_micro_parameters
+    from calibration.export.paired import clumps_of_liggghts_packing
+    from calibration.export.rig_liggghts import RigRun
+    from engine.lab.spec import MicroParameters
+
+    template = from_micro_parameters(MicroParameters(clump_aspect_ratio=1.5)).particles.clumps[0].template()
+    r = float(template.sphere_radii_m[0])
+    half = float(np.linalg.norm(template.sphere_offsets_m[0]))
+    # two bodies, one along x at the origin, one along y further on; written out of id order
+    centres = [(-half, 0.0, r), (half, 0.0, r), (0.2, -half, r), (0.2, half, r)]
+    ids = [3, 4, 1, 2]
+    _settled(tmp_path, ids, r, centres)
+    run = RigRun(0.1, 1.0, 2, np.zeros(1), np.zeros(1), np.zeros(1), str(tmp_path), 0.0)
+    bodies = clumps_of_liggghts_packing(run, template, 0.0838)
+    assert bodies.body_ids.tolist() == [0, 0, 1, 1] and bodies.body_masses_kg.tolist() == [0.0838, 0.0838]
+    got_ids, _, got_centres = run.settled_spheres()
+    assert got_ids.tolist() == [1, 2, 3, 4] and got_centres[0].tolist() == [0.2, -half, r]
+    _settled(tmp_path, [1, 3, 2, 4], r, centres)  # ids that pair spheres of different bodies
+    with pytest.raises(ValueError, match="body by body"):
+        clumps_of_liggghts_packing(run, template, 0.0838)
+    _settled(tmp_path, [1, 2, 3], r, centres[:3])
+    with pytest.raises(ValueError, match="whole bodies"):
+        clumps_of_liggghts_packing(run, template, 0.0838)
