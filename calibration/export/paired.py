@@ -244,22 +244,42 @@ def paired_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_cycles: int
     return report
 
 
-def clumps_of_liggghts_packing(run, template, body_mass_kg: float) -> RigidBodies:
-    """The bodies of a LIGGGHTS multisphere packing (``RigRun.settled_spheres``): fix multisphere gives a body's
-    spheres consecutive atom ids, so each run of ``n_spheres`` ids is one body; checked against the template's
-    own sphere distances (to 1e-6 of a radius), so a numbering that did not hold would be refused, not guessed."""
-    ids, radii, centres = run.settled_spheres()
+def clumps_of_liggghts_packing(run, template, body_mass_kg: float) -> tuple[RigidBodies, np.ndarray, np.ndarray]:
+    """The bodies of a LIGGGHTS multisphere packing (``RigRun.settled_spheres``), as (bodies, radii, centres) in
+    body order. Found by geometry, not atom ids (the fill's deletion above the level leaves the ids with gaps
+    that do not follow the bodies): a clump's spheres overlap each other by far more than spheres of two bodies
+    in a settled packing do (their overlaps are ~1e-4 of a radius), so two spheres closer than 0.9 (r_i + r_j)
+    belong to one body, and a body is a connected group of such pairs. Each group is checked against the
+    template (its sphere count and its distances, sorted, to 1e-4 of the smallest radius; the dump holds 12
+    digits), so a packing that is not the template's would be refused, not guessed."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    _, radii, centres = run.settled_spheres()
     n = int(template.n_spheres)
-    if ids.size % n:
-        raise ValueError(f"{ids.size} spheres are not whole bodies of {n}")
+    r_max = float(np.max(radii))
+    tree = cKDTree(centres)
+    pairs = tree.query_pairs(2.0 * 0.9 * r_max, output_type="ndarray")
+    if pairs.size:
+        gap = np.linalg.norm(centres[pairs[:, 0]] - centres[pairs[:, 1]], axis=1)
+        pairs = pairs[gap < 0.9 * (radii[pairs[:, 0]] + radii[pairs[:, 1]])]
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(radii.size, radii.size)) \
+        if pairs.size else coo_matrix((radii.size, radii.size))
+    count, labels = connected_components(graph, directed=False)
+    sizes = np.bincount(labels, minlength=count)
+    if np.any(sizes != n):
+        raise ValueError(f"spheres group into bodies of {sorted(set(sizes.tolist()))} spheres, not the template's {n}")
+    order = np.argsort(labels, kind="stable")
+    groups = centres[order].reshape(count, n, 3)
     offsets = np.asarray(template.sphere_offsets_m, float)
-    expected = np.linalg.norm(offsets[:, None, :] - offsets[None, :, :], axis=2)
-    groups = centres.reshape(-1, n, 3)
-    found = np.linalg.norm(groups[:, :, None, :] - groups[:, None, :, :], axis=3)
-    scale = float(np.min(template.sphere_radii_m))
-    if np.max(np.abs(found - expected[None])) > 1e-6 * scale:
-        raise ValueError("LIGGGHTS' atom ids do not run body by body: consecutive spheres are not the template's")
-    return RigidBodies(np.repeat(np.arange(groups.shape[0]), n), np.full(groups.shape[0], body_mass_kg))
+    iu = np.triu_indices(n, 1)
+    expected = np.sort(np.linalg.norm(offsets[:, None, :] - offsets[None, :, :], axis=2)[iu])
+    found = np.sort(np.linalg.norm(groups[:, :, None, :] - groups[:, None, :, :], axis=3)[:, iu[0], iu[1]], axis=1)
+    if np.max(np.abs(found - expected[None]), initial=0.0) > 1e-4 * float(np.min(template.sphere_radii_m)):
+        raise ValueError("a group of overlapping spheres is not the template's body (its sphere distances differ)")
+    bodies = RigidBodies(np.repeat(np.arange(count), n), np.full(count, body_mass_kg))
+    return bodies, radii[order], centres[order]
 
 
 @dataclass
@@ -304,8 +324,7 @@ def liggghts_restart_cct(material: ExportMaterial | dict, seeds=(1, 2, 3), cct_c
         if progress:
             progress(f"seed {seed}: LIGGGHTS fill and CCT (fix multisphere)")
         run = liggghts_rig_run(export, rig, params, material, seed, workdir)
-        bodies = clumps_of_liggghts_packing(run, template, body_mass)
-        _, radii, centres = run.settled_spheres()
+        bodies, radii, centres = clumps_of_liggghts_packing(run, template, body_mass)
         if progress:
             progress(f"seed {seed}: LIGGGHTS CCT restarted on its {bodies.body_masses_kg.size} clumps (fix rigid)")
         again = run_packing_cct(export, rig, centres, radii, rho, workdir, bodies=bodies)

@@ -124,7 +124,7 @@ def _cct_lines(rig: Rig, r_min_m: float, dt_s: float) -> str:
 variable h equal c_ztop
 variable h_fill equal ${{h}}
 print "FILLED time=$(time) atoms=$(atoms) height=${{h_fill}} mass=${{mass_total}} ratio=${{ke_ratio}}"
-write_dump all custom settled.txt id type radius mass x y z
+write_dump all custom settled.txt id type radius mass x y z modify format "%d %d %.10g %.10g %.12g %.12g %.12g"
 # confined compression: lid {rig.lid_start_gap_fraction} r_min above the highest sphere top
 variable zlid0 equal ${{h_fill}}+{rig.lid_start_gap_fraction * r_min_m:.8g}
 fix lid all mesh/surface/stress file lid.stl type ${{demcal_wall_type}} move 0.0 0.0 ${{zlid0}} reference_point 0.0 0.0 0.0

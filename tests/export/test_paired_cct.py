@@ -228,7 +228,7 @@ def _settled(folder, ids, radius_m: float, centres) -> None:
     (folder / "settled.txt").write_text("\n".join(lines) + "\n")
 
 
-def test_a_liggghts_clump_packing_is_read_body_by_body_and_a_numbering_that_does_not_hold_is_refused(tmp_path):
+def test_a_liggghts_clump_packing_is_grouped_into_bodies_by_geometry_and_a_foreign_one_is_refused(tmp_path):
     from calibration.export.material import from_micro_parameters
     from calibration.export.paired import clumps_of_liggghts_packing
     from calibration.export.rig_liggghts import RigRun
@@ -237,20 +237,24 @@ def test_a_liggghts_clump_packing_is_read_body_by_body_and_a_numbering_that_does
     template = from_micro_parameters(MicroParameters(clump_aspect_ratio=1.5)).particles.clumps[0].template()
     r = float(template.sphere_radii_m[0])
     half = float(np.linalg.norm(template.sphere_offsets_m[0]))
-    # two bodies, one along x at the origin, one along y further on; written out of id order
-    centres = [(-half, 0.0, r), (half, 0.0, r), (0.2, -half, r), (0.2, half, r)]
-    ids = [3, 4, 1, 2]
-    _settled(tmp_path, ids, r, centres)
+    # two bodies touching end to end along x (their near spheres 1e-4 r into each other, a settled contact), ids
+    # interleaved across the bodies as LIGGGHTS' deletions can leave them
+    gap = 2 * r - 1e-4 * r
+    centres = [(-half, 0.0, r), (half, 0.0, r), (half + gap, 0.0, r), (3 * half + gap, 0.0, r)]
+    _settled(tmp_path, [1, 3, 2, 4], r, centres)
     run = RigRun(0.1, 1.0, 2, np.zeros(1), np.zeros(1), np.zeros(1), str(tmp_path), 0.0)
-    bodies = clumps_of_liggghts_packing(run, template, 0.0838)
+    bodies, radii, grouped = clumps_of_liggghts_packing(run, template, 0.0838)
     assert bodies.body_ids.tolist() == [0, 0, 1, 1] and bodies.body_masses_kg.tolist() == [0.0838, 0.0838]
-    got_ids, _, got_centres = run.settled_spheres()
-    assert got_ids.tolist() == [1, 2, 3, 4] and got_centres[0].tolist() == [0.2, -half, r]
-    _settled(tmp_path, [1, 3, 2, 4], r, centres)  # ids that pair spheres of different bodies
-    with pytest.raises(ValueError, match="body by body"):
+    # by id the dump reads centres 0, 2, 1, 3; grouped, each body's two spheres are 2 half apart
+    assert np.linalg.norm(grouped[0] - grouped[1]) == pytest.approx(2 * half, rel=1e-9)
+    assert np.linalg.norm(grouped[2] - grouped[3]) == pytest.approx(2 * half, rel=1e-9)
+    assert radii.tolist() == [r] * 4
+    _settled(tmp_path, [1, 2, 3], r, centres[:3])  # a body short of a sphere
+    with pytest.raises(ValueError, match="bodies of"):
         clumps_of_liggghts_packing(run, template, 0.0838)
-    _settled(tmp_path, [1, 2, 3], r, centres[:3])
-    with pytest.raises(ValueError, match="whole bodies"):
+    squeezed = [(-0.6 * half, 0.0, r), (0.6 * half, 0.0, r)]  # overlapping, but not the template's distance
+    _settled(tmp_path, [1, 2], r, squeezed)
+    with pytest.raises(ValueError, match="not the template's body"):
         clumps_of_liggghts_packing(run, template, 0.0838)
 
 
