@@ -14,8 +14,11 @@ Each step switches one more thing off in both engines:
     no_wall_friction       and friction_pw 0 for the whole run (fill and CCT)
     frictionless           and friction_pp 0 for the CCT: normal springs and dashpots only
 
+A clump material (``--params`` with ``clump_aspect_ratio``) runs the same way, LIGGGHTS moving demcal's bodies
+with fix rigid (fix multisphere cannot start from a given packing; calibration/export/rig_liggghts.py).
+
 Needs Debian's ``liggghts``. Measured on the shared 2-core machine: 15-30 s per packing and step (the three CCTs,
-2 cycles), about 40 s with 4 cycles.
+2 cycles), about 40 s with 4 cycles; two-sphere clumps 275-445 s per packing (2 cycles, machine shared).
 """
 from __future__ import annotations
 
