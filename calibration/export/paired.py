@@ -248,7 +248,7 @@ def clumps_of_liggghts_packing(run, template, body_mass_kg: float) -> tuple[Rigi
     """The bodies of a LIGGGHTS multisphere packing (``RigRun.settled_spheres``), as (bodies, radii, centres) in
     body order. Found by geometry, not atom ids (the fill's deletion above the level leaves the ids with gaps
     that do not follow the bodies): a clump's spheres overlap each other by far more than spheres of two bodies
-    in a settled packing do (their overlaps are ~1e-4 of a radius), so two spheres closer than 0.9 (r_i + r_j)
+    in a settled packing do (theirs stay below 1e-3 of a radius), so two spheres closer than 0.9 (r_i + r_j)
     belong to one body, and a body is a connected group of such pairs. Each group is checked against the
     template (its sphere count and its distances, sorted, to 1e-4 of the smallest radius; the dump holds 12
     digits), so a packing that is not the template's would be refused, not guessed."""
