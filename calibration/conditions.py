@@ -25,14 +25,19 @@ def battery_options(keys: Iterable[ResponseKey], base: dict[str, Any] | None = N
     repose and the anchor pull-out are separate, costly set-ups: they run when ``base`` asks for them
     (``include_aor``, ``include_anchor``), never because a material happens to list such a measurement.
     """
-    keys = list(keys)
+    from engine.lab import registry
+
     out = dict(base or {})
-    dst = sorted({k.stress_pa() for k in keys if k.test == "dst" and k.stress_pa() is not None})
-    cct = sorted({k.stress_pa() for k in keys if k.test == "cct" and k.stress_pa() is not None})
-    if dst and out.get("dst_normal_stresses_pa") is None:
-        out["dst_normal_stresses_pa"] = dst
-    if cct and out.get("cct_window_stresses_pa") is None:
-        out["cct_window_stresses_pa"] = cct
+    stresses: dict[str, set[float]] = {}
+    for k in keys:
+        if k.stress_pa() is None:
+            continue
+        option = registry.quantity(k.test, k.quantity).stress_option
+        if option is not None:  # each quantity's stresses go to the option that makes the battery report it there
+            stresses.setdefault(option, set()).add(k.stress_pa())
+    for option, values in stresses.items():
+        if out.get(option) is None:
+            out[option] = sorted(values)
     return out
 
 
@@ -66,6 +71,7 @@ def standin_conditions(options: dict[str, Any], cct_max_stress_pa: float = 65.6e
     return Conditions(
         dst_normal_stresses_pa=tuple(options.get("dst_normal_stresses_pa") or defaults.dst_normal_stresses_pa),
         cct_window_stresses_pa=tuple(options.get("cct_window_stresses_pa") or ()),
+        cct_unload_reload_stresses_pa=tuple(options.get("cct_unload_reload_stresses_pa") or ()),
         cct_max_stress_pa=float(options.get("cct_max_stress_pa") or cct_max_stress_pa),
         include_aor=bool(options.get("include_aor", False)),
         include_anchor=bool(options.get("include_anchor", False)),

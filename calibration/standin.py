@@ -89,6 +89,11 @@ class Gains:
     anchor_surface_m2: float = 0.06
     # 1 - exp(-x) (None) or 1 - (1 + x/p)^-p: the same start and ceiling, another approach to it
     saturation_power: float | None = None
+    # unload-reload modulus: E_ur = 3 E' at the reference stress (the Hardening Soil model's E_ur = 3 E_50,
+    # Schanz et al. 1999), growing as sigma^n with the contact network (n for linear springs) and, for Hertzian
+    # contacts, a further 1/3 (a fixed network of Hertzian contacts, Goddard 1990). In LATER_GAINS (perturbed).
+    unload_reload_ratio: float = 3.0
+    unload_reload_network_exponent: float = 0.10
 
     def sat(self, x: float) -> float:
         if self.saturation_power is None:
@@ -98,14 +103,23 @@ class Gains:
 
     def perturbed(self, rng: np.random.Generator, relative: float = 0.05,
                   saturation_power: float = 4.0) -> "Gains":
-        """Another world: every gain and exponent scaled by 1 + U(-relative, relative)."""
+        """Another world: every gain and exponent scaled by 1 + U(-relative, relative).
+
+        The gains added after the test beds were fixed (``LATER_GAINS``) are drawn from a stream jumped ahead of
+        ``rng``, which leaves ``rng`` where the earlier gains left it: a caller that goes on drawing from it (tier
+        A's measurement noise) sees the same numbers as before, so its worlds and figures stay reproducible."""
+        later = np.random.Generator(rng.bit_generator.jumped())
         changes = {}
         for f in fields(self):
             value = getattr(self, f.name)
             if f.name == "saturation_power" or value is None:
                 continue
-            changes[f.name] = value * (1.0 + relative * float(rng.uniform(-1.0, 1.0)))
+            source = later if f.name in LATER_GAINS else rng
+            changes[f.name] = value * (1.0 + relative * float(source.uniform(-1.0, 1.0)))
         return replace(self, saturation_power=saturation_power, **changes)
+
+
+LATER_GAINS = frozenset({"unload_reload_ratio", "unload_reload_network_exponent"})
 
 
 # Seed-to-seed scatter of one simulated battery (packing randomness): a relative sd for
@@ -113,6 +127,7 @@ class Gains:
 SIMULATOR_SD = {
     ("fill", "bulk_density_kg_m3"): ("relative", 0.005),
     ("cct", "confined_modulus_pa"): ("relative", 0.04),
+    ("cct", "unload_reload_modulus_pa"): ("relative", 0.04),
     ("dst", "residual_shear_stress_pa"): ("relative", 0.02),
     ("dst", "dilatancy_angle_deg"): ("absolute", 0.75),
     ("aor", "angle_of_repose_deg"): ("absolute", 0.5),
@@ -126,6 +141,7 @@ class Conditions:
 
     dst_normal_stresses_pa: tuple[float, ...] = (10.5e3, 24.0e3, 38.3e3, 52.4e3)
     cct_window_stresses_pa: tuple[float, ...] = ()
+    cct_unload_reload_stresses_pa: tuple[float, ...] = ()
     cct_max_stress_pa: float = 65.6e3
     include_aor: bool = False
     include_anchor: bool = False
@@ -217,6 +233,8 @@ def bulk_values(parameters: Mapping[str, Any], conditions: Conditions, gains: Ga
     def modulus(stress):
         return e_ref * (stress / E_REF_STRESS_PA) ** exponent
 
+    ur_exponent = g.unload_reload_network_exponent + (1.0 / 3.0 if hertz_modulus_pa is not None else 0.0)
+
     out = [
         ("fill", "bulk_density_kg_m3", rho_b, {}),
         ("fill", "porosity", 1.0 - solid, {}),
@@ -225,6 +243,8 @@ def bulk_values(parameters: Mapping[str, Any], conditions: Conditions, gains: Ga
     ]
     out += [("cct", "confined_modulus_pa", modulus(s), {"normal_stress_pa": s})
             for s in conditions.cct_window_stresses_pa]
+    out += [("cct", "unload_reload_modulus_pa", g.unload_reload_ratio * e_ref * (s / E_REF_STRESS_PA) ** ur_exponent,
+             {"normal_stress_pa": s}) for s in conditions.cct_unload_reload_stresses_pa]
     for s in conditions.dst_normal_stresses_pa:
         out.append(("dst", "residual_shear_stress_pa", tau(s), {"normal_stress_pa": s}))
         out.append(("dst", "dilatancy_angle_deg", psi(s), {"normal_stress_pa": s}))

@@ -35,6 +35,7 @@ def conditions(spec: JobSpec) -> standin.Conditions:
     return standin.Conditions(
         dst_normal_stresses_pa=tuple(dst_normal_stresses_pa(spec)),
         cct_window_stresses_pa=tuple(windows),
+        cct_unload_reload_stresses_pa=tuple(getattr(o, "cct_unload_reload_stresses_pa", None) or ()),
         cct_max_stress_pa=float(o.cct_max_stress_pa or preset.cct_max_stress_pa),
         include_aor=bool(o.include_aor or spec.test == "aor"),
         include_anchor=bool(o.include_anchor or spec.test == "anchor"),

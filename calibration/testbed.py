@@ -36,6 +36,7 @@ from .vocabulary import DiagnosisVerdict
 MEASUREMENT_SD = {
     ("fill", "bulk_density_kg_m3"): ("relative", 0.01),
     ("cct", "confined_modulus_pa"): ("relative", 0.08),
+    ("cct", "unload_reload_modulus_pa"): ("relative", 0.08),
     ("dst", "residual_shear_stress_pa"): ("relative", 0.04),
     ("dst", "dilatancy_angle_deg"): ("absolute", 1.5),
     ("aor", "angle_of_repose_deg"): ("absolute", 1.0),

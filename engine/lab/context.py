@@ -142,12 +142,13 @@ class RunContext:
                 raise SpecFieldError("options.moving_average_span", "must be odd")
             if self.cct_max_stress_pa <= 0:
                 raise SpecFieldError("options.cct_max_stress_pa", "must be positive")
-            windows = o.cct_window_stresses_pa
-            if windows and max(windows) >= self.cct_max_stress_pa:
-                raise SpecFieldError(
-                    "options.cct_window_stresses_pa",
-                    f"every stress must be below the CCT maximum stress "
-                    f"({self.cct_max_stress_pa:.6g} Pa; options.cct_max_stress_pa), got {max(windows):.6g} Pa")
+            for name in ("cct_window_stresses_pa", "cct_unload_reload_stresses_pa"):
+                stresses = getattr(o, name)
+                if stresses and max(stresses) >= self.cct_max_stress_pa:
+                    raise SpecFieldError(
+                        f"options.{name}",
+                        f"every stress must be below the CCT maximum stress "
+                        f"({self.cct_max_stress_pa:.6g} Pa; options.cct_max_stress_pa), got {max(stresses):.6g} Pa")
         self.check_rig()
         for test, _ in steps:
             if test.check is not None:

@@ -72,6 +72,9 @@ class Quantity:
     # are targets (calibration.comparable.once_each)
     derived_from: tuple[str, ...] = ()
     relation: str = ""
+    # the TestOptions field listing the normal stresses this quantity is reported at: a measurement at a stress
+    # makes the battery run it at exactly that stress (calibration.conditions.battery_options)
+    stress_option: str | None = None
 
 
 @dataclass(frozen=True)
@@ -168,6 +171,12 @@ def _validate(test: LabTest, known: dict[str, LabTest]) -> None:
     names = [q.name for q in test.quantities]
     if not names or len(set(names)) != len(names):
         raise ValueError(f"lab test {test.name}: quantities must be named once each")
+    for q in test.quantities:
+        # a quantity measured at a stress must name the option that makes the battery report it there
+        if ("normal_stress_pa" in q.conditions) != (q.stress_option is not None) \
+                or (q.stress_option is not None and q.stress_option not in test.options):
+            raise ValueError(f"lab test {test.name}: {q.name} is reported at a normal stress only through one of "
+                             f"the test's options (stress_option), got {q.stress_option!r}")
     if not test.progress_weight > 0:
         raise ValueError(f"lab test {test.name}: progress_weight must be positive")
 

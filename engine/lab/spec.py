@@ -136,6 +136,14 @@ class TestOptions(BaseModel):
         "stresses (Pa; each > 0, strictly increasing, below the CCT maximum stress), keyed by the given floats, "
         "instead of five equal windows from 0 to the peak (docs/lab.md)",
     )
+    cct_unload_reload_stresses_pa: list[float] | None = Field(
+        None, max_length=_MAX_CCT_WINDOW_STRESSES,
+        description="CCT: after its cycles, load once more and at each of these normal stresses (Pa; each > 0, "
+        "strictly increasing, below the CCT maximum stress) hold the stress, then unload slowly by a tenth of it: "
+        "the unload-reload modulus E_ur = d(sigma)/d(strain) of that small unloading, reported per stress. It grows "
+        "with stress as the contacts stiffen (a Hertzian contact's stiffness ~ F^(1/3)), where the loading E' "
+        "grows mostly with the contact network (docs/lab.md)",
+    )
     speed_factor: float | None = Field(
         None, ge=_MIN_SPEED_FACTOR, le=_MAX_SPEED_FACTOR,
         description="test speed / lab speed for CCT and DST; unset: the fidelity's default (docs/lab.md)",
@@ -209,14 +217,15 @@ class TestOptions(BaseModel):
             raise ValueError("need 0 <= lower < upper <= 1 (shear strains)")
         return window
 
-    @field_validator("cct_window_stresses_pa")
+    @field_validator("cct_window_stresses_pa", "cct_unload_reload_stresses_pa")
     @classmethod
-    def _window_stresses(cls, value: list[float] | None) -> list[float] | None:
+    def _window_stresses(cls, value: list[float] | None, info: ValidationInfo) -> list[float] | None:
         # the CCT maximum depends on the fidelity: RunContext.validate checks "below the maximum"
         if value is None:
             return value
         if not value:
-            raise ValueError("give at least one stress, or leave the option unset for five equal windows")
+            unset = "for five equal windows" if info.field_name == "cct_window_stresses_pa" else "for no unload-reload"
+            raise ValueError(f"give at least one stress, or leave the option unset {unset}")
         for s in value:
             if not (math.isfinite(s) and s > 0):
                 raise ValueError(f"every stress must be a finite number > 0 Pa, got {s!r}")

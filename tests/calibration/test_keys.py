@@ -50,3 +50,8 @@ def test_the_battery_computes_the_measured_conditions_exactly():
                        "cct_window_stresses_pa": [15e3]}
     # a user's explicit choice wins
     assert battery_options(keys, {"dst_normal_stresses_pa": [5e3, 9e3]})["dst_normal_stresses_pa"] == [5e3, 9e3]
+    # each CCT quantity's stresses go to its own option: E_ur at 3 kPa is no E' window
+    unload_reload = [ResponseKey.of("cct", "unload_reload_modulus_pa", {"normal_stress_pa": s}) for s in (60e3, 3e3)]
+    options = battery_options(keys + unload_reload)
+    assert options["cct_window_stresses_pa"] == [15e3]
+    assert options["cct_unload_reload_stresses_pa"] == [3e3, 60e3]

@@ -69,11 +69,13 @@ TEST = LabTest(
     name="dst",
     title="Direct shear: residual shear stress, dilatancy, Mohr-Coulomb friction angle and cohesion",
     quantities=(
-        Quantity("residual_shear_stress_pa", "Pa", STRESS, conditions=("normal_stress_pa",)),
+        Quantity("residual_shear_stress_pa", "Pa", STRESS, conditions=("normal_stress_pa",),
+                 stress_option="dst_normal_stresses_pa"),
         # Negative dilatancy is contraction, physical for loose packings: the whole open range about zero.
         # Typical: dense sands dilate at up to about 20 deg (Bolton 1986), loose packings contract a little.
         Quantity("dilatancy_angle_deg", "deg", Bound(-90.0, 90.0, why="an angle between -90 and 90 degrees"),
                  conditions=("normal_stress_pa",), description="per load; unconditioned, the mean over the loads",
+                 stress_option="dst_normal_stresses_pa",
                  typical=Typical(-10.0, 30.0, "the dilatancy angles of granular materials", "Bolton 1986")),
         # Typical: sands and gravels 27-48 deg (Das), railway ballast above 60 deg at low confinement
         # (Indraratna et al. 1998; the thesis's aggregate 60.6 deg).

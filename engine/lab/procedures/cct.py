@@ -1,4 +1,5 @@
-"""Confined compression test (thesis sections 3.4 and 4.6.2): N load-unload cycles of the lid."""
+"""Confined compression test (thesis sections 3.4 and 4.6.2): N load-unload cycles of the lid, and on request an
+unload-reload loop at given stresses after them (``unload_reload``)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -8,8 +9,8 @@ import numpy as np
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
 from engine.lab.procedures.fill import FillOutcome, smallest_radius_m
-from engine.lab.procedures.lid import LidRecord, load_to, precompress, unload
-from engine.lab.reducers.cct import CctReduction, reduce_cct
+from engine.lab.procedures.lid import LidRecord, hold_stress, load_to, precompress, unload, unload_slowly
+from engine.lab.reducers.cct import CctReduction, reduce_cct, unload_reload_modulus
 from engine.lab.stops import LID_MAX_TRAVEL_FRACTION
 
 
@@ -27,12 +28,14 @@ def run_cct(ctx: RunContext, fill: FillOutcome) -> CctOutcome:
     record = LidRecord()
     precompress(ctx, sim, height, smallest_radius_m(ctx.preset), record)
     precompressed = sim.checkpoint()
+    loops = ctx.spec.options.cct_unload_reload_stresses_pa
     for cycle in range(2, ctx.cct_cycles + 1):
         load_to(ctx, sim, ctx.cct_max_stress_pa, ctx.lid_speed_m_s, record, cycle, f"cct: cycle {cycle} loading",
                 height, LID_MAX_TRAVEL_FRACTION * height)
-        if cycle == ctx.cct_cycles and ctx.stop_after_reduced:
+        if cycle == ctx.cct_cycles and ctx.stop_after_reduced and not loops:
             break  # the reducer reads loading branches only, and nothing starts from the CCT's last state
         unload(ctx, sim, ctx.lid_speed_m_s, record, cycle, f"cct: cycle {cycle} unloading", LID_MAX_TRAVEL_FRACTION * height)
+    cycles_end = len(record.lid_z_m)
     z = np.asarray(record.lid_z_m)
     stress = np.asarray(record.normal_stress_pa)
     touching = np.nonzero(stress > 0)[0]
@@ -40,7 +43,35 @@ def run_cct(ctx: RunContext, fill: FillOutcome) -> CctOutcome:
     strain = (z_contact - z) / height
     reduction = reduce_cct(strain, stress, ctx.preset.container_area_m2, height,
                            window_stresses_pa=ctx.spec.options.cct_window_stresses_pa)
+    if loops:
+        ranges = unload_reload(ctx, sim, height, record, ctx.cct_cycles + 1, loops, reduction.confined_modulus_pa)
+        strain = np.concatenate([strain, (z_contact - np.asarray(record.lid_z_m[cycles_end:])) / height])
+        stress = np.asarray(record.normal_stress_pa)
+        for target, (a, b) in zip(loops, ranges):
+            modulus = unload_reload_modulus(strain[a:b], stress[a:b])
+            if np.isfinite(modulus):
+                reduction.unload_reload_stress_pa.append(float(target))
+                reduction.unload_reload_modulus_pa.append(modulus)
     return CctOutcome(reduction, record, strain, precompressed)
+
+
+def unload_reload(ctx: RunContext, sim, height_m: float, record: LidRecord, cycle: int, stresses_pa: list[float],
+                  loading_modulus_pa: float) -> list[tuple[int, int]]:
+    """After the cycles, from the unloaded packing: load at the test's speed to each stress in turn, hold it on
+    the servo until the packing is at rest, then unload slowly by a tenth (``lid.unload_slowly``); the record's
+    index range of each small unloading. The loading branch between them is the next stress's approach, as in an
+    oedometer's unload-reload steps; the cycles' E' is reduced before, from the cycles alone."""
+    area = ctx.preset.container_area_m2
+    bulk_density_kg_m3 = float(np.sum(sim.body_masses_kg())) / (area * height_m)
+    impedance = float(np.sqrt(bulk_density_kg_m3 * loading_modulus_pa))
+    ranges = []
+    for target in stresses_pa:
+        tag = f"cct: unload-reload at {target / 1000:.3g} kPa"
+        load_to(ctx, sim, target, ctx.lid_speed_m_s, record, cycle, f"{tag}: loading", height_m,
+                LID_MAX_TRAVEL_FRACTION * height_m)
+        hold_stress(ctx, sim, target, ctx.lid_speed_m_s, f"{tag}: holding")
+        ranges.append(unload_slowly(ctx, sim, impedance, loading_modulus_pa, height_m, record, cycle, f"{tag}: unloading"))
+    return ranges
 
 
 def precompressed_state(ctx: RunContext, fill: FillOutcome) -> dict:

@@ -15,18 +15,13 @@ from engine.config import ServoSpec
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
 from engine.lab.geometry import BOTTOM_HALF
-from engine.lab.procedures.lid import LidRecord, load_to
+from engine.lab.procedures.lid import SERVO_GAIN, LidRecord, load_to, stabilise
 from engine.lab.reducers.dst import (DstReduction, MohrCoulombFit, mohr_coulomb_fit, reduce_dst,
                                      samples_needed_past_window)
-from engine.lab.stops import DST_STABILISE_MAX_S, LID_MAX_TRAVEL_FRACTION
+from engine.lab.stops import LID_MAX_TRAVEL_FRACTION
 
 SAMPLES_PER_RUN = 800  # shear samples over the shear distance (the 8-10 % window gets ~150)
 SHEAR_BAND_DIAMETERS = 10.0  # shear band thickness for the inertial number, in mean diameters
-# The engine's servo closes gain x (force error) per step through the summed contact stiffness, but
-# the lid's contacts also carry dashpots: a lid speed v adds c v per contact, with c dt / k ~ 18 x the
-# gain at the engine's time step and a damping ratio of 0.8, so the default gain (0.2) flips the lid
-# between +-max speed every step. 0.02 keeps that ratio near 0.36 and still closes the error in ~50 steps.
-SERVO_GAIN = 0.02
 
 
 @dataclass
@@ -42,26 +37,6 @@ class DstOutcome:
     fit: MohrCoulombFit | None
 
 
-def _stabilise(ctx: RunContext, sim, target_pa: float, phase: str, min_time_s=0.05, max_time_s=DST_STABILISE_MAX_S) -> None:
-    """Hold the servo until the stress is within 2 % of the target and the packing is nearly at rest
-    (kinetic energy ratio 1e-4: mean speed ~9 mm/s for 40 mm grains, a fraction of the shear speed)."""
-    area = ctx.preset.container_area_m2
-    d = labsim.mean_diameter_m(sim)
-    chunk = labsim.steps_for(sim, 0.01)
-    t0 = sim.time_s
-    while True:
-        labsim.advance(ctx, sim, chunk)
-        stress = float(sim.wall_force("lid")[2]) / area
-        elapsed = sim.time_s - t0
-        ctx.report(elapsed / max_time_s, phase)
-        if elapsed >= min_time_s and abs(stress - target_pa) < 0.02 * target_pa \
-                and labsim.kinetic_energy_ratio(sim, d) < 1e-4:
-            return
-        if elapsed >= max_time_s:
-            ctx.warn(f"{phase}: not stable after {max_time_s} s (stress {stress / 1000:.2f} kPa)")
-            return
-
-
 def run_one(ctx: RunContext, precompressed: dict, packing_height_m: float, target_pa: float) -> DstRun:
     tag = f"dst {target_pa / 1000:.1f} kPa"
     sim = labsim.restore(precompressed)
@@ -73,7 +48,7 @@ def run_one(ctx: RunContext, precompressed: dict, packing_height_m: float, targe
     v = ctx.shear_speed_m_s * scale
     sim.set_wall_servo("lid", ServoSpec(axis=(0.0, 0.0, -1.0), target_stress_pa=target_pa, area_m2=area,
                                         max_speed_m_s=max(v, lid_speed), gain_fraction=SERVO_GAIN))
-    _stabilise(ctx, sim, target_pa, f"{tag}: stabilising")
+    stabilise(ctx, sim, target_pa, f"{tag}: stabilising")
 
     opts = ctx.spec.options
     distance = ctx.shear_distance_m

@@ -8,11 +8,24 @@ import numpy as np
 
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
-from engine.lab.stops import LID_MAX_TRAVEL_FRACTION
+from engine.config import ServoSpec
+from engine.lab.stops import DST_STABILISE_MAX_S, LID_MAX_TRAVEL_FRACTION, UNLOAD_RELOAD_MAX_S
 
 # lid travel per control step; the stress overshoot at a turning point is k_b times this
 LID_TRAVEL_PER_SAMPLE_M = 2e-5
 LID_START_GAP_FRACTION = 0.05  # of the smallest radius, above the highest sphere top
+# The unload-reload of the CCT (options.cct_unload_reload_stresses_pa): the small unloading's amplitude as a
+# fraction of the held stress, small enough that few contacts slide (the branch is the packing's elastic
+# response) and large enough to span tens of samples.
+UNLOAD_RELOAD_FRACTION = 0.1
+# Reversing the lid at speed v sends a stress jump of about 2 rho_b c v = 2 sqrt(rho_b E) v into the packing
+# (the bulk's acoustic impedance; at the screening lid speed of 40 mm/s about 8 kPa, near the whole amplitude
+# at 10 kPa). The small unloading runs slowly enough that the jump is this fraction of its amplitude; the
+# reducer also skips the first part of the drop (engine.lab.reducers.cct.unload_reload_modulus).
+UNLOAD_RELOAD_JUMP_FRACTION = 0.1
+# Samples over the unloading's expected travel (expected from the loading E', which is 2-3 x softer than the
+# unloading's, so the record holds fewer: tens)
+UNLOAD_RELOAD_SAMPLES = 100
 
 
 @dataclass
@@ -86,6 +99,73 @@ def unload(ctx: RunContext, sim, speed_m_s: float, record: LidRecord, cycle: int
         if stress <= 0.0 or record.lid_z_m[-1] - z0 > max_travel_m:
             break
     sim.set_wall_velocity("lid", (0.0, 0.0, 0.0))
+
+
+# The engine's servo closes gain x (force error) per step through the summed contact stiffness, but
+# the lid's contacts also carry dashpots: a lid speed v adds c v per contact, with c dt / k ~ 18 x the
+# gain at the engine's time step and a damping ratio of 0.8, so the default gain (0.2) flips the lid
+# between +-max speed every step. 0.02 keeps that ratio near 0.36 and still closes the error in ~50 steps.
+SERVO_GAIN = 0.02
+
+
+def stabilise(ctx: RunContext, sim, target_pa: float, phase: str, min_time_s=0.05, max_time_s=DST_STABILISE_MAX_S) -> None:
+    """Hold the servo until the stress is within 2 % of the target and the packing is nearly at rest
+    (kinetic energy ratio 1e-4: mean speed ~9 mm/s for 40 mm grains, a fraction of the shear speed)."""
+    area = ctx.preset.container_area_m2
+    d = labsim.mean_diameter_m(sim)
+    chunk = labsim.steps_for(sim, 0.01)
+    t0 = sim.time_s
+    while True:
+        labsim.advance(ctx, sim, chunk)
+        stress = float(sim.wall_force("lid")[2]) / area
+        elapsed = sim.time_s - t0
+        ctx.report(elapsed / max_time_s, phase)
+        if elapsed >= min_time_s and abs(stress - target_pa) < 0.02 * target_pa \
+                and labsim.kinetic_energy_ratio(sim, d) < 1e-4:
+            return
+        if elapsed >= max_time_s:
+            ctx.warn(f"{phase}: not stable after {max_time_s} s (stress {stress / 1000:.2f} kPa)")
+            return
+
+
+
+def hold_stress(ctx: RunContext, sim, target_pa: float, max_speed_m_s: float, phase: str) -> None:
+    """The lid on its servo at ``target_pa`` until the packing is stable (``stabilise``), then stopped there."""
+    sim.set_wall_servo("lid", ServoSpec(axis=(0.0, 0.0, -1.0), target_stress_pa=target_pa,
+                                        area_m2=ctx.preset.container_area_m2, max_speed_m_s=max_speed_m_s,
+                                        gain_fraction=SERVO_GAIN))
+    stabilise(ctx, sim, target_pa, phase)
+    sim.set_wall_velocity("lid", (0.0, 0.0, 0.0))
+
+
+def unload_slowly(ctx: RunContext, sim, bulk_impedance_pa_s_m: float, expected_modulus_pa: float,
+                  packing_height_m: float, record: LidRecord, cycle: int, phase: str) -> tuple[int, int]:
+    """Raise the lid until the stress has fallen by UNLOAD_RELOAD_FRACTION of its value, slowly (the speed whose
+    reversal jump 2 Z v is UNLOAD_RELOAD_JUMP_FRACTION of that drop, Z = sqrt(rho_b E) the bulk's impedance).
+
+    Returns the record's index range [start, end) of the unloading, its first sample the stress it starts from.
+    ``expected_modulus_pa`` sets the sampling (UNLOAD_RELOAD_SAMPLES over the travel it predicts)."""
+    area = ctx.preset.container_area_m2
+    start = len(record.lid_z_m)
+    top = record.add(sim, area, cycle)
+    drop = UNLOAD_RELOAD_FRACTION * top
+    speed = min(UNLOAD_RELOAD_JUMP_FRACTION * drop / (2.0 * bulk_impedance_pa_s_m), ctx.lid_speed_m_s)
+    travel = drop / expected_modulus_pa * packing_height_m
+    chunk = max(1, int(travel / UNLOAD_RELOAD_SAMPLES / (speed * sim.timestep_s)))
+    sim.set_wall_velocity("lid", (0.0, 0.0, speed))
+    t0 = sim.time_s
+    while True:
+        labsim.advance(ctx, sim, chunk)
+        stress = record.add(sim, area, cycle)
+        ctx.report(min((top - stress) / drop, 1.0), phase)
+        if stress <= top - drop:
+            break
+        if sim.time_s - t0 > UNLOAD_RELOAD_MAX_S:
+            ctx.warn(f"{phase}: the stress fell {(top - stress) / 1000:.3g} of {drop / 1000:.3g} kPa in "
+                     f"{UNLOAD_RELOAD_MAX_S} s; the unload-reload modulus is read from what was recorded")
+            break
+    sim.set_wall_velocity("lid", (0.0, 0.0, 0.0))
+    return start, len(record.lid_z_m)
 
 
 def precompress(ctx: RunContext, sim, packing_height_m: float, r_min_m: float, record: LidRecord) -> None:

@@ -105,6 +105,34 @@ def tangent_modulus_at(
     return float(np.mean(per_branch)) if per_branch else float("nan")
 
 
+# the first part of a small unloading's stress drop that unload_reload_modulus leaves out
+UNLOAD_RELOAD_SKIP_FRACTION = 0.2
+
+
+def unload_reload_modulus(strain: np.ndarray, normal_stress_pa: np.ndarray,
+                          skip_fraction: float = UNLOAD_RELOAD_SKIP_FRACTION) -> float:
+    """The unload-reload modulus E_ur (Pa) of one small unloading: the least-squares slope of stress on strain.
+
+    ``strain`` and ``normal_stress_pa`` run from the held stress down to the end of the unloading. The first
+    ``skip_fraction`` of the stress drop is left out: reversing the lid sends a stress jump of 2 sqrt(rho_b E) v
+    through the packing before the quasi-static response takes over, a step that would read as stiffness.
+    NaN when fewer than 3 samples remain (no value rather than a wrong one).
+
+    Why it is measured: on unloading the contacts stick, so the slope is the packing's elastic stiffness at that
+    stress on a fixed contact network; the loading E' also counts the network's growth and the contacts that
+    slide. A Hertzian contact's stiffness grows as F^(1/3), so at a fixed network E_ur ~ sigma^(1/3) for Hertz and
+    is flat for linear springs (Goddard 1990; sands' unload-reload moduli grow as sigma^0.5, Schanz et al. 1999);
+    the loading E' of a loose packing grows about as much under either law (docs/diagnosis.md, hertz_strong).
+    """
+    strain = np.asarray(strain, dtype=float)
+    stress = np.asarray(normal_stress_pa, dtype=float)
+    if strain.size < 3:
+        return float("nan")
+    top, bottom = float(stress[0]), float(np.min(stress))
+    kept = stress <= top - skip_fraction * (top - bottom)
+    return _slope(strain[kept], stress[kept]) if np.count_nonzero(kept) >= 3 else float("nan")
+
+
 @dataclass
 class CctReduction:
     """E' per cycle and its mean over cycles 2..N (Pa), k_b (N/m), and E' against stress (Pa).
@@ -119,6 +147,9 @@ class CctReduction:
     bulk_stiffness_n_per_m: float
     window_stress_mid_pa: list[float] = field(default_factory=list)
     window_modulus_pa: list[float] = field(default_factory=list)
+    # the unload-reload moduli at the requested stresses (unload_reload_modulus); a NaN one is left out of both
+    unload_reload_stress_pa: list[float] = field(default_factory=list)
+    unload_reload_modulus_pa: list[float] = field(default_factory=list)
 
 
 def reduce_cct(
