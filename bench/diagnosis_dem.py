@@ -277,7 +277,7 @@ SCENARIOS = {
     # the Hertzian world's 3.5x; the contact network grows under load), so these windows do not separate the laws
     # Session 29: the unload-reload modulus at the same stresses (options.cct_unload_reload_stresses_pa) reads the
     # contacts' stiffness on a fixed network, E_ur ~ sigma^(1/3) more for Hertz: single packings gave E_ur(60 kPa) /
-    # E_ur(3 kPa) 3.3-4.4 Hertzian against 1.5-2.3 linear, where the loading E' rose alike
+    # E_ur(3 kPa) 3.3-4.4 Hertzian against 1.5-2.3 linear (bench/unload_reload.py; the loading E' 3.2-3.9 and 2.4-3.1)
     "hertz_strong": Scenario("hertz_strong", "hertz_mindlin", None, 9, kind="strong",
                              options={"cct_window_stresses_pa": [3.0e3, 10.0e3, 30.0e3, 60.0e3],
                                       "cct_unload_reload_stresses_pa": [3.0e3, 10.0e3, 30.0e3, 60.0e3]}),
