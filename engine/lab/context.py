@@ -142,7 +142,10 @@ class RunContext:
                 raise SpecFieldError("options.moving_average_span", "must be odd")
             if self.cct_max_stress_pa <= 0:
                 raise SpecFieldError("options.cct_max_stress_pa", "must be positive")
-            for name in ("cct_window_stresses_pa", "cct_unload_reload_stresses_pa"):
+            from engine.lab.registry import get as lab_test
+
+            # the CCT reports its stress-conditioned quantities only below the peak it loads to
+            for name in sorted({q.stress_option for q in lab_test("cct").quantities if q.stress_option}):
                 stresses = getattr(o, name)
                 if stresses and max(stresses) >= self.cct_max_stress_pa:
                     raise SpecFieldError(

@@ -127,3 +127,18 @@ def test_a_layer_of_hertzian_contacts_unloads_stiffer_as_the_cube_root_of_its_st
         moduli.append(modulus)
     # a factor 8 in stress is a factor 8^(1/3) = 2 in the contacts' stiffness (the weight's share aside)
     assert moduli[1] / moduli[0] == pytest.approx(2.0, rel=0.03)
+
+
+def test_unload_reload_stresses_are_refused_naming_the_field():
+    from pydantic import ValidationError
+
+    from engine.lab.errors import SpecFieldError
+
+    with pytest.raises(ValidationError, match="strictly increasing"):
+        JobSpec(test="cct", options={"cct_unload_reload_stresses_pa": [30e3, 10e3]})
+    with pytest.raises(ValidationError, match="no unload-reload"):
+        JobSpec(test="cct", options={"cct_unload_reload_stresses_pa": []})
+    # above the CCT's peak (67 kPa on the screening box) nothing could be held there
+    with pytest.raises(SpecFieldError) as refused:
+        RunContext.from_spec(JobSpec(test="cct", options={"cct_unload_reload_stresses_pa": [1.0e5]})).validate()
+    assert refused.value.field == "options.cct_unload_reload_stresses_pa"

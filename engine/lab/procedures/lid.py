@@ -6,9 +6,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from engine.config import ServoSpec
 from engine.lab import sim as labsim
 from engine.lab.context import RunContext
-from engine.config import ServoSpec
 from engine.lab.stops import DST_STABILISE_MAX_S, LID_MAX_TRAVEL_FRACTION, UNLOAD_RELOAD_MAX_S
 
 # lid travel per control step; the stress overshoot at a turning point is k_b times this
@@ -126,7 +126,6 @@ def stabilise(ctx: RunContext, sim, target_pa: float, phase: str, min_time_s=0.0
         if elapsed >= max_time_s:
             ctx.warn(f"{phase}: not stable after {max_time_s} s (stress {stress / 1000:.2f} kPa)")
             return
-
 
 
 def hold_stress(ctx: RunContext, sim, target_pa: float, max_speed_m_s: float, phase: str) -> None:
