@@ -267,6 +267,12 @@ def test_dem_result_curves_one_quantity_per_axis(page, service, shots):
     """A screening battery as the DEM engine recorded it (fill, CCT, DST at four loads, angle of repose),
     replayed: the views engineers read, each axis one quantity with its unit."""
     result = json.loads(gzip.decompress(RECORDED_DEM.read_bytes()))
+    # the battery was recorded before the unload-reload option existed: its curve added as 3 x the loading E'
+    # at the window stresses (the Hardening Soil model's E_ur = 3 E_50, Schanz et al. 1999)
+    windows = result["curves"]["cct_modulus_vs_stress"]
+    result["curves"]["cct_unload_reload_modulus_vs_stress"] = {
+        "normal_stress_pa": windows["normal_stress_pa"],
+        "unload_reload_modulus_pa": [3.0 * e for e in windows["confined_modulus_pa"]]}
     job_id = _insert_job(service, status="succeeded", test="battery", spec=result.pop("spec"), result=result,
                          engine_version=result["provenance"]["engine_version"], wall_time_s=result["provenance"]["wall_time_s"])
     open_view(page, service, f"#/jobs/{job_id}")
@@ -276,6 +282,7 @@ def test_dem_result_curves_one_quantity_per_axis(page, service, shots):
         "CCT: stress-strain loops": ("normal strain (-)", "normal stress (kPa)"),
         "CCT: confined modulus E' per cycle": ("cycle", "E' (MPa)"),
         "CCT: E' per stress window": ("normal stress (kPa)", "E' (MPa)"),
+        "CCT: unload-reload modulus against stress": ("normal stress (kPa)", "modulus (MPa)"),
         "DST: shear stress": ("shear displacement (mm)", "shear stress (kPa)"),
         "DST: lid rise (dilation)": ("shear displacement (mm)", "lid rise (mm)"),
         "DST: Mohr-Coulomb envelope": ("normal stress (kPa)", "shear stress (kPa)"),
@@ -288,6 +295,10 @@ def test_dem_result_curves_one_quantity_per_axis(page, service, shots):
         assert y_name in text, (title, text)
     loops = page.locator(".charts [aria-label='CCT: stress-strain loops']").inner_text()
     assert "cycle 1" in loops and "cycle 2" in loops
+    moduli = page.locator(".charts [aria-label='CCT: unload-reload modulus against stress']").inner_text()
+    assert "E_ur (unload-reload)" in moduli and "E' (loading, per window)" in moduli
+    # drawn by its own view, not also by the fallback that charts unknown curves column by column
+    assert page.locator(".charts [aria-label^='cct_unload_reload_modulus_vs_stress']").count() == 0
     dst = page.locator(".charts [aria-label='DST: shear stress']").inner_text()
     assert len(re.findall(r"σn [\d.]+ kPa", dst)) == 4
     page.locator(".charts").screenshot(path=str(shots / "job-dem-curves.png"))

@@ -1,8 +1,9 @@
 // A job's curves as engineers read them: one quantity per axis, units on the axes.
-// CCT: stress-strain loops per cycle, E' per cycle and per stress window; DST: shear stress and lid
-// rise against shear displacement per load, and the Mohr-Coulomb envelope; fill settling; the
-// angle-of-repose profile per sector. Curves this module does not know are drawn one column per
-// chart against the first column, so nothing stored is hidden.
+// CCT: stress-strain loops per cycle, E' per cycle and per stress window, the unload-reload
+// modulus against stress; DST: shear stress and lid rise against shear displacement per load, and
+// the Mohr-Coulomb envelope; fill settling; the angle-of-repose profile per sector. Curves this
+// module does not know are drawn one column per chart against the first column, so nothing stored
+// is hidden.
 import { fmt, h } from "./core.js";
 import { axis, chart } from "./plot.js";
 
@@ -61,6 +62,16 @@ export function curveViews(curves, properties = []) {
   if (curves.cct_modulus_vs_stress) {
     const c = take("cct_modulus_vs_stress");
     out.push(xy("CCT: E' per stress window", "normal stress (kPa)", "E' (MPa)", [line("E'", pairs(scale(c.normal_stress_pa, KPA), scale(c.confined_modulus_pa, MPA)), { showSymbol: true })]));
+  }
+  if (curves.cct_unload_reload_modulus_vs_stress) {
+    // log-log, so a power law E ~ sigma^n is a straight line whose slope reads the contact law
+    // (n ~ 1/3 more for Hertz than linear springs); the loading E' beside it for the ratio E_ur / E'
+    const ur = take("cct_unload_reload_modulus_vs_stress");
+    const series = [line("E_ur (unload-reload)", pairs(scale(ur.normal_stress_pa, KPA), scale(ur.unload_reload_modulus_pa, MPA)), { showSymbol: true })];
+    const win = curves.cct_modulus_vs_stress;
+    if (win) series.push(line("E' (loading, per window)", pairs(scale(win.normal_stress_pa, KPA), scale(win.confined_modulus_pa, MPA)), { showSymbol: true, lineStyle: { width: 1.4, type: "dashed" } }));
+    out.push(chart({ title: { text: "CCT: unload-reload modulus against stress" }, legend, grid, tooltip: { trigger: "axis" },
+      xAxis: axis("normal stress (kPa)", { type: "log" }), yAxis: axis("modulus (MPa)", { type: "log" }), series }));
   }
   const dst = Object.keys(curves).filter((k) => /^dst_\d+$/.test(k)).sort((a, b) => Number(a.slice(4)) - Number(b.slice(4)));
   if (dst.length) {
