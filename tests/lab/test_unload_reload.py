@@ -24,7 +24,7 @@ from engine.lab.context import RunContext
 from engine.lab.geometry import lid_wall, shear_box_walls
 from engine.lab.procedures.lid import (UNLOAD_RELOAD_FRACTION, LidRecord, hold_stress, load_to, place_lid,
                                        unload_slowly)
-from engine.lab.reducers.cct import UNLOAD_RELOAD_SKIP_FRACTION, unload_reload_modulus
+from engine.lab.reducers.cct import UNLOAD_RELOAD_SKIP_FRACTION, reduce_unload_reload, unload_reload_modulus
 from engine.lab.spec import JobSpec
 from engine.particles.generation import Packing
 from engine.particles.templates import sphere
@@ -47,6 +47,18 @@ def test_the_reducer_reads_the_slope_past_the_reversal_jump():
     assert unload_reload_modulus(strain, stress) == pytest.approx(modulus, rel=1e-9)
     assert unload_reload_modulus(strain, stress, skip_fraction=0.0) > 1.05 * modulus
     assert math.isnan(unload_reload_modulus(strain[:2], stress[:2]))
+
+
+def test_a_stress_whose_unloading_gave_no_modulus_is_left_out_of_both_lists():
+    """Two held stresses in one record: the first unloading linear at 12 MPa, the second two samples long (NaN):
+    only the first stress and its modulus are reported, paired."""
+    modulus = 12.0e6
+    first = 20.0e3 - np.linspace(0.0, 2.0e3, 30)
+    stress = np.concatenate([first, [40.0e3, 39.0e3]])
+    strain = np.concatenate([2.0e-3 - (20.0e3 - first) / modulus, [3.0e-3, 2.9e-3]])
+    out = reduce_unload_reload(strain, stress, [20.0e3, 40.0e3], [(0, 30), (30, 32)])
+    assert out.stress_pa == [20.0e3]
+    assert out.modulus_pa == [pytest.approx(modulus, rel=1e-9)]
 
 
 def _layer_run(parameters: dict, stresses_pa: list[float]):
@@ -142,3 +154,27 @@ def test_unload_reload_stresses_are_refused_naming_the_field():
     with pytest.raises(SpecFieldError) as refused:
         RunContext.from_spec(JobSpec(test="cct", options={"cct_unload_reload_stresses_pa": [1.0e5]})).validate()
     assert refused.value.field == "options.cct_unload_reload_stresses_pa"
+
+
+@pytest.mark.slow
+def test_a_cct_packing_asked_for_unload_reload_reports_it_without_changing_its_cycles():
+    """A screening CCT on a poured packing, asked for E_ur at 10 and 40 kPa: a property and a curve point at exactly
+    those stresses, each stiffer than the loading E' at the same stress (unloading is elastic, loading also slides
+    and rearranges contacts: Schanz et al. 1999), and the cycles' E' the same as without the option (the loops
+    come after the cycles are reduced; same seed, same packing)."""
+    from engine.lab.battery import run_job
+
+    stresses = [10.0e3, 40.0e3]
+    parameters = {"particle_density_kg_m3": DENSITY_KG_M3, "particle_stiffness_n_per_m": KP_N_M,
+                  "friction_pp": 0.6, "friction_pw": 0.5}
+    options = {"cct_window_stresses_pa": stresses}
+    plain = run_job(JobSpec(test="cct", fidelity="screening", seed=2, parameters=parameters, options=options))
+    asked = run_job(JobSpec(test="cct", fidelity="screening", seed=2, parameters=parameters,
+                            options={**options, "cct_unload_reload_stresses_pa": stresses}))
+    assert asked.value("cct", "confined_modulus_pa") == plain.value("cct", "confined_modulus_pa")
+    for stress in stresses:
+        loading = asked.value("cct", "confined_modulus_pa", normal_stress_pa=stress)
+        assert loading == plain.value("cct", "confined_modulus_pa", normal_stress_pa=stress)
+        assert asked.value("cct", "unload_reload_modulus_pa", normal_stress_pa=stress) > loading
+    assert asked.curves["cct_unload_reload_modulus_vs_stress"]["normal_stress_pa"] == stresses
+    assert "cct_unload_reload_modulus_vs_stress" not in plain.curves

@@ -28,8 +28,9 @@ def _run(bench: Bench, lo: float, hi: float) -> Run:
              TEST.property("bulk_stiffness_n_per_m", red.bulk_stiffness_n_per_m)]
     props += [TEST.property("confined_modulus_pa", modulus, normal_stress_pa=mid)
               for mid, modulus in zip(red.window_stress_mid_pa, red.window_modulus_pa)]
+    ur = cct.unload_reload
     props += [TEST.property("unload_reload_modulus_pa", modulus, normal_stress_pa=stress)
-              for stress, modulus in zip(red.unload_reload_stress_pa, red.unload_reload_modulus_pa)]
+              for stress, modulus in zip(ur.stress_pa, ur.modulus_pa)]
     curves = {
         "cct": {"time_s": cct.record.time_s, "lid_z_m": cct.record.lid_z_m, "normal_strain": cct.strain.tolist(),
                 "normal_stress_pa": cct.record.normal_stress_pa, "cycle": cct.record.cycle},
@@ -38,9 +39,9 @@ def _run(bench: Bench, lo: float, hi: float) -> Run:
         "cct_modulus_per_cycle": {"cycle": [float(i + 1) for i in range(len(red.modulus_per_cycle_pa))],
                                   "confined_modulus_pa": red.modulus_per_cycle_pa},
     }
-    if red.unload_reload_stress_pa:
-        curves["cct_unload_reload_modulus_vs_stress"] = {"normal_stress_pa": red.unload_reload_stress_pa,
-                                                         "unload_reload_modulus_pa": red.unload_reload_modulus_pa}
+    if ur.stress_pa:
+        curves["cct_unload_reload_modulus_vs_stress"] = {"normal_stress_pa": ur.stress_pa,
+                                                         "unload_reload_modulus_pa": ur.modulus_pa}
     return Run(cct, props, curves)
 
 

@@ -2,7 +2,7 @@
 unload-reload loop at given stresses after them (``unload_reload``)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -10,7 +10,7 @@ from engine.lab import sim as labsim
 from engine.lab.context import RunContext
 from engine.lab.procedures.fill import FillOutcome, smallest_radius_m
 from engine.lab.procedures.lid import LidRecord, hold_stress, load_to, precompress, unload, unload_slowly
-from engine.lab.reducers.cct import CctReduction, reduce_cct, unload_reload_modulus
+from engine.lab.reducers.cct import CctReduction, UnloadReload, reduce_cct, reduce_unload_reload
 from engine.lab.stops import LID_MAX_TRAVEL_FRACTION
 
 
@@ -20,6 +20,7 @@ class CctOutcome:
     record: LidRecord
     strain: np.ndarray
     precompressed: dict  # checkpoint after cycle 1: the DST's starting point
+    unload_reload: UnloadReload = field(default_factory=UnloadReload)  # empty unless options.cct_unload_reload_stresses_pa asked for it
 
 
 def run_cct(ctx: RunContext, fill: FillOutcome) -> CctOutcome:
@@ -43,16 +44,12 @@ def run_cct(ctx: RunContext, fill: FillOutcome) -> CctOutcome:
     strain = (z_contact - z) / height
     reduction = reduce_cct(strain, stress, ctx.preset.container_area_m2, height,
                            window_stresses_pa=ctx.spec.options.cct_window_stresses_pa)
+    moduli = UnloadReload()
     if loops:
         ranges = unload_reload(ctx, sim, height, record, ctx.cct_cycles + 1, loops, reduction.confined_modulus_pa)
         strain = np.concatenate([strain, (z_contact - np.asarray(record.lid_z_m[cycles_end:])) / height])
-        stress = np.asarray(record.normal_stress_pa)
-        for target, (a, b) in zip(loops, ranges):
-            modulus = unload_reload_modulus(strain[a:b], stress[a:b])
-            if np.isfinite(modulus):
-                reduction.unload_reload_stress_pa.append(float(target))
-                reduction.unload_reload_modulus_pa.append(modulus)
-    return CctOutcome(reduction, record, strain, precompressed)
+        moduli = reduce_unload_reload(strain, np.asarray(record.normal_stress_pa), loops, ranges)
+    return CctOutcome(reduction, record, strain, precompressed, moduli)
 
 
 def unload_reload(ctx: RunContext, sim, height_m: float, record: LidRecord, cycle: int, stresses_pa: list[float],

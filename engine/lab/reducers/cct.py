@@ -147,9 +147,28 @@ class CctReduction:
     bulk_stiffness_n_per_m: float
     window_stress_mid_pa: list[float] = field(default_factory=list)
     window_modulus_pa: list[float] = field(default_factory=list)
-    # the unload-reload moduli at the requested stresses (unload_reload_modulus); a NaN one is left out of both
-    unload_reload_stress_pa: list[float] = field(default_factory=list)
-    unload_reload_modulus_pa: list[float] = field(default_factory=list)
+
+
+@dataclass
+class UnloadReload:
+    """The unload-reload moduli E_ur (Pa) at the held stresses (Pa); a stress whose unloading gave no modulus
+    (``unload_reload_modulus`` NaN) is left out of both lists."""
+
+    stress_pa: list[float] = field(default_factory=list)
+    modulus_pa: list[float] = field(default_factory=list)
+
+
+def reduce_unload_reload(strain: np.ndarray, normal_stress_pa: np.ndarray, stresses_pa: list[float],
+                         ranges: list[tuple[int, int]]) -> UnloadReload:
+    """E_ur per held stress from the lid's record: ``ranges`` are the record's index ranges of the small
+    unloadings, one per stress of ``stresses_pa``."""
+    out = UnloadReload()
+    for target, (a, b) in zip(stresses_pa, ranges):
+        modulus = unload_reload_modulus(strain[a:b], normal_stress_pa[a:b])
+        if np.isfinite(modulus):
+            out.stress_pa.append(float(target))
+            out.modulus_pa.append(modulus)
+    return out
 
 
 def reduce_cct(
