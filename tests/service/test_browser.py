@@ -503,6 +503,41 @@ def test_missing_pages_say_so_and_clear_the_previous_one(page, service):
     expect_text(page, "h2", "Not found")
 
 
+def test_unload_reload_targets_are_drawn_beside_the_model_on_the_stiffness_panel(page, service, shots):
+    """A material measured for its unload-reload modulus at two stresses: the campaign's "Across conditions" panel
+    draws E_ur measured and modelled on the log-log stiffness axes (where the contact law shows). The measurements:
+    the thesis aggregate's E' 8.69 MPa (Table 4.5) times the Hardening Soil model's E_ur / E_50 = 3, growing as
+    sigma^0.5 from 30 kPa (Schanz et al. 1999's sands)."""
+    import time
+
+    from conftest_s2 import campaign_body
+
+    stresses = [10.0e3, 30.0e3]
+    materials = service.api("GET", "/materials", params={"limit": 200}).json()["items"]
+    thesis = next(m for m in materials if m["name"] == "thesis-coarse-aggregate")
+    copy = service.api("POST", f"/materials/{thesis['id']}/copy", json={"name": "aggregate with E_ur"}).json()
+    for stress in stresses:
+        modulus = 3.0 * 8.69e6 * (stress / 30.0e3) ** 0.5
+        assert service.api("POST", f"/materials/{copy['id']}/measurements", json={
+            "test": "cct", "quantity": "unload_reload_modulus_pa", "values": [modulus], "unit": "Pa",
+            "condition": {"normal_stress_pa": stress}}).status_code == 201
+    body = campaign_body(copy["id"], name="unload-reload")
+    body["targets"] += [{"test": "cct", "quantity": "unload_reload_modulus_pa", "condition": {"normal_stress_pa": s}}
+                        for s in stresses]
+    cid = service.api("POST", "/campaigns", json=body).json()["id"]
+    assert service.api("POST", f"/campaigns/{cid}/start").status_code < 300
+    deadline = time.monotonic() + TIMEOUT_MS / 1000
+    while service.api("GET", f"/campaigns/{cid}").json()["status"] != "completed":
+        assert time.monotonic() < deadline, "the campaign did not complete"
+        time.sleep(0.5)
+    open_view(page, service, f"#/campaigns/{cid}")
+    panel = "[aria-label='modulus against stress']"
+    expect_text(page, panel, "Stiffness: E_ur against σn \\(log-log\\)")
+    text = page.locator(panel).inner_text()
+    assert "E_ur measured" in text and "E_ur model" in text and "modulus (MPa)" in text, text
+    section_shot(page, shots, "Across conditions", "campaign-conditions-unload-reload")
+
+
 def test_no_physical_match_page_offers_no_add_button(page, service, shots):
     """Issue 33: under "Diagnosis: no physical match" the page offered an enabled "Add Hertz ..." button
     for a significant effect. Now the table offers none; only an override, styled apart, that asks for

@@ -3,7 +3,8 @@
 // battery at the optimum: shear stress, dilatancy and E' per load, with its Mohr-Coulomb line, which
 // the report's per-target mean does not have); the measured side is the targets.
 //   shear stress against normal stress, with the measured and the modelled Mohr-Coulomb lines;
-//   log E' against log normal stress; dilatancy angle against normal stress.
+//   log E' (and the unload-reload E_ur where measured) against log normal stress; dilatancy angle
+//   against normal stress.
 import { fmt, h } from "./core.js";
 import { axis, band, chart } from "./plot.js";
 
@@ -35,15 +36,24 @@ function shearPanel(targets, props) {
   { height: 300, label: "shear against normal stress" });
 }
 
+// E' and, where measured, the unload-reload modulus E_ur: on log-log axes a power law E ~ σ^n is a line,
+// and a model whose E_ur rises less steeply than the measured one misses the contact law (Hertz, n + 1/3)
 function modulusPanel(targets, props) {
-  const model = perLoad(props, "cct", "confined_modulus_pa");
-  const measured = perLoad(targets, "cct", "confined_modulus_pa");
-  if (model.length < 2 && measured.length < 2) return null;
-  const series = [];
-  if (measured.length) series.push({ type: "line", name: "measured", data: measured.map((r) => [sigmaOf(r) * KPA, r.measured * MPA]), symbol: "diamond", symbolSize: 10, itemStyle: { color: "#101828" }, lineStyle: { type: "dashed" } });
-  if (model.length) series.push({ type: "line", name: "model", data: model.map((p) => [sigmaOf(p) * KPA, p.value * MPA]), symbolSize: 8, itemStyle: { color: "#1f5fa8" } });
-  return chart({ title: { text: "Stiffness: E' against σn (log-log)" }, legend: { top: 20, left: 4 }, grid: { left: 60, right: 14, top: 56, bottom: 44 },
-    xAxis: axis("normal stress σn (kPa)", { type: "log" }), yAxis: axis("confined modulus E' (MPa)", { type: "log" }), series },
+  const kinds = [["confined_modulus_pa", "E'", "circle"], ["unload_reload_modulus_pa", "E_ur", "triangle"]];
+  const series = [], shown = [];
+  for (const [quantity, label, symbol] of kinds) {
+    const model = perLoad(props, "cct", quantity);
+    const measured = perLoad(targets, "cct", quantity);
+    if (model.length < 2 && measured.length < 2) continue;
+    shown.push(label);
+    if (measured.length) series.push({ type: "line", name: `${label} measured`, data: measured.map((r) => [sigmaOf(r) * KPA, r.measured * MPA]), symbol: "diamond", symbolSize: 10, itemStyle: { color: "#101828" }, lineStyle: { type: "dashed" } });
+    if (model.length) series.push({ type: "line", name: `${label} model`, data: model.map((p) => [sigmaOf(p) * KPA, p.value * MPA]), symbol, symbolSize: 8, itemStyle: { color: label === "E'" ? "#1f5fa8" : "#dc6803" } });
+  }
+  if (!shown.length) return null;
+  const onlyLoading = shown.length === 1 && shown[0] === "E'";
+  return chart({ title: { text: `Stiffness: ${shown.join(" and ")} against σn (log-log)` },
+    legend: { top: 20, left: 4 }, grid: { left: 60, right: 14, top: 56, bottom: 44 },
+    xAxis: axis("normal stress σn (kPa)", { type: "log" }), yAxis: axis(onlyLoading ? "confined modulus E' (MPa)" : "modulus (MPa)", { type: "log" }), series },
   { height: 300, label: "modulus against stress" });
 }
 
