@@ -112,7 +112,8 @@ MEASURING_SEED_BASE = 910000  # measuring packing k (1, 2, ...) runs at seed MEA
 MEASURING_PACKINGS = 3
 # one effect tried, and when it is rejected the diagnosis's next candidate
 MAX_ITERATIONS = 3
-INDICATED, INCONCLUSIVE = DiagnosisVerdict.INDICATED.value, DiagnosisVerdict.INCONCLUSIVE.value
+INDICATED, INCONCLUSIVE, NO_MISFIT = (DiagnosisVerdict.INDICATED.value, DiagnosisVerdict.INCONCLUSIVE.value,
+                                      DiagnosisVerdict.NO_MISFIT.value)
 TRUTH_FLOOR_FACTOR = 1.1  # issue 33: the RMS after adding an effect within 1.1 x the truth's own
 DENSITY_PRIOR_BIAS = 0.02
 PRIOR_STREAM = 20261124  # the priors' scatter: a stream of its own, so the measurements do not change
@@ -497,6 +498,9 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
             continue
         diagnosis = response.json()
         out["diagnosis_verdicts"].append(diagnosis.get("verdict"))
+        # the candidates the last diagnosis could not have seen (calibration.unseen), and what would see them
+        out["unseen"] = [u["effect"] for u in diagnosis.get("unseen", [])]
+        out["measure_next"] = diagnosis.get("measure_next", [])
         if h["number"] == 1:
             out["ranking"] = [r["effect"] for r in diagnosis["ranking"]]
             out["alias_groups"] = [g["effects"] for g in diagnosis.get("alias_groups", [])]
@@ -709,7 +713,11 @@ def weak_end_right(o: dict) -> bool:
         return o["effect"] in o["undistinguished"]
     if o.get("added"):
         return o["added"] == o["effect"]
-    return "inconclusive" in (o.get("stop_reason") or "") or bool(
+    # "no misfit" that names the hidden effect as one these measurements could not see, with what would see it,
+    # is the honest inconclusive about that effect (calibration.unseen)
+    unseen = bool(o.get("diagnosis_verdicts") and o["diagnosis_verdicts"][-1] == NO_MISFIT
+                  and o["effect"] in (o.get("unseen") or []) and o.get("measure_next"))
+    return unseen or "inconclusive" in (o.get("stop_reason") or "") or bool(
         o.get("diagnosis_verdicts") and o["diagnosis_verdicts"][-1] == INCONCLUSIVE)
 
 

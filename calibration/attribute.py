@@ -24,6 +24,7 @@ import numpy as np
 from engine.effects.base import FINGERPRINT_COLUMNS, Candidate
 
 from . import stats
+from . import unseen as unseen_mod
 from .keys import find
 from .localise import ALPHA, Localisation
 from .vocabulary import DiagnosisVerdict
@@ -162,6 +163,7 @@ class Attribution:
     candidates: dict[str, Candidate]
     directed: stats.DirectedTest | None = None   # the max-T score test over the candidates
     adequacy_p: float | None = None               # Holm over the omnibus lack of fit and ``directed``
+    unseen: list[dict] = field(default_factory=list)  # candidates these measurements could not see (unseen.py)
 
     @property
     def fails(self) -> bool:
@@ -183,21 +185,12 @@ class Attribution:
                 "indicated": self.indicated(),
                 "alias_groups": self.alias_groups, "fingerprints": self.fingerprints,
                 "measure_next": self.measure_next, "alpha": ALPHA, "min_explained": MIN_EXPLAINED,
-                "critical_lm": _critical_lm(len(self.ranking)),
+                "critical_lm": unseen_mod.critical_lm(ALPHA, len(self.ranking)), "unseen": self.unseen,
                 "directed": None if self.directed is None else self.directed.to_dict(),
                 "adequacy": {"p_value": self.adequacy_p, "fails": self.fails,
                              "about": "Holm over the omnibus lack of fit and the directed test (the largest "
                                       "candidate score against its simulated null): the model misses the "
                                       "measurements when either p is below alpha / 2"}}
-
-
-def _critical_lm(k: int) -> float:
-    """LM a single effect needs to clear Holm's first (strictest) step among k one-sided tests."""
-    from scipy import stats as sps
-
-    if k == 0:
-        return math.nan
-    return float(sps.chi2.isf(2.0 * ALPHA / k, 1))
 
 
 def _plausible(candidate: Candidate, strength: float | None, fraction: float | None) -> bool:
@@ -344,8 +337,13 @@ def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[
                     "effects": {c.name: {col: c.fingerprint.get(col, "0") for col in FINGERPRINT_COLUMNS}
                                 for c in candidates.values()}}
     verdict, message, measure_next = _verdict(loc, ranked, groups, labels, r, M, room)
+    blind = unseen_mod.unseen(signatures, M, ALPHA, set(labels))
+    if verdict == DiagnosisVerdict.NO_MISFIT and blind:
+        # "no misfit" does not speak for an effect the measurements could not have seen: say which, and what would
+        message += "; " + unseen_mod.message(blind)
+        measure_next = list(dict.fromkeys(m for row in blind for m in row["measure"]))
     return Attribution(ranked, groups, fingerprints, verdict, message, measure_next, candidates, directed,
-                       loc.adequacy_p)
+                       loc.adequacy_p, blind)
 
 
 def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels, r, M, room=((), 0.0)):

@@ -77,6 +77,10 @@ class Candidate:
     # the closed-form stand-in's term this strength feeds (calibration.standin.TERMS), for a candidate
     # that is a micro parameter rather than a contact effect (an effect declares its own: Effect.standin)
     standin_term: str | None = None
+    # (test, quantity, how) of the measurements that would show the effect where the measured ones cannot
+    # (calibration.unseen): named to the user when a "no misfit" could not have seen it; validated against
+    # the lab's registry (tests/calibration/test_unseen.py)
+    revealed_by: tuple[tuple[str, str, str], ...] = ()
 
     def applies_to(self, fidelity: str | None) -> bool:
         return fidelity is None or self.fidelities is None or fidelity in self.fidelities

@@ -66,6 +66,9 @@ CANDIDATE = Candidate(
     physics="Moisture and fines bind grains: the Mohr-Coulomb line gains an intercept c > 0 while its "
             "slope stays, the angle of repose rises steeply. Calibration raises phi to compensate, so "
             "the shear-stress residual falls with normal stress (+ at the lowest load, - at the highest).",
+    # the intercept is the largest share of the strength at the lowest loads
+    revealed_by=(("dst", "residual_shear_stress_pa", "at low normal loads (the Mohr-Coulomb intercept)"),
+                 ("aor", "angle_of_repose_deg", "")),
 )
 
 EFFECT = Effect(

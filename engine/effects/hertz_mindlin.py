@@ -86,7 +86,13 @@ CANDIDATE = Candidate(
     physics="A Hertzian contact stiffens as it is loaded, so the confined modulus grows with stress "
             "(E' ~ sigma^(1/3) in effective-medium theory, ~sigma^(1/2) measured, Makse et al. 2004) "
             "where a linear spring gives a flat E'. With the level fitted through kp the E' residual is "
-            "- at the lowest stress and + at the highest; strength, dilatancy and the pile do not change.",
+            "- at the lowest stress and + at the highest; strength, dilatancy and the pile do not change. "
+            "In loose packings the loading E' also grows with the contact network under either law, so "
+            "the unloading (unload-reload) modulus, read on a fixed network, is where the law shows.",
+    # measured on tier B's packings (docs/diagnosis.md, hertz_strong): E' windows from 3 to 60 kPa left the
+    # Hertzian world within the linear model's noise; E_ur at the same stresses rejected it (p 0.0032)
+    revealed_by=(("cct", "unload_reload_modulus_pa", "at several normal stresses, e.g. 3-60 kPa "
+                  "(options.cct_unload_reload_stresses_pa)"),),
 )
 
 EFFECT = Effect(

@@ -43,6 +43,7 @@ CANDIDATE = Candidate(
             "force rise and the packing loosens. Round spheres without it saturate near phi 40-45 deg "
             "however high the sliding friction (Estrada et al. 2008), so mu_pp calibrates to its upper "
             "bound and the friction angle stays out of reach.",
+    revealed_by=(("dst", "residual_shear_stress_pa", "at each normal load"), ("aor", "angle_of_repose_deg", "")),
 )
 
 EFFECT = Effect(

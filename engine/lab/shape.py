@@ -44,6 +44,7 @@ CANDIDATE = Candidate(
             "angle, dilatancy (lid rise), angle of repose and pull-out rise and the packing loosens. "
             "It looks like rolling resistance (Estrada et al. 2011) but with a larger dilatancy "
             "deficit; the two form an alias group that dilatancy per load separates.",
+    revealed_by=(("dst", "dilatancy_angle_deg", "at each normal load"), ("aor", "angle_of_repose_deg", "")),
 )
 
 # two equal spheres that still touch are at most twice as long as they are wide

@@ -33,7 +33,8 @@ def _parameters(effect) -> list[dict[str, Any]]:
 def _candidate(c) -> dict[str, Any]:
     return {"name": c.name, "title": c.title, "factor": c.factor, "unit": c.unit,
             "plausible_range": list(c.plausible_range), "step": c.step, "switch": c.is_switch,
-            "off_value": c.off_value, "fingerprint": dict(c.fingerprint), "physics": c.physics}
+            "off_value": c.off_value, "fingerprint": dict(c.fingerprint), "physics": c.physics,
+            "revealed_by": [{"test": t, "quantity": q, "how": how} for t, q, how in c.revealed_by]}
 
 
 @router.get("/effects", **typed(Effects),

@@ -92,21 +92,26 @@ def _bench(name):
         sys.path.remove(str(ROOT / "bench"))
 
 
-@pytest.mark.parametrize("added, verdicts, stop, right, undistinguished", [
-    ("rolling_epsd2", ["effect indicated", "no misfit"], "lack of fit passes", True, None),   # the truth added
-    ("particle_shape", ["effect indicated"], "lack of fit passes", False, None),             # a wrong effect kept
-    (None, ["inconclusive"], "diagnosis: inconclusive", True, None),                          # honest "inconclusive"
-    (None, ["no physical match"], "diagnosis: no physical match", False, None),               # neither
+@pytest.mark.parametrize("added, verdicts, stop, right, undistinguished, unseen, measure_next", [
+    ("rolling_epsd2", ["effect indicated", "no misfit"], "lack of fit passes", True, None, [], []),   # the truth added
+    ("particle_shape", ["effect indicated"], "lack of fit passes", False, None, [], []),  # a wrong effect kept
+    (None, ["inconclusive"], "diagnosis: inconclusive", True, None, [], []),  # honest "inconclusive"
+    (None, ["no physical match"], "diagnosis: no physical match", False, None, [], []),  # neither
     # an alias refit that could not tell the truth from its alias: the leader shown, both named
     ("particle_shape", ["effect indicated"], "lack of fit passes; undistinguished: ...", True,
-     ["particle_shape", "rolling_epsd2"]),
+     ["particle_shape", "rolling_epsd2"], [], []),
     ("particle_shape", ["effect indicated"], "lack of fit passes; undistinguished: ...", False,
-     ["cohesion_adhesive", "particle_shape"]),                                                  # the truth not in it
+     ["cohesion_adhesive", "particle_shape"], [], []),  # the truth not in it
+    # "no misfit" naming the truth as unseen, with what would see it: the honest inconclusive about it
+    (None, ["no misfit"], "lack of fit passes", True, None, ["rolling_epsd2"], ["aor angle_of_repose_deg"]),
+    (None, ["no misfit"], "lack of fit passes", False, None, ["particle_shape"], ["aor angle_of_repose_deg"]),
+    (None, [], "lack of fit passes", False, None, [], []),  # never diagnosed
 ])
-def test_a_weak_scenario_ends_with_its_effect_or_inconclusive(added, verdicts, stop, right, undistinguished):
+def test_a_weak_scenario_ends_with_its_effect_or_inconclusive(added, verdicts, stop, right, undistinguished, unseen,
+                                                              measure_next):
     """Issue 33: today's weak scenarios end with the true effect added or "inconclusive", never a wrong effect kept."""
     row = {"effect": "rolling_epsd2", "kind": "weak", "added": added, "diagnosis_verdicts": verdicts, "stop_reason": stop,
-           "undistinguished": undistinguished}
+           "undistinguished": undistinguished, "unseen": unseen, "measure_next": measure_next}
     assert _bench("diagnosis_dem").weak_end_right(row) is right
 
 

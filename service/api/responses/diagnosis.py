@@ -35,6 +35,21 @@ class RankedEffect(Out):
         "projected signature has no length (the baseline parameters absorb all of it), so there is no score"))
 
 
+class UnseenEffect(Out):
+    """A candidate these measurements could not see at any plausible strength (calibration.unseen)."""
+
+    effect: str
+    title: str
+    lm_at_top: float = Field(description="the score test's noncentrality at the top of its plausible range "
+                                         "(the full switch for a law that replaces the baseline's)")
+    lm_needed: float = Field(description="the noncentrality at which Holm's first step flags it with `power`")
+    power: float
+    smallest_seen: float | None = Field(description="the smallest strength that would be seen, in its unit "
+                                                    "(a switch: the fraction of it); null: none would")
+    signature_noise: float | None = Field(description="share of its probe's projected length that is noise")
+    measure: list[str] = Field(description="what would show it")
+
+
 class Separator(Out):
     effects: list[str] = Field(description="the two effects")
     cos: float = Field(description="cosine of their projected signatures")
@@ -92,6 +107,9 @@ class Diagnosis(Out):
     alpha: float
     min_explained: float = Field(description="share of the misfit an indicated effect must explain")
     critical_lm: float | None = Field(description="LM a single effect needs to clear Holm's first step")
+    unseen: list[UnseenEffect] = Field(
+        default_factory=list, description="candidates these measurements could not see at any plausible strength: "
+                                          "a 'no misfit' does not speak for or against them")
     directed: DirectedTest | None
     adequacy: DiagnosisAdequacy
     lack_of_fit: LackOfFit = Field(description="over every battery at the optimum together")

@@ -19,6 +19,12 @@ class EffectParameter(Out):
     exclusiveMaximum: int | float | None = None  # as the parameter's JSON schema states it
 
 
+class RevealingMeasurement(Out):
+    test: str
+    quantity: str
+    how: str = Field(description="at which conditions, for people")
+
+
 class Candidate(Out):
     """What the diagnosis knows of an effect (engine.candidates)."""
 
@@ -32,6 +38,8 @@ class Candidate(Out):
     off_value: float | None
     fingerprint: dict[str, str] = Field(description="per measured feature: the sign of the change it makes")
     physics: str
+    revealed_by: list[RevealingMeasurement] = Field(
+        default_factory=list, description="the measurements that would show it where the measured ones cannot")
 
 
 class Effect(Out):

@@ -1,0 +1,92 @@
+"""Which candidate effects the measurements could not see: a power statement for "no misfit".
+
+"The model agrees with the measurements" says nothing of an effect the measured quantities do not respond
+to. A candidate's projected signature |M s| (what the baseline parameters cannot absorb, per unit
+strength) gives the noncentrality its score test would have if the effect were present at strength g:
+lambda = g^2 |M s|^2, less the share of |M s|^2 the probe's own noise accounts for
+(``attribute.noise_share``). The one-sided score test's root sqrt(LM) is then N(sqrt(lambda), 1), so it
+clears Holm's first step (critical LM c among k candidates) with probability Phi(sqrt(lambda) - sqrt(c)):
+``DETECTION_POWER`` needs lambda >= (sqrt(c) + z_power)^2. A candidate whose lambda stays below that even
+at the top of its plausible range (the full switch for a law that replaces the baseline's) is unseen: a
+"no misfit" does not speak for or against it, and the report names the measurement that would.
+
+Tier B's Hertz scenario is the case in point: loading E' grows with the contact network under either
+contact law, so E' windows left Hertz-Mindlin unseen (docs/diagnosis.md, hertz_strong); the unload-reload
+modulus sees it (``Candidate.revealed_by``). The signature is a linear probe: for a saturating effect the
+strength is a first-order figure, as the diagnosis's own strength estimates are.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy import stats as sps
+
+# an effect counts as visible when the score test would flag it at least this often
+DETECTION_POWER = 0.8
+
+
+def critical_lm(alpha: float, k: int) -> float:
+    """LM one effect needs to clear Holm's first (strictest) step among k one-sided score tests."""
+    return float(sps.chi2.isf(2.0 * alpha / k, 1)) if k > 0 else math.nan
+
+
+def detectable_lm(alpha: float, k: int, power: float = DETECTION_POWER) -> float:
+    """The noncentrality at which the one-sided score test clears ``critical_lm`` with probability ``power``:
+    (sqrt(c) + z_power)^2 (for k = 1, alpha 0.05, power 0.8: (1.645 + 0.842)^2 = 6.18)."""
+    return (math.sqrt(critical_lm(alpha, k)) + float(sps.norm.ppf(power))) ** 2
+
+
+def _top_strength(candidate) -> float:
+    """The strength change from "off" to the top of the plausible range; 1 for a switch (the full switch)."""
+    if candidate.is_switch:
+        return 1.0
+    return float(candidate.plausible_range[1]) - float(candidate.off_value or 0.0)
+
+
+def unseen(signatures, M: np.ndarray, alpha: float, measured_labels: set[str] | None = None) -> list[dict[str, Any]]:
+    """The candidates these measurements could not see at any plausible strength, each with the noncentrality
+    at the range's top, the one needed, the smallest strength that would be seen (None: none would) and what
+    to measure: its ``revealed_by`` measurements, "more replicates of" those already measured."""
+    from calibration.attribute import noise_share
+
+    need = detectable_lm(alpha, len(signatures))
+    out = []
+    for sig in signatures:
+        c = sig.candidate
+        projected = M @ np.asarray(sig.vector, float)
+        share = noise_share(M, sig.vector, sig.noise_var)
+        length2 = float(projected @ projected) * max(0.0, 1.0 - share)
+        lm_top = length2 * _top_strength(c) ** 2
+        if lm_top >= need:
+            continue
+        smallest = None
+        if length2 > 0.0:
+            g = math.sqrt(need / length2)
+            smallest = g if c.is_switch else float(c.off_value or 0.0) + g
+        out.append({"effect": c.name, "title": c.title, "lm_at_top": lm_top, "lm_needed": need,
+                    "power": DETECTION_POWER, "smallest_seen": smallest, "signature_noise": share,
+                    "measure": [_advice(test, quantity, how, measured_labels) for test, quantity, how in c.revealed_by]})
+    return out
+
+
+def _advice(test: str, quantity: str, how: str, measured_labels: set[str] | None) -> str:
+    """ "test quantity how", or "more replicates of ..." when the target list already holds that quantity."""
+    text = f"{test} {quantity}" + (f" {how}" if how else "")
+    measured = measured_labels is not None and any(label.split(" @ ")[0] == f"{test} {quantity}"
+                                                   for label in measured_labels)
+    return f"more replicates of {text}" if measured else text
+
+
+def message(rows: list[dict[str, Any]]) -> str:
+    """One sentence for the diagnosis's message: what was unseen and what would see it."""
+    if not rows:
+        return ""
+    parts = []
+    for row in rows:
+        what = f"{row['title']} ({row['effect']}): LM {row['lm_at_top']:.1f} at its strongest plausible strength"
+        parts.append(what + (f"; measure {' or '.join(row['measure'])}" if row["measure"] else ""))
+    return ("these measurements could not see, with "
+            f"{100 * rows[0]['power']:.0f} % power, {len(rows)} candidate effect{'s' if len(rows) > 1 else ''} "
+            f"(LM {rows[0]['lm_needed']:.1f} needed): " + "; ".join(parts))

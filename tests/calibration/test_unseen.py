@@ -1,0 +1,108 @@
+"""Which candidates a "no misfit" could not have seen (calibration.unseen): the power figure against the normal
+distribution's, its rate measured on a fixed seed, and the cases worked by hand on signatures of known length."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from calibration import stats
+from calibration.attribute import Signature, attribute
+from calibration.localise import Localisation
+from calibration.unseen import DETECTION_POWER, critical_lm, detectable_lm, unseen
+from calibration.vocabulary import DiagnosisVerdict
+from engine.candidates import candidates
+from engine.lab.registry import units
+
+ALPHA = 0.05
+N_ROWS = 6
+
+
+def _vector(first: float) -> np.ndarray:
+    v = np.zeros(N_ROWS)
+    v[0] = first
+    return v
+
+
+def test_the_noncentrality_needed_is_the_one_sided_z_tests():
+    # one candidate: Holm's first step is the one-sided 5 % test, z 1.6449; 80 % power adds z 0.8416
+    assert detectable_lm(ALPHA, 1) == pytest.approx((1.644854 + 0.841621) ** 2, rel=1e-6)  # 6.18
+    # four candidates: the step is at alpha / 4 one-sided, z 2.2414
+    assert math.sqrt(critical_lm(ALPHA, 4)) == pytest.approx(2.241403, rel=1e-6)
+    assert detectable_lm(ALPHA, 4) == pytest.approx((2.241403 + 0.841621) ** 2, rel=1e-6)
+
+
+def test_at_the_noncentrality_needed_the_score_test_flags_the_effect_at_the_stated_power():
+    """Residuals r = sqrt(lambda) u + z with z standard normal (M = I, u a unit signature), at lambda =
+    detectable_lm for four candidates: the one-sided score test clears Holm's first step in 80 % of draws."""
+    rng = np.random.default_rng(20261129)
+    need, crit = detectable_lm(ALPHA, 4), critical_lm(ALPHA, 4)
+    u = _vector(1.0)
+    M = np.eye(N_ROWS)
+    draws = 20_000
+    r = math.sqrt(need) * u + rng.standard_normal((draws, N_ROWS))
+    flagged = np.mean([stats.score_test(row, u, M).lm > crit for row in r])
+    print(f"score test at lambda {need:.2f}: flagged in {flagged:.4f} of {draws} draws (stated {DETECTION_POWER})")
+    assert flagged == pytest.approx(DETECTION_POWER, abs=4 * math.sqrt(0.8 * 0.2 / draws))
+
+
+def test_a_signature_too_short_at_its_plausible_top_is_unseen_and_its_revealing_measurement_named():
+    table = candidates()
+    M = np.eye(N_ROWS)
+    # Hertz-Mindlin, a switch: its full switch moves the first row by 0.5 sd, LM 0.25 at the top
+    hertz = Signature(table["hertz_mindlin"], _vector(0.5), 1.0, reference=1.1e9)
+    # rolling resistance: 10 sd per unit friction, its plausible top 0.5 -> 5 sd, LM 25
+    rolling = Signature(table["rolling_epsd2"], _vector(10.0), 0.15)
+    need = detectable_lm(ALPHA, 2)
+    rows = unseen([hertz, rolling], M, ALPHA, {"cct confined_modulus_pa @ normal_stress_pa=15000"})
+    assert [row["effect"] for row in rows] == ["hertz_mindlin"]
+    row = rows[0]
+    assert row["lm_at_top"] == pytest.approx(0.25) and row["lm_needed"] == pytest.approx(need)
+    assert row["smallest_seen"] == pytest.approx(math.sqrt(need) / 0.5)  # the fraction of the switch
+    assert row["measure"] == ["cct unload_reload_modulus_pa at several normal stresses, e.g. 3-60 kPa "
+                              "(options.cct_unload_reload_stresses_pa)"]
+    # already measured: more replicates of it
+    again = unseen([hertz], M, ALPHA, {"cct unload_reload_modulus_pa @ normal_stress_pa=3000"})[0]
+    assert again["measure"][0].startswith("more replicates of cct unload_reload_modulus_pa")
+
+
+def test_an_additive_effects_smallest_seen_strength_and_the_probes_noise():
+    table = candidates()
+    M = np.eye(N_ROWS)
+    # cohesion: 0.01 sd per J/m2 on one row; its top 200 J/m2 -> LM 4 below 6.18 (one candidate): unseen,
+    # seen from sqrt(6.18) / 0.01 = 249 J/m2
+    cohesion = Signature(table["cohesion_adhesive"], _vector(0.01), 60.0)
+    row = unseen([cohesion], M, ALPHA, set())[0]
+    assert row["lm_at_top"] == pytest.approx(4.0)
+    assert row["smallest_seen"] == pytest.approx(math.sqrt(detectable_lm(ALPHA, 1)) / 0.01)
+    # 0.02 sd per J/m2 is LM 16 at the top, seen; but when the probe's noise accounts for 3/4 of its squared
+    # length (noise variance 0.0003 on the row against 0.0004) what is left is LM 4 again: unseen
+    noisy = Signature(table["cohesion_adhesive"], _vector(0.02), 60.0, noise_var=_vector(0.0003))
+    assert unseen([dataclasses.replace(noisy, noise_var=None)], M, ALPHA, set()) == []
+    assert unseen([noisy], M, ALPHA, set())[0]["lm_at_top"] == pytest.approx(4.0)
+
+
+def test_no_misfit_names_what_it_could_not_see():
+    """Residuals within the noise (all zero): "no misfit", and the message and "measure next" name the
+    candidate the measurements could not have seen, not the one they could."""
+    table = candidates()
+    M = np.eye(N_ROWS)
+    r = np.zeros(N_ROWS)
+    df = np.full(N_ROWS, np.inf)
+    loc = Localisation(stats.lack_of_fit(r, M, df), rows=[], tests=[], trends={}, conflicts={})
+    signatures = [Signature(table["hertz_mindlin"], _vector(0.5), 1.0, reference=1.1e9),
+                  Signature(table["rolling_epsd2"], _vector(10.0), 0.15)]
+    labels = [f"dst residual_shear_stress_pa @ normal_stress_pa={s}" for s in range(N_ROWS)]
+    att = attribute(loc, r, M, signatures, labels)
+    assert att.verdict == DiagnosisVerdict.NO_MISFIT
+    assert "could not see" in att.message and "hertz_mindlin" in att.message and "rolling_epsd2" not in att.message
+    test, quantity, how = table["hertz_mindlin"].revealed_by[0]
+    assert att.measure_next == [f"{test} {quantity} {how}"]
+    assert [u["effect"] for u in att.to_dict()["unseen"]] == ["hertz_mindlin"]
+
+
+def test_every_revealing_measurement_is_one_the_lab_reports():
+    known = units()
+    for name, c in candidates().items():
+        for test, quantity, _ in c.revealed_by:
+            assert quantity in known.get(test, {}), (name, test, quantity)
