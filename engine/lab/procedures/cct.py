@@ -20,7 +20,8 @@ class CctOutcome:
     record: LidRecord
     strain: np.ndarray
     precompressed: dict  # checkpoint after cycle 1: the DST's starting point
-    unload_reload: UnloadReload = field(default_factory=UnloadReload)  # empty unless options.cct_unload_reload_stresses_pa asked for it
+    # empty unless options.cct_unload_reload_stresses_pa asked for it
+    unload_reload: UnloadReload = field(default_factory=UnloadReload)
 
 
 def run_cct(ctx: RunContext, fill: FillOutcome) -> CctOutcome:
