@@ -122,6 +122,13 @@ def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, servic
     assert page.locator("section.diagnosis [aria-label='effect ranking'] svg").count() == 1
     expect_text(page, "section.history .chi2dof[data-iteration='1']", r"\d")
     assert_diagnosis_fits(page)
+    # the candidates these targets cannot see are marked so in the table, not as merely "not significant"
+    diagnosis = service.api("GET", f"/campaigns/{campaign_id}/diagnosis").json()
+    significant = {r["effect"] for r in diagnosis["ranking"] if r["significant"]}
+    unseen = [u["effect"] for u in diagnosis["unseen"] if u["effect"] not in significant]
+    # one overall E' target: Hertz-Mindlin, matched to kp, changes nothing kp cannot absorb
+    assert "hertz_mindlin" in unseen
+    assert page.locator("section.diagnosis .unseen").count() == len(unseen)
     assert_parity_axes_end_on_ticks(page)
     assert not re.search(r"\b(fill|cct|dst|aor|anchor)__", page.locator("main").inner_text())  # no response keys
     for title, name in (("Verdict", "campaign-verdict"), ("Targets", "campaign-targets"), ("Across conditions", "campaign-conditions"),

@@ -111,6 +111,8 @@ export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded })
   const groups = d.alias_groups || [];
   const against = AGAINST_ADDING.has(d.verdict);
   const suggested = against ? [] : d.ranking.filter((r) => r.significant);
+  // candidates these measurements could not see at any plausible strength (calibration/unseen.py)
+  const unseen = new Map((d.unseen || []).map((u) => [u.effect, u]));
   // chart and fingerprints one under the other: side by side at 1280 px the chart truncated the
   // effects' names and the table hid its last columns (issue 31)
   return h("section", { className: "card diagnosis" }, h("h3", {}, `Diagnosis: ${d.verdict}`),
@@ -121,7 +123,8 @@ export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded })
       d.ranking.map((r) => [
         h("span", {}, h("span", { className: "swatch", style: `background:${colourOf(r)}` }), ` ${r.title} `, h("code", {}, r.effect)),
         r.lm, r.p_holm, `${fmt(100 * r.explained, 3)} %`, probeNoise(r), strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
-        !r.significant ? h("span", { className: "muted" }, "not significant")
+        !r.significant && unseen.has(r.effect) ? h("span", { className: "muted unseen", title: `LM ${fmt(unseen.get(r.effect).lm_at_top, 2)} at its strongest plausible strength, ${fmt(unseen.get(r.effect).lm_needed, 3)} needed` }, "unseen by these measurements")
+          : !r.significant ? h("span", { className: "muted" }, "not significant")
           : against ? h("span", { className: "muted" }, "not offered: against the diagnosis")
             : addEffectForm(campaignId, r, nextNumber, canAdd, onAdded)]))),
     groups.length ? h("div", {}, h("h4", {}, "Alias groups: effects the data cannot tell apart"),
