@@ -919,7 +919,11 @@ def main(argv=None) -> int:
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds or sc.confirmation_seeds, args.polish_steps
             o["measuring_packings"] = sc.measuring_packings
             o["diagnose_always"], o["polish_when"] = args.diagnose_always, args.polish_when
-            o["cct_window_stresses_pa"] = options["cct_window_stresses_pa"]
+            # the stresses the scenario measured (its own options over the command's)
+            measured_options = {**options, **sc.options}
+            o["cct_window_stresses_pa"] = measured_options["cct_window_stresses_pa"]
+            if measured_options.get("cct_unload_reload_stresses_pa"):
+                o["cct_unload_reload_stresses_pa"] = measured_options["cct_unload_reload_stresses_pa"]
             if args.replay:
                 o["replay_differences"] = replay(svc, cid, body)
             if args.truth_floor:
