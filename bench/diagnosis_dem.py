@@ -279,9 +279,13 @@ SCENARIOS = {
     # Session 29: the unload-reload modulus at the same stresses (options.cct_unload_reload_stresses_pa) reads the
     # contacts' stiffness on a fixed network, E_ur ~ sigma^(1/3) more for Hertz: single packings gave E_ur(60 kPa) /
     # E_ur(3 kPa) 3.3-4.4 Hertzian against 1.5-2.3 linear (bench/unload_reload.py; the loading E' 3.2-3.9 and 2.4-3.1)
+    # Session 30 (three packings, two seeds): lack of fit rejects, Hertz first and added at E 1.07 GPa (true 1.10),
+    # but lambda ~ 12 and the truth floor at 0.96 of the RMS before: the replicates of cohesion_strong take it to
+    # about 48 (the row in docs/results/tier_b_strong.json was measured with three packings)
     "hertz_strong": Scenario("hertz_strong", "hertz_mindlin", None, 9, kind="strong",
                              options={"cct_window_stresses_pa": [3.0e3, 10.0e3, 30.0e3, 60.0e3],
-                                      "cct_unload_reload_stresses_pa": [3.0e3, 10.0e3, 30.0e3, 60.0e3]}),
+                                      "cct_unload_reload_stresses_pa": [3.0e3, 10.0e3, 30.0e3, 60.0e3]},
+                             measuring_packings=12, confirmation_seeds=8),
     # issue 33: DEM nulls measured with an effect-free set-up unlike the calibrated model's
     "null_spread": Scenario("null_spread", None, None, 10, kind="other_null",
                             setup_job=_appendix_a({"form": "uniform", "radius_min_m": 0.019, "radius_max_m": 0.021}),
