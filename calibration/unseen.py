@@ -3,12 +3,18 @@
 "The model agrees with the measurements" says nothing of an effect the measured quantities do not respond
 to. A candidate's projected signature |M s| (what the baseline parameters cannot absorb, per unit
 strength) gives the noncentrality its score test would have if the effect were present at strength g:
-lambda = g^2 |M s|^2, less the share of |M s|^2 the probe's own noise accounts for
-(``attribute.noise_share``). The one-sided score test's root sqrt(LM) is then N(sqrt(lambda), 1), so it
-clears Holm's first step (critical LM c among k candidates) with probability Phi(sqrt(lambda) - sqrt(c)):
+lambda = g^2 |M s|^2. The one-sided score test's root sqrt(LM) is then N(sqrt(lambda), 1), so it clears
+Holm's first step (critical LM c among k candidates) with probability Phi(sqrt(lambda) - sqrt(c)):
 ``DETECTION_POWER`` needs lambda >= (sqrt(c) + z_power)^2. A candidate whose lambda stays below that even
 at the top of its plausible range (the full switch for a law that replaces the baseline's) is unseen: a
 "no misfit" does not speak for or against it, and the report names the measurement that would.
+
+The probe measures s with the simulator's scatter e (``attribute.signature_noise_var``), and a short
+projected signature is also what a noisy probe of a long one can give. "Unseen" is a claim about the true
+signature, so it is judged on an upper bound of its length: |M s_true| <= |M s| + |M e|, with |M e| at most
+1.96 sqrt(E|M e|^2) (95 %, the noise taken as if all in one direction, the conservative case). A probe
+whose noise could hide a visible signature names nothing: on tier B's weak Hertz scenario one seed's
+cohesion probe was 2.2 times its own length in noise, and cohesion at 80 J/m2 had been seen there.
 
 Tier B's Hertz scenario is the case in point: loading E' grows with the contact network under either
 contact law, so E' windows left Hertz-Mindlin unseen (docs/diagnosis.md, hertz_strong); the unload-reload
@@ -25,6 +31,8 @@ from scipy import stats as sps
 
 # an effect counts as visible when the score test would flag it at least this often
 DETECTION_POWER = 0.8
+# the probe's noise bound on a projected signature's length: 1.96 of its root-mean-square (95 %)
+NOISE_Z = 1.96
 
 
 def critical_lm(alpha: float, k: int) -> float:
@@ -47,7 +55,7 @@ def _top_strength(candidate) -> float:
 
 def unseen(signatures, M: np.ndarray, alpha: float, measured_labels: set[str] | None = None) -> list[dict[str, Any]]:
     """The candidates these measurements could not see at any plausible strength, each with the noncentrality
-    at the range's top, the one needed, the smallest strength that would be seen (None: none would) and what
+    at the range's top (on the upper bound of its signature's length), the one needed, the smallest strength that would be seen (None: none would) and what
     to measure: its ``revealed_by`` measurements, "more replicates of" those already measured."""
     from calibration.attribute import noise_share
 
@@ -56,19 +64,27 @@ def unseen(signatures, M: np.ndarray, alpha: float, measured_labels: set[str] | 
     for sig in signatures:
         c = sig.candidate
         projected = M @ np.asarray(sig.vector, float)
+        length2 = float(projected @ projected)
         share = noise_share(M, sig.vector, sig.noise_var)
-        length2 = float(projected @ projected) * max(0.0, 1.0 - share)
-        lm_top = length2 * _top_strength(c) ** 2
+        upper2 = (math.sqrt(length2) + NOISE_Z * math.sqrt(_noise2(M, sig.noise_var))) ** 2
+        lm_top = upper2 * _top_strength(c) ** 2
         if lm_top >= need:
             continue
         smallest = None
-        if length2 > 0.0:
-            g = math.sqrt(need / length2)
+        if upper2 > 0.0:
+            g = math.sqrt(need / upper2)
             smallest = g if c.is_switch else float(c.off_value or 0.0) + g
         out.append({"effect": c.name, "title": c.title, "lm_at_top": lm_top, "lm_needed": need,
                     "power": DETECTION_POWER, "smallest_seen": smallest, "signature_noise": share,
                     "measure": [_advice(test, quantity, how, measured_labels) for test, quantity, how in c.revealed_by]})
     return out
+
+
+def _noise2(M: np.ndarray, noise_var) -> float:
+    """E|M e|^2 of a probe's noise (``attribute.noise_share``'s numerator); 0 when not known."""
+    if noise_var is None:
+        return 0.0
+    return float(np.sum(np.asarray(noise_var, float) * np.sum(M * M, axis=0)))
 
 
 def _advice(test: str, quantity: str, how: str, measured_labels: set[str] | None) -> str:

@@ -75,11 +75,13 @@ def test_an_additive_effects_smallest_seen_strength_and_the_probes_noise():
     row = unseen([cohesion], M, ALPHA, set())[0]
     assert row["lm_at_top"] == pytest.approx(4.0)
     assert row["smallest_seen"] == pytest.approx(math.sqrt(detectable_lm(ALPHA, 1)) / 0.01)
-    # 0.02 sd per J/m2 is LM 16 at the top, seen; but when the probe's noise accounts for 3/4 of its squared
-    # length (noise variance 0.0003 on the row against 0.0004) what is left is LM 4 again: unseen
-    noisy = Signature(table["cohesion_adhesive"], _vector(0.02), 60.0, noise_var=_vector(0.0003))
-    assert unseen([dataclasses.replace(noisy, noise_var=None)], M, ALPHA, set()) == []
-    assert unseen([noisy], M, ALPHA, set())[0]["lm_at_top"] == pytest.approx(4.0)
+    # the same probe with noise of variance 1e-4 on the row (as large as its signal): the true signature may be
+    # 0.01 + 1.96 x 0.01 long, LM (0.0296 x 200)^2 = 35 at the top, so "unseen" cannot be claimed
+    noisy = dataclasses.replace(cohesion, noise_var=_vector(1.0e-4))
+    assert unseen([noisy], M, ALPHA, set()) == []
+    # a probe of nothing but small noise (variance 1e-10): unseen, on the bound (1.96e-5 x 200)^2 = 1.5e-5
+    quiet = Signature(table["cohesion_adhesive"], np.zeros(N_ROWS), 60.0, noise_var=_vector(1.0e-10))
+    assert unseen([quiet], M, ALPHA, set())[0]["lm_at_top"] == pytest.approx((1.96e-5 * 200.0) ** 2)
 
 
 def test_no_misfit_names_what_it_could_not_see():
