@@ -16,10 +16,10 @@ signature, so it is judged on an upper bound of its length: |M s_true| <= |M s| 
 whose noise could hide a visible signature names nothing: on tier B's weak Hertz scenario one seed's
 cohesion probe was 2.2 times its own length in noise, and cohesion at 80 J/m2 had been seen there.
 
-Tier B's Hertz scenario is the case in point: loading E' grows with the contact network under either
-contact law, so E' windows left Hertz-Mindlin unseen (docs/diagnosis.md, hertz_strong); the unload-reload
-modulus sees it (``Candidate.revealed_by``). The signature is a linear probe: for a saturating effect the
-strength is a first-order figure, as the diagnosis's own strength estimates are.
+Why it matters: on tier B's packings the loading E' grows with the contact network under either contact
+law, so E' windows left a Hertzian world inside the linear model's noise, while the unload-reload modulus
+saw it (docs/diagnosis.md, hertz_strong; ``Candidate.revealed_by`` names it). The signature is a linear
+probe: for a saturating effect the strength is a first-order figure, as the diagnosis's own estimates are.
 """
 from __future__ import annotations
 
