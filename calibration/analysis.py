@@ -260,15 +260,31 @@ def diagnosis_plan(config, optimum: dict, iteration_parameters: dict, confirmati
     return plan
 
 
+def top_probe_plan(config, optimum: dict, names: list[str], confirmation_seeds: list[int]) -> list[tuple]:
+    """(name, factor values, seed) of the second probe of each of ``names`` (``attribute.top_probes``): the
+    optimum with the candidate at its plausible top (``Candidate.top_step`` from "off"), at the diagnosis seeds
+    of ``confirmation_seeds``, so each pairs with the baseline battery already run at the same seed."""
+    from engine.candidates import candidates
+
+    table = candidates()
+    plan = []
+    for name in names:
+        c = table[name]
+        values = {**dict(optimum["parameters"]), c.factor: (c.off_value or 0.0) + c.top_step}
+        plan += [(name, values, seed) for seed in signature_seeds(confirmation_seeds)]
+    return plan
+
+
 def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[list[dict]],
-             confirmation_seeds: list[int], planned: list[tuple[str, int, list[dict]]]) -> dict[str, Any]:
+             confirmation_seeds: list[int], planned: list[tuple]) -> dict[str, Any]:
     """Rank the candidate effects (calibration.attribute) from their batteries at the optimum.
 
-    ``planned``: (name, seed, records) of the diagnosis batteries (``diagnosis_plan`` order). The
-    residuals are the report's (the confirmation batteries); each candidate's signature is its mean
-    minus the planned baseline's at the same seeds (common random numbers), seeds the confirmation
-    did not use, so that the signatures' noise is independent of the residuals."""
-    from calibration.attribute import Signature, attribute, signature_noise_var, signature_vector
+    ``planned``: (name, seed, records, probe) of the diagnosis batteries (``diagnosis_plan`` order, then any
+    ``top_probe_plan``; probe ``attribute.STEP`` or ``attribute.TOP``, STEP when left out). The residuals are
+    the report's (the confirmation batteries); each probe's signature is its mean minus the planned baseline's
+    at the same seeds (common random numbers), seeds the confirmation did not use, so that the signatures'
+    noise is independent of the residuals."""
+    from calibration.attribute import STEP, TOP, Signature, attribute, signature_noise_var, signature_vector
     from calibration.fitting import run_values
     from engine.candidates import candidates
 
@@ -278,18 +294,19 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
     res, loc = _localised(config, design, modelled, optimum, conf)
     table = candidates()
     signatures = []
-    names = [n for n in dict.fromkeys(name for name, _, _ in planned) if n != BASELINE]
-    baseline = [run_values(records) for n, _, records in planned if n == BASELINE]
-    for name in names:
+    planned = [(entry[0], entry[1], entry[2], entry[3] if len(entry) > 3 else STEP) for entry in planned]
+    baseline = {seed: run_values(records) for n, seed, records, _ in planned if n == BASELINE}
+    for name, probe in dict.fromkeys((n, pr) for n, _, _, pr in planned if n != BASELINE):
         c = table[name]
-        values = [run_values(records) for n, _, records in planned if n == name]
-        step = 1.0 if c.is_switch else c.step
-        vector = signature_vector(res, values, baseline, step)
+        batteries = [(seed, run_values(records)) for n, seed, records, pr in planned if n == name and pr == probe]
+        values = [v for _, v in batteries]
+        step = 1.0 if c.is_switch else (c.top_step if probe == TOP else c.step)
+        vector = signature_vector(res, values, [baseline[seed] for seed, _ in batteries], step)
         noise = signature_noise_var(res, conf.sim_sd, len(values), step)
         reference = None
         if c.is_switch:
             reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
-        signatures.append(Signature(c, vector, step, reference, noise))
+        signatures.append(Signature(c, vector, step, reference, noise, probe))
     M, room = diagnosis_projection(res, design, dict(optimum["parameters"]), config.priors)
     left = stats.lack_of_fit(res.r, M, res.df, seed=config.seed) if room else None
     att = attribute(loc, res.r, M, signatures, [k.label for k in res.keys],
@@ -299,7 +316,7 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
     share = simulator_share({k: conf.sim_sd[k] for k in res.keys if k in conf.sim_sd},
                             {k: float(res.sd[i]) for i, k in enumerate(res.keys)})
     return _json_safe({**att.to_dict(), "lack_of_fit": loc.lack_of_fit.to_dict(), "simulator_share": share,
-                       "seeds": sorted(set(confirmation_seeds) | {s for _, s, _ in planned}),
+                       "seeds": sorted(set(confirmation_seeds) | {s for _, s, _, _ in planned}),
                        "batteries": len(planned)})
 
 

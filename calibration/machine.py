@@ -256,9 +256,15 @@ def _report(ctx: Context, it) -> Transition:
     if plan:
         runs = [NewRun(RunKind.DIAGNOSIS, k + 1, k + 1, natural, {}, seed) for k, (_, natural, seed) in enumerate(plan)]
         # which battery is which (by standard order), stored so the diagnosis reads it rather than planning again
-        report = {**report, "diagnosis_plan": [{"effect": name, "seed": seed} for name, _, seed in plan]}
+        report = {**report, "diagnosis_plan": [_plan_entry(name, seed, attribute.STEP) for name, _, seed in plan]}
         return Transition(Phase.REPORT, Phase.DIAGNOSIS, {"report": report, "confirmation": stored}, runs)
     return _finish(ctx, it, Phase.REPORT, report, confirmation=stored)
+
+
+def _plan_entry(name: str, seed: int, probe: str) -> dict[str, Any]:
+    """A diagnosis battery as the report stores it; the probe is named only where it is not the step's, so the
+    plans of iterations stored before the top probe existed read the same."""
+    return {"effect": name, "seed": seed} if probe == attribute.STEP else {"effect": name, "seed": seed, "probe": probe}
 
 
 def _diagnosed(ctx: Context, it) -> Transition:
@@ -268,34 +274,52 @@ def _diagnosed(ctx: Context, it) -> Transition:
     runs = sorted(runs_of(it, RunKind.DIAGNOSIS), key=lambda r: r.std_order)
     stored_plan = (it.report or {}).get("diagnosis_plan")
     # iterations stored before the plan was kept with the report are planned again (the same pure function)
-    plan = ([(p["effect"], p["seed"]) for p in stored_plan] if stored_plan is not None else
-            [(name, seed) for name, _, seed in analysis.diagnosis_plan(s, it.optimum, it.parameters, seeds)])
+    plan = ([(p["effect"], p["seed"], p.get("probe", attribute.STEP)) for p in stored_plan] if stored_plan is not None
+            else [(name, seed, attribute.STEP)
+                  for name, _, seed in analysis.diagnosis_plan(s, it.optimum, it.parameters, seeds)])
     diagnosis = analysis.diagnose(s, it.design["doe"], runs_of(it, RunKind.DESIGN), ctx.targets, it.optimum,
                                   records(confirmations), seeds,
-                                  [(name, seed, list((r.responses or {}).values()))
-                                   for (name, seed), r in zip(plan, runs)])
-    # the suspects judged again: the model's reach now includes each candidate at a plausible strength
-    planned = [(name, r.responses) for (name, _), r in zip(plan, runs)]
+                                  [(name, seed, list((r.responses or {}).values()), probe)
+                                   for (name, seed, probe), r in zip(plan, runs)])
+    # the suspects judged again: the model's reach now includes each candidate at a plausible strength (a step
+    # probe extrapolated to the top, a top probe as it ran)
+    planned = [(name, r.responses) for (name, _, probe), r in zip(plan, runs) if probe == attribute.STEP]
     reach = suspect.reach([*(r.responses for r in it.runs if r.kind != RunKind.DIAGNOSIS),
                            *(responses for name, responses in planned if name == analysis.BASELINE),
-                           *suspect.extrapolated_candidates(planned, analysis.BASELINE)])
+                           *suspect.extrapolated_candidates(planned, analysis.BASELINE),
+                           *(r.responses for (_, _, probe), r in zip(plan, runs) if probe == attribute.TOP)])
     suspects = suspect.suspects((it.report or {}).get("targets") or [], reach)
-    planned_seeds = list(dict.fromkeys(seed for name, seed in plan if name == analysis.BASELINE))
+    planned_seeds = list(dict.fromkeys(seed for name, seed, _ in plan if name == analysis.BASELINE))
     all_seeds = attribute.signature_seeds(seeds)
+    probed_top = list(dict.fromkeys(name for name, _, probe in plan if probe == attribute.TOP))
     if stored_plan is not None:
         if len(planned_seeds) < len(all_seeds):
             more, why = replicates.more_seeds(diagnosis, diagnosis.get("simulator_share"))
         else:
             more, why = False, f"every seed run ({len(planned_seeds)})"
-        stages = [*((it.report or {}).get("diagnosis_stages") or []),
-                  {"seeds": len(planned_seeds), "batteries": len(plan), "more_seeds": more, "why": why}]
-        if more:
-            rest = [seed for seed in seeds if attribute.signature_seeds([seed])[0] not in planned_seeds]
-            extra = analysis.diagnosis_plan(s, it.optimum, it.parameters, rest)
+        # a candidate the step's probe saw but could not name is probed at its plausible top too, once
+        top = [] if more or suspects else attribute.top_probes(diagnosis, set(probed_top))
+        stage = {"seeds": len(planned_seeds), "batteries": len(plan), "more_seeds": more, "why": why}
+        if top:
+            stage["top_probes"] = top
+            stage["why"] += ("; the model misses the measurements and no candidate is named, but "
+                             f"{', '.join(top)} explain part of the misfit: probed at their plausible top too")
+        stages = [*((it.report or {}).get("diagnosis_stages") or []), stage]
+        if more or top:
+            done = [seed for seed in seeds if attribute.signature_seeds([seed])[0] in planned_seeds]
+            rest = [seed for seed in seeds if seed not in done]
+            # more seeds: the step's probes there, and the top's where it ran; a top probe: at the seeds run
+            extra = ([(name, natural, seed, attribute.STEP)
+                      for name, natural, seed in analysis.diagnosis_plan(s, it.optimum, it.parameters, rest)]
+                     + [(name, natural, seed, attribute.TOP)
+                        for name, natural, seed in analysis.top_probe_plan(s, it.optimum, probed_top, rest)]
+                     if more else
+                     [(name, natural, seed, attribute.TOP)
+                      for name, natural, seed in analysis.top_probe_plan(s, it.optimum, top, done)])
             runs = [NewRun(RunKind.DIAGNOSIS, len(plan) + k + 1, len(plan) + k + 1, natural, {}, seed)
-                    for k, (_, natural, seed) in enumerate(extra)]
+                    for k, (_, natural, seed, _) in enumerate(extra)]
             report = {**(it.report or {}), "diagnosis_stages": stages,
-                      "diagnosis_plan": [*stored_plan, *({"effect": name, "seed": seed} for name, _, seed in extra)]}
+                      "diagnosis_plan": [*stored_plan, *(_plan_entry(name, seed, probe) for name, _, seed, probe in extra)]}
             return Transition(Phase.DIAGNOSED, Phase.DIAGNOSIS, {"report": report}, runs)
         it_report = {**(it.report or {}), "diagnosis_stages": stages}
     else:

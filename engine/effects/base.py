@@ -42,6 +42,11 @@ STANDIN_TERMS = ("rolling_friction", "surface_energy_j_m2", "hertz_young_modulus
                  "elongation")
 
 
+# a strength-type candidate is probed again at its plausible top only when the top lies this many secant steps
+# out: nearer, a response curving between step and top changes its direction too little to matter
+TOP_PROBE_RATIO = 2.0
+
+
 @dataclass(frozen=True)
 class Candidate:
     """What the missing-physics diagnosis (``calibration/``) needs to know of a physical effect.
@@ -117,6 +122,17 @@ class Candidate:
     @property
     def is_switch(self) -> bool:
         return self.off_value is None
+
+    @property
+    def top_step(self) -> float | None:
+        """The strength change from "off" to the plausible range's top, where a second diagnosis probe runs
+        (``calibration.analysis.top_probe_plan``) when the secant step saw the effect but could not explain
+        the misfit; None for a switch-type effect (it is probed at its matched strength only) and where the
+        top is not at least TOP_PROBE_RATIO steps out (a probe there says little the step's did not)."""
+        if self.is_switch:
+            return None
+        top = self.plausible_range[1] - (self.off_value or 0.0)
+        return top if top >= TOP_PROBE_RATIO * self.step else None
 
 
 @dataclass(frozen=True)

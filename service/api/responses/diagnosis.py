@@ -9,6 +9,16 @@ from calibration.vocabulary import DiagnosisVerdict
 from service.api.responses.common import LackOfFit, Out
 
 
+class ProbeScore(Out):
+    """One probe of a candidate's strength and the score its signature got."""
+
+    probe: str = Field(description="'step' or 'top'")
+    strength_probed: float | None = Field(description="the strength the probe's batteries ran at, in its unit")
+    lm: float
+    explained: float = Field(description="share of the misfit this probe's signature explains, 0..1")
+    strength: float | None = Field(description="the strength this probe's secant asks for")
+
+
 class RankedEffect(Out):
     """One candidate effect's one-sided score test against the residuals."""
 
@@ -33,6 +43,9 @@ class RankedEffect(Out):
         "share of its projected signature's squared length the simulator's scatter accounts for in expectation "
         "(calibration.attribute.noise_share); the score is attenuated by about 1 - this; 0: not known; null: the "
         "projected signature has no length (the baseline parameters absorb all of it), so there is no score"))
+    probe: str = Field("step", description="the probe the score is read from: 'step' (the secant step) or 'top' "
+                       "(the plausible top, where both ran and it scored higher; p then Bonferroni over both)")
+    probes: list[ProbeScore] = Field(default_factory=list, description="each probe's score, where more than one ran")
 
 
 class UnseenEffect(Out):

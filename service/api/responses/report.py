@@ -331,6 +331,9 @@ class Intervals(Out):
 class DiagnosisBattery(Out):
     effect: str = Field(description="candidate effect switched on, or 'baseline' (the optimum as it is)")
     seed: int
+    probe: Literal["step", "top"] = Field("step", description=(
+        "where the candidate's strength was set: its secant step, or the top of its plausible range (a second "
+        "probe for a candidate the step's saw but could not name, calibration.attribute.top_probes)"))
 
 
 class DiagnosisStage(Out):
@@ -341,6 +344,8 @@ class DiagnosisStage(Out):
     batteries: int
     more_seeds: bool
     why: str
+    top_probes: list[str] | None = Field(None, description="candidates this stage sent to be probed at their "
+                                         "plausible top (calibration.attribute.top_probes)")
 
 
 class LeftOutTarget(Out):
