@@ -106,6 +106,14 @@ function fingerprints(f, titles) {
 const probeNoise = (r) => (r.signature_noise ? h("span", { title: "share of the signature that is the simulator's scatter; the score is attenuated by about one minus this" },
   r.signature_noise >= 1 ? "mostly noise" : `${fmt(100 * r.signature_noise, 2)} %`) : "–");
 
+// a candidate probed at its secant step and at its plausible top (calibration.attribute.top_probes): the share
+// read (the better probe's) and each probe's, so a response that bends with strength shows
+const explainedCell = (r) => ((r.probes || []).length > 1
+  ? h("span", { className: "probes", title: "probed at the secant step and at the plausible top; the better probe is read, its p Bonferroni over both" },
+    `${fmt(100 * r.explained, 3)} %`, h("br"),
+    h("small", { className: "muted" }, r.probes.map((p) => `${fmt(100 * p.explained, 2)} % at ${fmt(p.strength_probed, 3)} ${r.unit}`).join(", ")))
+  : `${fmt(100 * r.explained, 3)} %`);
+
 // canAdd: the campaign is completed and this is its latest iteration.
 export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded }) {
   const groups = d.alias_groups || [];
@@ -122,7 +130,7 @@ export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded })
     h("div", { className: "scroll" }, table(["Effect", "LM", "Holm p", "Explained", "Probe noise", "Strength (plausible range)", "Alias group", ""],
       d.ranking.map((r) => [
         h("span", {}, h("span", { className: "swatch", style: `background:${colourOf(r)}` }), ` ${r.title} `, h("code", {}, r.effect)),
-        r.lm, r.p_holm, `${fmt(100 * r.explained, 3)} %`, probeNoise(r), strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
+        r.lm, r.p_holm, explainedCell(r), probeNoise(r), strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
         !r.significant && unseen.has(r.effect) ? h("span", { className: "muted unseen", title: `LM ${fmt(unseen.get(r.effect).lm_at_top, 2)} at its strongest plausible strength, ${fmt(unseen.get(r.effect).lm_needed, 3)} needed` }, "unseen by these measurements")
           : !r.significant ? h("span", { className: "muted" }, "not significant")
           : against ? h("span", { className: "muted" }, "not offered: against the diagnosis")
