@@ -42,7 +42,7 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="write every case's outcome to this file")
     ap.add_argument("--from-json", help="print the table of outcomes written earlier by --json (no runs)")
     args = ap.parse_args(argv)
-    from calibration.testbed import acceptance, case_kinds, machine_line, refit_line, table_text
+    from calibration.testbed import acceptance, case_kinds, machine_line, refit_line, table_text, top_probe_line
 
     if args.from_json:
         with open(args.from_json) as fh:
@@ -50,6 +50,7 @@ def main(argv=None) -> int:
         rows = acceptance(outcomes)
         print(table_text(rows))
         print(refit_line(outcomes))
+        print(top_probe_line(outcomes))
         print(machine_line(rows))
         return 0
 
@@ -74,6 +75,7 @@ def main(argv=None) -> int:
           f"{sorted(o['batteries'] for o in outcomes)[len(outcomes) // 2]}")
     print(table_text(rows))
     print(refit_line(outcomes))
+    print(top_probe_line(outcomes))
     print(machine_line(rows))
     return 0
 

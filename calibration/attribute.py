@@ -6,6 +6,11 @@ s_e = (f(theta*, e on) - f(theta*, off)) / sd / step says what e does; what the 
 parameters can absorb is projected out (M, from the fitted models' sensitivities), and a one-sided
 score test asks how much of the remaining misfit e explains (``stats.score_test``).
 
+A signature is a secant from "off" to the candidate's step. Where the step's probe saw an effect (Holm-significant)
+but could not name it, the candidate is probed again at its plausible top (``top_probes``): a strong effect's
+response can bend beyond the step. Its score is then read from the better probe, its p Bonferroni over the two,
+and the directed test takes its maximum over every probe's signature.
+
 Effects whose projected signatures are nearly collinear (|cos| > ALIAS_COS) cannot be told apart by
 these measurements: they form an alias group, reported with the measurement where their
 signatures differ most, i.e. the one that would separate them. Less collinear effects can still be

@@ -287,6 +287,8 @@ def outcome(case: Case, result: LoopResult, runs: int) -> dict[str, Any]:
             "stop_reason": result.stop_reason, "batteries": runs,
             # an alias fitted in place of an effect that passed (calibration.automatic.settle_alias)
             "alias_refit": _refit(result),
+            # candidates the step's probe saw but could not name, probed at their plausible top (attribute.top_probes)
+            "top_probes": _top_probes(result),
             "top_p_holm": top.get("p_holm") if top else None,
             "coverage": _coverage(case, final)}
 
@@ -299,6 +301,33 @@ def _refit(result: LoopResult) -> dict[str, Any] | None:
         return None
     return {"leader": settled["leader"], "partner": settled["partner"], "kept": settled["kept_effect"],
             "undistinguished": bool(settled["undistinguished"])}
+
+
+def _top_probes(result: LoopResult) -> list[dict[str, Any]]:
+    """Per iteration whose diagnosis probed candidates at their plausible top: which, and what it then indicated."""
+    out = []
+    for it in result.iterations:
+        report = it.report or {}
+        probed = [name for stage in report.get("diagnosis_stages") or [] for name in stage.get("top_probes") or []]
+        if probed:
+            out.append({"iteration": it.number, "effects": probed,
+                        "indicated": list((report.get("diagnosis") or {}).get("indicated") or [])})
+    return out
+
+
+def top_probe_line(outcomes: list[dict]) -> str:
+    """How often a diagnosis probed a candidate at its plausible top, by kind of case, and whether it then named
+    the truth (a single hidden effect) or, in a null, anything."""
+    probed = [o for o in outcomes if o.get("top_probes")]
+    kinds: dict[str, int] = {}
+    for o in probed:
+        kinds[o["kind"]] = kinds.get(o["kind"], 0) + 1
+    first = [o["top_probes"][0] for o in probed]
+    truth_named = sum(bool(set(p["indicated"][:1]) & set(o["effects"])) for o, p in zip(probed, first))
+    return (f"top probes (a candidate the step's probe saw but could not name, probed at its plausible top): "
+            f"{len(probed)} cases ({', '.join(f'{k} {n}' for k, n in sorted(kinds.items())) or 'none'}); "
+            f"then indicated the hidden effect first {truth_named}, indicated something "
+            f"{sum(bool(p['indicated']) for p in first)}")
 
 
 def refit_line(outcomes: list[dict]) -> str:
