@@ -32,7 +32,7 @@ from . import stats
 from . import unseen as unseen_mod
 from .keys import find
 from .localise import ALPHA, Localisation
-from .vocabulary import DiagnosisVerdict
+from .vocabulary import DiagnosisVerdict, Probe
 
 ALIAS_COS = 0.9
 # One-sided 5 % point of the normal: the leading candidate is told apart from a rival only when its
@@ -56,10 +56,11 @@ class Signature:
     # None: not known (a deterministic evaluator, or a caller that does not say)
     noise_var: np.ndarray | None = None
     # where the strength was probed: STEP (the candidate's secant step) or TOP (its plausible top, top_probes)
-    probe: str = "step"
+    probe: str = Probe.STEP.value
 
 
-STEP, TOP = "step", "top"
+# the probes' names as the stored plan and the report hold them (calibration.vocabulary.Probe)
+STEP, TOP = Probe.STEP.value, Probe.TOP.value
 
 
 # signature batteries run at the confirmation seeds plus this (modulo the largest seed)

@@ -24,6 +24,14 @@ class Word(str, Enum):
         return tuple(member.value for member in cls)
 
 
+class Probe(Word):
+    """Where a diagnosis battery set a candidate's strength (calibration.attribute): at its secant step, or at
+    the top of its plausible range (a second probe for a candidate the step's saw but could not name)."""
+
+    STEP = "step"
+    TOP = "top"
+
+
 class Phase(Word):
     """Where an iteration is. Phases that wait for batteries: BATTERIES (the design's),
     CONFIRMATION, POLISH (one round at a time) and DIAGNOSIS; the others are computations."""

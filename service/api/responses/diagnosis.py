@@ -5,14 +5,14 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from calibration.vocabulary import DiagnosisVerdict
+from calibration.vocabulary import DiagnosisVerdict, Probe
 from service.api.responses.common import LackOfFit, Out
 
 
 class ProbeScore(Out):
     """One probe of a candidate's strength and the score its signature got."""
 
-    probe: str = Field(description="'step' or 'top'")
+    probe: Probe
     strength_probed: float | None = Field(description="the strength the probe's batteries ran at, in its unit")
     lm: float
     explained: float = Field(description="share of the misfit this probe's signature explains, 0..1")
@@ -43,7 +43,7 @@ class RankedEffect(Out):
         "share of its projected signature's squared length the simulator's scatter accounts for in expectation "
         "(calibration.attribute.noise_share); the score is attenuated by about 1 - this; 0: not known; null: the "
         "projected signature has no length (the baseline parameters absorb all of it), so there is no score"))
-    probe: str = Field("step", description="the probe the score is read from: 'step' (the secant step) or 'top' "
+    probe: Probe = Field(Probe.STEP, description="the probe the score is read from: 'step' (the secant step) or 'top' "
                        "(the plausible top, where both ran and it scored higher; p then Bonferroni over both)")
     probes: list[ProbeScore] = Field(default_factory=list, description="each probe's score, where more than one ran")
 

@@ -6,7 +6,7 @@ from typing import Any, Literal
 
 from pydantic import Field
 
-from calibration.vocabulary import Explains, Verdict
+from calibration.vocabulary import Explains, Probe, Verdict
 from service.api.responses.common import (
     CONDITION,
     PARAMETERS,
@@ -331,7 +331,7 @@ class Intervals(Out):
 class DiagnosisBattery(Out):
     effect: str = Field(description="candidate effect switched on, or 'baseline' (the optimum as it is)")
     seed: int
-    probe: Literal["step", "top"] = Field("step", description=(
+    probe: Probe = Field(Probe.STEP, description=(
         "where the candidate's strength was set: its secant step, or the top of its plausible range (a second "
         "probe for a candidate the step's saw but could not name, calibration.attribute.top_probes)"))
 
