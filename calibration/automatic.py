@@ -383,6 +383,17 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
 EQUAL_SCORE = 1e-9
 
 
+def may_continue(record: dict | None, number: int) -> bool:
+    """Could more iterations change where the loop stopped after iteration ``number`` (its automatic
+    ``record``)? When it stopped at the iteration limit, or kept an effect whose alias it had no iteration left
+    to fit. A hint for a page's "continue" action; ``machine.extended`` decides by taking the step again."""
+    from calibration.settings import MAX_ITERATIONS
+
+    if not record or number >= MAX_ITERATIONS:
+        return False
+    return record.get("stop_reason") == StopReason.MAX_ITERATIONS or bool(record.get("aliased"))
+
+
 def cheapest_of_equals(options: list[str], diagnosis: dict, base_config: dict,
                        base_report: dict) -> tuple[list[str], dict | None]:
     """``options`` with the leaders the diagnosis cannot tell apart (equal score test statistic, to

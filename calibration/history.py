@@ -50,6 +50,8 @@ def history(iterations: Sequence[Any]) -> dict[str, Any]:
             # automatic mode: whether this iteration's added effect was kept, and why the loop stopped
             "decision": (report.get("automatic") or {}).get("decision"),
             "stop_reason": (report.get("automatic") or {}).get("stop_reason"),
+            # a completed loop taken up again from here (machine.extended): the limit raised and what it had stopped for
+            "continued": (report.get("automatic") or {}).get("continued"),
             "tie_break": ((report.get("automatic") or {}).get("tie_break") or {}).get("message"),
             # an alias fitted in place of an effect that passed, compared with it: the iteration kept, and the
             # two effects when the measurements could not tell them apart

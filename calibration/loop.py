@@ -17,6 +17,7 @@ from typing import Any, Mapping, Sequence
 from . import machine
 from . import parameters as factor_paths
 from .analysis import model_fails
+from .errors import SettingsError
 from .evaluators import BatchEvaluator
 from .history import history
 from .keys import responses_of
@@ -141,6 +142,18 @@ class CalibrationLoop:
             return False
         self._apply(it, transition)
         return True
+
+    def extend(self, more_iterations: int = 1) -> "CalibrationLoop":
+        """Take a completed automatic loop up again with ``more_iterations`` beyond its last iteration
+        (``machine.extended``: its next step decided again under the raised limit); ``run()`` then goes on.
+        SettingsError when there is nothing more iterations would do."""
+        if not self.state.complete or not self.state.iterations:
+            raise SettingsError("the loop has not stopped: run it first", "more_iterations", conflict=True)
+        it = self.state.iterations[-1]
+        transition = machine.extended(self._context(), it, more_iterations)
+        self._apply(it, transition)
+        self.state.complete = False
+        return self
 
     def ask(self, runs: Sequence[RunState]) -> list[list[dict]]:
         """Evaluate ``runs`` (in the design's randomised run order) with the batch evaluator."""

@@ -33,7 +33,7 @@ from .design import build_design, design_view
 from .errors import LoopFailed, SettingsError
 from .records import Measured
 from .report import build_report
-from .settings import LoopSettings
+from .settings import MAX_ITERATIONS, LoopSettings
 from .vocabulary import MISFIT_VERDICTS, Phase, PolishRule, PolishStage, RunKind
 
 SEED_MAX = 2**31 - 1
@@ -325,6 +325,45 @@ def _diagnosed(ctx: Context, it) -> Transition:
     else:
         it_report = it.report or {}
     return _finish(ctx, it, Phase.DIAGNOSED, analysis.diagnosed_report(it_report, diagnosis, suspects))
+
+
+def extended(ctx: Context, it, more_iterations: int) -> Transition:
+    """A completed automatic loop taken up again with ``more_iterations`` beyond its last iteration ``it``:
+    the automatic mode decides ``it``'s next step again under the raised ``max_iterations`` (the settings
+    the returned transition carries on), and the record it stores says what the loop had stopped for.
+
+    Why: the iteration limit is a budget, not a verdict. A loop that reached it with a step pending (an
+    alias to fit in place of the effect kept, an effect to add) says what that step is (tier B's
+    cohesion_strong on DEM stopped at 3 naming rolling resistance to fit in cohesion's place); taking it up
+    again runs that step with every battery already run kept, where a new campaign would start over.
+    SettingsError when the loop is not automatic or not at its end, or when the raised limit still leaves
+    nothing to do (the stop was not the limit's: the lack of fit passes, nothing improves)."""
+    s = ctx.settings
+    if not s.automatic:
+        raise SettingsError("only an automatic loop continues by itself; start the next iteration with the "
+                            "changes it needs instead", "automatic", conflict=True)
+    if it.number != max(p.number for p in ctx.iterations):
+        raise SettingsError(f"iteration {it.number} is not the loop's last", "more_iterations", conflict=True)
+    if it.phase != Phase.DONE or it.report is None:
+        raise SettingsError(f"iteration {it.number} is still running ({it.phase}): the loop has not stopped",
+                            "more_iterations", conflict=True)
+    limit = it.number + more_iterations
+    raised = {**ctx.raw, "max_iterations": limit}
+    if limit > MAX_ITERATIONS:
+        raise SettingsError(f"{it.number} iterations ran and an automatic loop runs at most "
+                            f"{MAX_ITERATIONS}: at most {MAX_ITERATIONS - it.number} more",
+                            "more_iterations")
+    settings = type(s).model_validate(raised)
+    before = (it.report.get("automatic") or {}).get("stop_reason")
+    report = {k: v for k, v in it.report.items() if k != "automatic"}
+    record = automatic.next_step(settings, raised, ctx.iterations, it, report, ctx.validate)
+    following = record.pop("next_config", None)
+    if following is None:
+        raise SettingsError(f"the loop stopped for a reason more iterations do not change: {record['stop_reason']}",
+                            "more_iterations", conflict=True)
+    record["continued"] = {"more_iterations": more_iterations, "max_iterations": limit, "stopped_for": before}
+    return Transition(Phase.DONE, Phase.DONE, {"report": {**report, "automatic": record}},
+                      next_settings=following)
 
 
 def _finish(ctx: Context, it, source: Phase, report: dict, **values: Any) -> Transition:

@@ -25,6 +25,8 @@ _FINITE = STRICT_INPUT  # no NaN, no infinities, no booleans for numbers (engine
 MAX_SOURCE_CHARS = 10_000
 # A generator ('D=ABC', or a factor's name, up to 64 characters, for D) names at most the 15 factors of a preview.
 MAX_GENERATOR_CHARS = 200
+# automatic mode: iterations at most, the first included (a continued loop too: machine.extended)
+MAX_ITERATIONS = 10
 
 # Design factors must be scalar MicroParameters fields (the lab varies those).
 FACTOR_NAMES = tuple(
@@ -184,7 +186,7 @@ class LoopSettings(BaseModel):
         "iteration by itself, until the lack of fit passes, nothing improves, or max_iterations is reached "
         "(the reason is in the summary's stop_reason)",
     )
-    max_iterations: WholeNumber = Field(4, ge=1, le=10, description="automatic mode: iterations at most, the first included")
+    max_iterations: WholeNumber = Field(4, ge=1, le=MAX_ITERATIONS, description="automatic mode: iterations at most, the first included")
     seed: WholeNumber = Field(0, ge=0, le=2**31 - 1_000_000)
     @field_validator("factors")
     @classmethod

@@ -268,6 +268,21 @@ def campaign_next(args) -> int:
     return _emit(args, c, _next_text(c, last, args.add_effect))
 
 
+def campaign_continue(args) -> int:
+    """A completed automatic campaign taken up again: its last iteration's next step decided again under the
+    raised limit, and what the loop had stopped for."""
+    c = _call(args, "POST", f"/campaigns/{args.id}/continue", body={"more_iterations": args.iterations})
+    total = _call(args, "GET", f"/campaigns/{args.id}/iterations", params={"limit": 1})["total"]
+    last = _call(args, "GET", f"/campaigns/{args.id}/iterations", params={"limit": 1, "offset": total - 1})["items"][0]
+    record = (last.get("report") or {}).get("automatic") or {}
+    continued = record.get("continued") or {}
+    text = (f"campaign {c['id']} continues after iteration {last['number']} (limit now {continued.get('max_iterations')}; "
+            f"it had stopped: {continued.get('stopped_for')}): iteration {last['number'] + 1} "
+            + (f"adds {record['next_effect']}" if record.get("next_effect") else "runs the same model in a wider box")
+            + (f", fitted in place of {record['alias_refit']['leader']}" if record.get("alias_refit") else ""))
+    return _emit(args, c, text)
+
+
 def _next_text(c: dict, last: dict | None, effect: str | None) -> str:
     """What the iteration just asked for will run (the campaign's summary still shows the finished one
     until the runner makes the new one): its number, the effect and factors it adds or changes."""
@@ -456,6 +471,10 @@ def register(subparsers) -> None:
     nxt.add_argument("--proposed-design", action="store_true",
                      help="run the design the surface check proposed (narrowed factorial or axial runs)")
     resolution_options(nxt)  # e.g. a coarse factor nearer 1, or as_measured to confirm at the particles' own size
+    more = _leaf(csub, "continue", campaign_continue, "take a completed automatic campaign up again with more "
+                 "iterations (refused when it stopped for a reason more iterations do not change)")
+    more.add_argument("id", type=int)
+    more.add_argument("--iterations", type=int, default=1, help="iterations beyond the last one (default 1)")
     cli_export.register_campaign(csub)
 
     schedule = subparsers.add_parser("schedule", help="cron schedules that start campaigns")

@@ -4,9 +4,10 @@ from __future__ import annotations
 from fastapi import APIRouter, Depends, Query
 from sqlalchemy.orm import Session
 
-from service.campaigns.schemas import CampaignCreate, IterationIn
-from service.campaigns.store import (campaign_estimate, campaign_summary, create_campaign, get_campaign, iteration,
-                                     iteration_view, list_campaigns, next_iteration, transition)
+from service.campaigns.schemas import CampaignCreate, ContinueIn, IterationIn
+from service.campaigns.store import (campaign_estimate, campaign_summary, continue_campaign, create_campaign,
+                                     get_campaign, iteration, iteration_view, list_campaigns, next_iteration,
+                                     transition)
 from service.api.openapi import errors
 from service.api.params import CampaignId, CampaignLimit, IterationLimit, IterationNumber, Offset
 from engine.lab.bounds import ID_MAX
@@ -92,6 +93,15 @@ def iterations(campaign_id: CampaignId, session: DbSession, limit: IterationLimi
 def add_iteration(campaign_id: CampaignId, body: IterationIn, session: DbSession, who: Caller = Depends(caller)) -> dict:
     who.require(get_campaign(session, campaign_id).owner, f"campaign {campaign_id}", ["path", "campaign_id"])
     return campaign_summary(next_iteration(session, campaign_id, body))
+
+
+@router.post("/{campaign_id}/continue",
+             summary="Take a completed automatic campaign up again with more iterations (409 when it stopped for "
+                     "a reason more iterations do not change)", responses=_STATE, **typed(CampaignSummary))
+def continue_(campaign_id: CampaignId, session: DbSession, body: ContinueIn | None = None,
+              who: Caller = Depends(caller)) -> dict:
+    who.require(get_campaign(session, campaign_id).owner, f"campaign {campaign_id}", ["path", "campaign_id"])
+    return campaign_summary(continue_campaign(session, campaign_id, (body or ContinueIn()).more_iterations))
 
 
 def _product(session: Session, campaign_id: CampaignId, number: int | None, attr: str, label: str):

@@ -10,7 +10,7 @@ from typing import Any
 from pydantic import BaseModel, Field, ValidationInfo, field_validator, model_validator
 
 from calibration.evaluator_registry import DEFAULT, EvaluatorName
-from calibration.settings import _FINITE, DesignIn, DesignPreviewIn, FactorIn, LoopSettings, PriorIn  # noqa: F401
+from calibration.settings import _FINITE, MAX_ITERATIONS, DesignIn, DesignPreviewIn, FactorIn, LoopSettings, PriorIn  # noqa: F401
 from engine.lab.bounds import ID_MAX, CONDITION_BOUNDS
 from engine.lab.registry import known_quantity, known_test
 from engine.lab.resolution import ResolutionIn
@@ -138,3 +138,13 @@ class IterationIn(BaseModel):
         if self.proposed_design and (self.factors is not None or self.design is not None):
             raise ValueError("proposed_design sets the factors' ranges or the design itself: give neither with it")
         return self
+
+
+class ContinueIn(BaseModel):
+    """More iterations for a completed automatic campaign (calibration.machine.extended)."""
+
+    model_config = _FINITE
+
+    more_iterations: WholeNumber = Field(
+        1, ge=1, le=MAX_ITERATIONS - 1, description="iterations beyond the last one; the loop's limit becomes the "
+        f"last iteration's number plus this (at most {MAX_ITERATIONS} in all)")

@@ -13,6 +13,7 @@ from sqlalchemy.orm import Session
 
 from calibration.adding import effect_hints, with_effect_factor, with_proposed_design
 from calibration.analysis import active_effects
+from calibration.automatic import may_continue
 from calibration.errors import SettingsError
 from calibration.keys import ResponseKey
 from calibration.keys import select as select_targets
@@ -250,6 +251,45 @@ def next_iteration(session: Session, campaign_id: int, changes: IterationIn) -> 
     return get_campaign(session, campaign_id)
 
 
+def continue_campaign(session: Session, campaign_id: int, more_iterations: int) -> Campaign:
+    """Completed automatic campaign -> running again, its limit raised by ``more_iterations``: the last
+    iteration's next step is decided again (``calibration.machine.extended``, the database-free loop's
+    ``extend`` too) and stored with what it had stopped for; the runner then starts the iteration it configures.
+    409 when the campaign is not completed or stopped for a reason more iterations do not change."""
+    from calibration import machine
+
+    campaign = get_campaign(session, campaign_id)
+    if campaign.status != CampaignStatus.COMPLETED:
+        raise Conflict(f"campaign {campaign_id} is {campaign.status}; only a completed campaign continues",
+                       ["path", "campaign_id"])
+    config = CampaignCreate.model_validate(campaign.config)
+    targets, left_out = split_targets(session, config)
+
+    def validate(raw: dict) -> dict:  # the next iteration's settings, checked as the runner checks them
+        validated = CampaignCreate.model_validate(raw)
+        check_limits_with_targets(session, validated)
+        return validated.model_dump(mode="json")
+
+    last = max(campaign.iterations, key=lambda it: it.number)
+    try:
+        step = machine.extended(machine.Context(config, dict(campaign.config), targets, campaign.iterations, validate,
+                                                left_out), last, more_iterations)
+    except SettingsError as exc:
+        raise from_settings_error(exc) from exc
+    # the record and the campaign's state change together, and only from "completed" (a racing request loses)
+    won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == CampaignStatus.COMPLETED)
+                          .values(config=step.next_settings, status=CampaignStatus.RUNNING, finished_at=None,
+                                  updated_at=utcnow()).execution_options(synchronize_session=False)).rowcount
+    if not won:
+        session.rollback()
+        raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])
+    session.execute(update(CampaignIteration).where(CampaignIteration.id == last.id)
+                    .values(**step.values).execution_options(synchronize_session=False))
+    session.commit()
+    session.expire_all()
+    return get_campaign(session, campaign_id)
+
+
 def _refuse_against_diagnosis(last, add_effect: str, override: bool) -> None:
     """409 for an effect added against the last diagnosis (no physical match, a suspect measurement)
     unless the request says ``override: true``: the page offers that only as a marked override."""
@@ -283,6 +323,9 @@ def campaign_summary(campaign: Campaign) -> dict[str, Any]:
         "finished_at": _iso(campaign.finished_at), "config": campaign.config,
         "stop_reason": (((current.report or {}).get("automatic") or {}).get("stop_reason") if current else None),
         "kept_iteration": (((current.report or {}).get("automatic") or {}).get("kept_iteration") if current else None),
+        # stopped where more iterations could go on (POST .../continue): at the limit, or an alias left unfitted
+        "continuable": bool(campaign.status == CampaignStatus.COMPLETED and current is not None and may_continue(
+            (current.report or {}).get("automatic"), current.number)),
         "warnings": settings_warnings(campaign.config or {}) + resolution_warnings(campaign),
     }
 

@@ -243,3 +243,30 @@ def test_the_history_table_names_a_widened_box(monkeypatch, capsys):
     assert cli_campaigns.campaign_history(SimpleNamespace(id=1, json=False, quiet=False)) == 0
     rows = capsys.readouterr().out.splitlines()
     assert "box widened" not in rows[2] and "- (box widened: particle_stiffness_n_per_m)" in rows[3]
+
+
+def test_campaign_continue(server, capsys):
+    """`demcal campaign continue ID`: an automatic campaign stopped by its one-iteration limit, with an effect
+    indicated (the stand-in spheres cannot reach the aggregate's 60.6 deg), goes on to add it; asked again
+    beyond the ten-iteration limit, a message naming the field, not a traceback."""
+    url, app, settings = server
+    code, out, _ = run(capsys, "campaign", "create", "--url", url, "--name", "limit", "--material", "1",
+                       "--evaluator", "analytic", "--fidelity", "thesis", "--factor", "particle_density_kg_m3:2300:2700",
+                       "--factor", "particle_stiffness_n_per_m:1e6:3e6", "--factor", "friction_pp:0.3:1.0",
+                       "--automatic", "--max-iterations", "1", "--start", "--json")
+    assert code == 0
+    cid = json.loads(out)["id"]
+    code, _, err = run(capsys, "campaign", "continue", str(cid), "--url", url)
+    assert code == 2 and "HTTP 409" in err  # still running
+    runner = CampaignRunner(app.state.session_factory, settings)
+    for _ in range(12):
+        runner.tick()
+        drain(app, settings)
+    code, out, _ = run(capsys, "campaign", "status", str(cid), "--url", url)
+    assert code == 0 and "completed" in out and "maximum number of iterations reached" in out
+    code, _, err = run(capsys, "campaign", "continue", str(cid), "--url", url, "--iterations", "10")
+    assert code == 2 and "HTTP 422" in err and "more_iterations" in err
+    code, out, _ = run(capsys, "campaign", "continue", str(cid), "--url", url)
+    assert code == 0 and f"campaign {cid} continues after iteration 1 (limit now 2" in out
+    assert "maximum number of iterations reached" in out and "iteration 2 adds " in out
+    assert any(name in out.split("iteration 2 adds ")[1] for name in ("rolling_epsd2", "particle_shape"))

@@ -45,6 +45,9 @@ class CampaignSummary(Out):
     config: dict[str, Any] = Field(description="the configuration of the next or current iteration: the "
                                                "fields of the create body (CampaignCreate), as validated")
     stop_reason: str | None = Field(description="automatic mode: why the loop stopped")
+    continuable: bool = Field(False, description="automatic mode: it stopped where more iterations could go on (at "
+                              "the iteration limit, or with an alias of the kept effect left unfitted): POST "
+                              ".../continue")
     kept_iteration: int | None = Field(None, description="automatic mode: the iteration whose model the loop kept "
                                                          "when that is not the last (an alias fitted in its place "
                                                          "and compared with it)")

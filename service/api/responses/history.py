@@ -12,7 +12,7 @@ from service.api.responses.common import (
     Out,
     ParameterValues,
 )
-from service.api.responses.report import Decision, Explanation
+from service.api.responses.report import Continued, Decision, Explanation
 
 
 class IterationBatteries(Out):
@@ -50,6 +50,8 @@ class HistoryEntry(Out):
     top_effect: str | None = Field(description="the diagnosis's first-ranked effect")
     decision: Decision | None = Field(description="automatic mode: whether the added effect was kept")
     stop_reason: str | None = Field(description="automatic mode: why the loop stopped here")
+    continued: Continued | None = Field(None, description="automatic mode: the loop had stopped here and was taken up "
+                                                          "again with more iterations (POST .../continue)")
     range_widened: bool = Field(description="the iteration redid its base on a wider strength range")
     box_widened: list[str] = Field(default_factory=list, description="base factors this iteration ran in a wider box "
                                                                      "than the iteration it was built on (their optimum "

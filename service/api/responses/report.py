@@ -243,6 +243,14 @@ class AliasSettled(Out):
     message: str
 
 
+class Continued(Out):
+    """A completed automatic loop taken up again after this iteration (calibration.machine.extended)."""
+
+    more_iterations: int
+    max_iterations: int = Field(description="the loop's limit from then on, the first iteration included")
+    stopped_for: str | None = Field(description="the reason the loop had stopped here before")
+
+
 class Automatic(Out):
     """The automatic mode's record of an iteration: its decision and the next step or why it stopped."""
 
@@ -264,6 +272,8 @@ class Automatic(Out):
     alias_settled: AliasSettled | None = Field(None, description="the two aliases' fits compared: which is kept")
     kept_iteration: int | None = Field(None, description="the iteration whose model the loop keeps (after an "
                                                          "alias refit)")
+    continued: Continued | None = Field(None, description="the loop had stopped here and was taken up again with "
+                                                          "more iterations (POST .../continue)")
 
 
 class Trend(Out):

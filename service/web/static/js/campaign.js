@@ -95,7 +95,12 @@ export async function campaignPage(view, id, params) {
        + `-${duration(e.wall_time_range_s[1])}; ${e.wall_time_basis}).`)));
   if (c.warnings?.length) parts.push(h("ul", { className: "campaign-warnings" }, c.warnings.map((w) => h("li", {}, humanText(w)))));
   if (c.error) parts.push(h("p", { className: "job-error" }, h("b", {}, "Failed: "), humanText(c.error)));
-  if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), humanText(c.stop_reason)));
+  if (c.stop_reason) parts.push(h("p", { className: "stop-reason" }, h("b", {}, "Automatic mode stopped: "), humanText(c.stop_reason),
+    // stopped where more iterations could go on (the limit, an alias left unfitted): take it up again
+    c.continuable ? [" ", h("button", { className: "secondary", "data-action": "continue", onclick: async () => {
+      if (await attempt(() => api(`/campaigns/${id}/continue`, { method: "POST", body: { more_iterations: 1 } }),
+        "continuing with one more iteration")) goTo(`#/campaigns/${id}`);
+    } }, "Continue with one more iteration")] : ""));
   // an alias fitted in place of an effect that passed: the model kept may be an earlier iteration's
   if (c.kept_iteration != null && c.kept_iteration !== c.current_iteration) parts.push(h("p", { className: "kept-iteration" },
     h("b", {}, "Model kept: "), `iteration ${c.kept_iteration}'s (see the history); iteration ${c.current_iteration} fitted its alias for comparison.`));

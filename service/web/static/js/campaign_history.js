@@ -85,6 +85,9 @@ function automaticCell(it) {
     `${it.decision.effect} ${it.decision.accepted ? (compared ? "beats the base" : "kept") : "rejected"}`));
   if (it.kept_iteration != null) parts.push(h("span", { className: it.undistinguished ? "kept-iteration bad" : "kept-iteration", title: it.stop_reason || "" },
     ` · model kept: iteration ${it.kept_iteration}` + (it.undistinguished ? ` (undistinguished: ${it.undistinguished.join(" / ")})` : "")));
+  // a completed loop taken up again from here (POST .../continue): what it had stopped for
+  if (it.continued) parts.push(h("span", { className: "continued", title: it.continued.stopped_for || "" },
+    `${parts.length ? " · " : ""}continued (limit ${it.continued.max_iterations}; had stopped: ${it.continued.stopped_for || "–"})`));
   return parts.length ? h("span", {}, ...parts) : "–";
 }
 
