@@ -426,7 +426,7 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
              density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False,
              polish_steps: int | None = None, confirmation_seeds: int | None = None,
              diagnose_always: bool = False, max_iterations: int = MAX_ITERATIONS,
-             polish_when: str | None = None) -> tuple[int, dict]:
+             polish_when: str | None = None, more_iterations: int = 0) -> tuple[int, dict]:
     """The scenario's automatic campaign and the body it was created with: an existing one calibrating
     exactly this (same measurements, priors, design and options; its name carries their digest) is
     reused, so a rerun resumes it."""
@@ -464,6 +464,15 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         print(f"{sc.name}: resuming campaign {c['id']} ({c['status']})", flush=True)
         if c["status"] in ("draft", "paused"):
             svc.call("POST", f"/campaigns/{c['id']}/{'start' if c['status'] == 'draft' else 'resume'}")
+        if c["status"] == "completed" and more_iterations:
+            # --continue: a loop stopped at its limit with a step left (an alias to fit) takes it, its batteries kept
+            if c.get("continuable"):
+                svc.call("POST", f"/campaigns/{c['id']}/continue", json={"more_iterations": more_iterations})
+                print(f"{sc.name}: campaign {c['id']} continues with {more_iterations} more iteration(s) "
+                      f"(it had stopped: {c['stop_reason']})", flush=True)
+            else:
+                print(f"{sc.name}: campaign {c['id']} stopped for its answer, nothing to continue: {c['stop_reason']}",
+                      flush=True)
         return c["id"], body
     # a campaign abandoned as failed leaves its material; the name carries the measurements' digest,
     # so that material is this campaign's and is reused (a second POST would be a 409)
@@ -820,6 +829,10 @@ def main(argv=None) -> int:
     ap.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS,
                     help="iterations of each automatic campaign, the first included (default 3: one effect tried "
                          "and, when it is rejected, the next; 2: the first effect added and judged)")
+    ap.add_argument("--continue", dest="more_iterations", type=int, default=0, metavar="N",
+                    help="with --data-dir: a scenario's stored campaign that stopped at its iteration limit with a step "
+                         "left (an alias to fit in the kept effect's place) goes on with N more iterations "
+                         "(POST /campaigns/{id}/continue), every battery run kept")
     ap.add_argument("--cct-window-stresses-kpa", default=None,
                     help="comma-separated normal stresses (kPa) of the measured E' windows (default: "
                          + ",".join(f"{x / 1e3:g}" for x in OPTIONS["cct_window_stresses_pa"])
@@ -906,7 +919,7 @@ def main(argv=None) -> int:
             cid, body = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
                            args.polish_steps, args.confirmation_seeds or sc.confirmation_seeds, args.diagnose_always,
                            args.max_iterations,
-                           args.polish_when)
+                           args.polish_when, args.more_iterations)
             final = _wait_campaign(svc, cid, poll_s)
             if final["status"] != "completed":
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)
