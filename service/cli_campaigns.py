@@ -171,6 +171,8 @@ def _status_text(c: dict, progress: str | None = None) -> str:
         text += f"\nautomatic mode stopped: {c['stop_reason']}"
     if c.get("kept_iteration") is not None:
         text += f"\nthe model kept is iteration {c['kept_iteration']}'s"
+    if c.get("continuable"):
+        text += f"\nmore iterations could go on from here: demcal campaign continue {c['id']}"
     return text + (f"\nerror: {c['error']}" if c.get("error") else "")
 
 

@@ -264,6 +264,7 @@ def test_campaign_continue(server, capsys):
         drain(app, settings)
     code, out, _ = run(capsys, "campaign", "status", str(cid), "--url", url)
     assert code == 0 and "completed" in out and "maximum number of iterations reached" in out
+    assert f"more iterations could go on from here: demcal campaign continue {cid}" in out
     code, _, err = run(capsys, "campaign", "continue", str(cid), "--url", url, "--iterations", "10")
     assert code == 2 and "HTTP 422" in err and "more_iterations" in err
     code, out, _ = run(capsys, "campaign", "continue", str(cid), "--url", url)
