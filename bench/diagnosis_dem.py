@@ -534,6 +534,7 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
         # the criterion's weighted error: RMS of the targets' standardised residuals (priors apart);
         # error_ratio, the chi2 ratio priors included, is what tables before session 12 printed
         out["rms_after"] = final.get("weighted_rms")
+        out["after_iteration"] = final["number"]
         if first.get("weighted_rms") and final.get("weighted_rms") is not None:
             out["rms_ratio"] = final["weighted_rms"] / first["weighted_rms"]
         out["error_ratio"] = final["chi2"] / first["chi2"] if first["chi2"] else None
@@ -593,16 +594,17 @@ def replay(svc: Service, cid: int, body: dict) -> list[str]:
 
 
 def truth_floor(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: float, reduced: bool,
-                options: dict) -> dict[str, Any]:
+                options: dict, number: int = 1) -> dict[str, Any]:
     """The weighted RMS error the measuring world's own parameters reach (``--truth-floor``).
 
-    The truth, its hidden effect on, is run at the first iteration's confirmation seeds and judged as
+    The truth, its hidden effect on, is run at iteration ``number``'s confirmation seeds and judged as
     that iteration's report judged its optimum: the same targets, measured uncertainties and simulator
     scatter divided by the number of seeds. A calibration of the right model is expected to come down
     to about the truth's error (a little below it, by the noise its fitted parameters absorb), not to
-    a fraction of it, so ``rms_truth / rms_before`` is about the smallest ratio the criterion "the
-    weighted error falls by at least half" can expect to see in this scenario."""
-    report = svc.call("GET", f"/campaigns/{cid}/iterations/1")["report"]
+    a fraction of it, so ``rms_truth / rms_before`` (at the first iteration's seeds) is about the smallest
+    ratio the criterion "the weighted error falls by at least half" can expect to see in this scenario, and
+    the fit kept is judged against the truth at its own iteration's seeds (``truth_floors``)."""
+    report = svc.call("GET", f"/campaigns/{cid}/iterations/{number}")["report"]
     seeds = report["confirmation_seeds"]
     jobs = [sc.measuring_job(seed, evaluator, options, reduced) for seed in seeds]
     digest = _digest(jobs[0])
@@ -619,6 +621,28 @@ def truth_floor(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: fl
             standardised.append((float(np.mean(values)) - row["measured"]) / row["residual_sd"])
     return {"rms_truth": weighted_rms(standardised), "chi2_truth": float(np.sum(np.square(standardised))),
             "truth_job_ids": ids}
+
+
+def truth_floors(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: float, reduced: bool,
+                 options: dict, after_iteration: int | None) -> dict[str, Any]:
+    """The truth floor at the first iteration's seeds (``rms_truth``: against the RMS before) and, where the
+    model kept is a later iteration's, at that iteration's seeds too (``rms_truth_after``, ``chi2_truth_after``:
+    the issue's "at most 1.1 times the truth's own RMS at the same seeds"). Why both: an iteration's
+    confirmation batteries run at seeds of its own (``calibration.machine``), so the first iteration's truth
+    and the kept fit are two draws of the simulator's scatter; with two seeds that scatter is half of each
+    residual's variance, and the kept fit was once judged against another draw's floor (session 32)."""
+    out = truth_floor(svc, sc, cid, evaluator, poll_s, reduced, options)
+    if after_iteration is not None and after_iteration != 1:
+        after = truth_floor(svc, sc, cid, evaluator, poll_s, reduced, options, after_iteration)
+        out.update(rms_truth_after=after["rms_truth"], chi2_truth_after=after["chi2_truth"],
+                   truth_after_job_ids=after["truth_job_ids"])
+    return out
+
+
+def _truth_after(o: dict, key: str = "rms_truth") -> float | None:
+    """The truth's own figure at the kept fit's seeds; rows written before session 32 have only the first
+    iteration's (another draw of the simulator's scatter)."""
+    return o.get(f"{key}_after", o.get(key))
 
 
 def own_rig(svc: Service, own: OwnMaterial) -> str:
@@ -760,7 +784,7 @@ def criteria(outs: list[dict]) -> dict[str, Any]:
     # issue 33's criterion: after an effect was added, the weighted RMS within 1.1 x the truth's own at the
     # same seeds (--truth-floor), with chi2/dof <= 2; rows without the truth floor are not counted
     floored = [o for o in outs if o.get("added") and o.get("rms_truth") is not None]
-    res["within_truth_floor"] = sum(o.get("rms_after") is not None and o["rms_after"] <= TRUTH_FLOOR_FACTOR * o["rms_truth"]
+    res["within_truth_floor"] = sum(o.get("rms_after") is not None and o["rms_after"] <= TRUTH_FLOOR_FACTOR * _truth_after(o)
                                     and o["chi2_per_dof_after"] is not None and o["chi2_per_dof_after"] <= 2.0
                                     for o in floored)
     res["n_truth_floor"] = len(floored)
@@ -944,7 +968,8 @@ def main(argv=None) -> int:
             if args.replay:
                 o["replay_differences"] = replay(svc, cid, body)
             if args.truth_floor:
-                o.update(truth_floor(svc, sc, cid, args.evaluator, poll_s, args.reduced, options))
+                o.update(truth_floors(svc, sc, cid, args.evaluator, poll_s, args.reduced, options,
+                                      o.get("after_iteration")))
             o["commit"] = _commit()  # rows written over several stops may come from different code
             outs.append(o)
             _print_row(o)
@@ -999,6 +1024,8 @@ def _markdown(outs: list[dict]) -> None:
 def _rms(o: dict) -> str:
     before, after = o.get("rms_before"), o.get("rms_after")
     floor = f"; truth {_f(o['rms_truth'])}" if o.get("rms_truth") is not None else ""
+    if after is not None and o.get("rms_truth_after") is not None:
+        floor += f", at the kept fit's seeds {_f(o['rms_truth_after'])}"
     if after is None:
         return (_f(before) if o.get("rms_ratio") is None else _f(o["rms_ratio"])) + (f" ({floor[2:]})" if floor else "")
     return f"{_f(before)} -> {_f(after)} ({_f(o.get('rms_ratio'))}{floor})"
@@ -1038,8 +1065,8 @@ def _print_criteria(outs: list[dict], evaluator: str, reduced: bool) -> None:
               "right model can be expected to reach (--truth-floor): " + ", ".join(floors))
     # the chi2/dof <= 2 bar applies to the fit, which spends dof on its parameters; where the truth's own chi2
     # over the same dof is above 2, the measurements' draw itself misses the bar and no calibration can pass it
-    truth_bars = [f"{o['scenario']} {_f(o['chi2_truth'])} / {o['dof_after']} = {_f(o['chi2_truth'] / o['dof_after'])} "
-                  f"(the fit: {_f(o['chi2_per_dof_after'])})"
+    truth_bars = [f"{o['scenario']} {_f(_truth_after(o, 'chi2_truth'))} / {o['dof_after']} = "
+                  f"{_f(_truth_after(o, 'chi2_truth') / o['dof_after'])} (the fit: {_f(o['chi2_per_dof_after'])})"
                   for o in outs if o.get("added") and o.get("chi2_truth") is not None and o.get("dof_after")]
     if truth_bars:
         print("  the truth's own chi2 over the kept fit's degrees of freedom, where the chi2/dof <= 2 bar sits for "
@@ -1077,8 +1104,12 @@ def _add_truth_floors(svc: Service, path: str, poll_s: float) -> int:
     rows = list(_load_rows(path).values())
     for o in rows:
         options = {**OPTIONS, "cct_window_stresses_pa": o.get("cct_window_stresses_pa") or OPTIONS["cct_window_stresses_pa"]}
-        o.update(truth_floor(svc, SCENARIOS[o["scenario"]], o["campaign_id"], o.get("evaluator") or "dem", poll_s,
-                             o.get("form") == "reduced", options), truth_floor_commit=_commit())
+        sc = SCENARIOS[o["scenario"]]
+        if "after_iteration" not in o and o.get("added"):  # a row written before session 32: read it again
+            o["after_iteration"] = outcome(svc, sc, o["campaign_id"]).get("after_iteration")
+        o.update(truth_floors(svc, sc, o["campaign_id"], o.get("evaluator") or "dem", poll_s,
+                              o.get("form") == "reduced", options, o.get("after_iteration")),
+                 truth_floor_commit=_commit())
         _save_row(path, o)
         _print_row(o)
     _print_criteria(rows, (rows[0].get("evaluator") if rows else None) or "dem",
