@@ -448,7 +448,8 @@ def register(subparsers) -> None:
     page_options(list_parser)
     list_parser.add_argument("--status", choices=CampaignStatus.values())
     for action, text in (("start", "start a draft campaign"), ("pause", "pause a running campaign"),
-                         ("resume", "resume a paused campaign")):
+                         ("resume", "resume a paused campaign"),
+                         ("retry", "run a failed campaign on: its failed batteries queued again, the others kept")):
         _leaf(csub, action, campaign_action, text).add_argument("id", type=int)
         csub.choices[action].set_defaults(action=action)
     status = _leaf(csub, "status", campaign_status, "a campaign's state and its phase's progress")

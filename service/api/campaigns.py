@@ -7,7 +7,7 @@ from sqlalchemy.orm import Session
 from service.campaigns.schemas import CampaignCreate, ContinueIn, IterationIn
 from service.campaigns.store import (campaign_estimate, campaign_summary, continue_campaign, create_campaign,
                                      get_campaign, iteration, iteration_view, list_campaigns, next_iteration,
-                                     transition)
+                                     retry_campaign, transition)
 from service.api.openapi import errors
 from service.api.params import CampaignId, CampaignLimit, IterationLimit, IterationNumber, Offset
 from engine.lab.bounds import ID_MAX
@@ -102,6 +102,13 @@ def continue_(campaign_id: CampaignId, session: DbSession, body: ContinueIn | No
               who: Caller = Depends(caller)) -> dict:
     who.require(get_campaign(session, campaign_id).owner, f"campaign {campaign_id}", ["path", "campaign_id"])
     return campaign_summary(continue_campaign(session, campaign_id, (body or ContinueIn()).more_iterations))
+
+
+@router.post("/{campaign_id}/retry", summary="failed -> running: its failed batteries queued again, the others kept "
+             "(409 otherwise)", responses=_STATE, **typed(CampaignSummary))
+def retry(campaign_id: CampaignId, session: DbSession, who: Caller = Depends(caller)) -> dict:
+    who.require(get_campaign(session, campaign_id).owner, f"campaign {campaign_id}", ["path", "campaign_id"])
+    return campaign_summary(retry_campaign(session, campaign_id))
 
 
 def _product(session: Session, campaign_id: CampaignId, number: int | None, attr: str, label: str):

@@ -290,6 +290,41 @@ def continue_campaign(session: Session, campaign_id: int, more_iterations: int) 
     return get_campaign(session, campaign_id)
 
 
+def retry_campaign(session: Session, campaign_id: int) -> Campaign:
+    """Failed campaign -> running again where it failed: its current iteration's failed or cancelled batteries
+    are queued again (``queue.retry_job``: same job, fresh attempts) and the runner takes the phase up; every
+    battery that succeeded stays. 409 unless the campaign failed.
+
+    Why: one battery that fails (a worker's bug since fixed, a cancelled job) failed the whole campaign, and the
+    only way on was a new campaign that runs every battery again (tier B's hertz_strong on DEM failed in its
+    second iteration after 59 batteries, on an unload-reload hold the servo could not settle, session 32)."""
+    from service.queue import retry_job
+
+    campaign = get_campaign(session, campaign_id)
+    if campaign.status != CampaignStatus.FAILED:
+        raise Conflict(f"campaign {campaign_id} is {campaign.status}; only a failed campaign is retried",
+                       ["path", "campaign_id"])
+    won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == CampaignStatus.FAILED)
+                          .values(status=CampaignStatus.RUNNING, error=None, finished_at=None, updated_at=utcnow())
+                          .execution_options(synchronize_session=False)).rowcount
+    if not won:
+        session.rollback()
+        raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])
+    current = next((it for it in campaign.iterations if it.number == campaign.current_iteration), None)
+    for run in (current.runs if current is not None else []):
+        if run.status not in (RunStatus.FAILED, RunStatus.CANCELLED):
+            continue
+        if run.job_id is not None:
+            try:
+                retry_job(session, run.job_id)
+            except Conflict:  # the job finished meanwhile (a retry of its own): the runner reads it as it is
+                pass
+        run.status, run.error = RunStatus.QUEUED.value if run.job_id is not None else RunStatus.PENDING.value, None
+    session.commit()
+    session.expire_all()
+    return get_campaign(session, campaign_id)
+
+
 def _refuse_against_diagnosis(last, add_effect: str, override: bool) -> None:
     """409 for an effect added against the last diagnosis (no physical match, a suspect measurement)
     unless the request says ``override: true``: the page offers that only as a marked override."""

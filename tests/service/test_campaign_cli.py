@@ -271,3 +271,12 @@ def test_campaign_continue(server, capsys):
     assert code == 0 and f"campaign {cid} continues after iteration 1 (limit now 2" in out
     assert "maximum number of iterations reached" in out and "iteration 2 adds " in out
     assert any(name in out.split("iteration 2 adds ")[1] for name in ("rolling_epsd2", "particle_shape"))
+
+
+def test_campaign_retry_of_a_campaign_that_did_not_fail_is_a_message(server, capsys):
+    url, app, settings = server
+    code, out, _ = run(capsys, "campaign", "create", "--url", url, "--name", "fine", "--material", "1",
+                       "--evaluator", "analytic", "--fidelity", "thesis", "--factor", "friction_pp:0.3:1.0", "--json")
+    cid = json.loads(out)["id"]
+    code, _, err = run(capsys, "campaign", "retry", str(cid), "--url", url)
+    assert code == 2 and "HTTP 409" in err and "only a failed campaign is retried" in err

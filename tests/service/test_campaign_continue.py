@@ -76,3 +76,42 @@ def test_a_campaign_that_stopped_for_its_answer_is_refused_and_left_as_it_was(s2
 
     missing = client.post(f"{API}/campaigns/999999/continue")
     assert missing.status_code == 404
+
+
+def test_a_failed_campaign_is_retried_where_it_failed_keeping_its_batteries(s2):
+    """A battery of the design fails (its job marked failed as a worker's exception leaves it): the campaign fails
+    naming it; POST .../retry queues that battery's job again, keeps the others, and the campaign completes with
+    the same runs. Retrying a campaign that did not fail is a 409."""
+    from sqlalchemy import select, update
+
+    from service.campaigns.runner import CampaignRunner
+    from service.models.campaign import CampaignRun
+    from service.models.job import Job
+
+    client, app, settings = s2
+    body = campaign_body(thesis_material_id(client))
+    cid = client.post(f"{API}/campaigns", json=body).json()["id"]
+    refused = client.post(f"{API}/campaigns/{cid}/retry")
+    assert refused.status_code == 409 and error_loc(refused) == ["path", "campaign_id"]
+    client.post(f"{API}/campaigns/{cid}/start")
+    CampaignRunner(app.state.session_factory, settings).tick()  # the design's batteries queued
+    with app.state.session_factory() as session:
+        job_ids = sorted(session.scalars(select(CampaignRun.job_id).where(CampaignRun.job_id.is_not(None))))
+        assert len(job_ids) >= 8
+        broken = job_ids[3]
+        session.execute(update(Job).where(Job.id == broken).values(status="failed", error="ZeroDivisionError: float "
+                                                                    "division by zero", attempts=1))
+        session.commit()
+    failed = run_to_end(client, app, settings, cid)
+    assert failed["status"] == "failed" and f"(job {broken}) failed: ZeroDivisionError" in failed["error"]
+
+    retried = client.post(f"{API}/campaigns/{cid}/retry")
+    assert retried.status_code == 200, retried.text
+    assert retried.json()["status"] == "running" and retried.json()["error"] is None
+    done = run_to_end(client, app, settings, cid)
+    assert done["status"] == "completed", done
+    runs = client.get(f"{API}/campaigns/{cid}/iterations/1").json()["runs"]
+    assert sorted(r["job_id"] for r in runs if r["kind"] == "design") == job_ids  # the same batteries, none twice
+    assert all(r["status"] == "succeeded" for r in runs)
+    assert client.get(f"{API}/jobs/{broken}").json()["status"] == "succeeded"
+    assert client.post(f"{API}/campaigns/{cid}/retry").status_code == 409

@@ -26,6 +26,8 @@ function controls(c, id) {
     c.status === "draft" ? act("Start", () => api(`/campaigns/${id}/start`, { method: "POST" })) : "",
     c.status === "running" ? act("Pause", () => api(`/campaigns/${id}/pause`, { method: "POST" })) : "",
     c.status === "paused" ? act("Resume", () => api(`/campaigns/${id}/resume`, { method: "POST" })) : "",
+    // a failed battery failed the campaign: queue it again and run on, the batteries that succeeded kept
+    c.status === "failed" ? act("Retry", () => api(`/campaigns/${id}/retry`, { method: "POST" })) : "",
     " ", h("a", { href: `#/jobs?campaign_id=${id}` }, "its jobs"), " · ", h("a", { href: `#/materials/${c.material_id}` }, "its material"));
 }
 
