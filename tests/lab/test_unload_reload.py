@@ -178,3 +178,50 @@ def test_a_cct_packing_asked_for_unload_reload_reports_it_without_changing_its_c
         assert asked.value("cct", "unload_reload_modulus_pa", normal_stress_pa=stress) > loading
     assert asked.curves["cct_unload_reload_modulus_vs_stress"]["normal_stress_pa"] == stresses
     assert "cct_unload_reload_modulus_vs_stress" not in plain.curves
+
+
+class _LidOff:
+    """A simulation whose lid carries no load: the state the servo left a stirred packing in (session 32)."""
+
+    time_s = 1.0
+
+    @staticmethod
+    def wall_force(name):
+        return np.zeros(3)
+
+    @staticmethod
+    def wall_position(name):
+        return np.array([0.0, 0.0, 0.3])
+
+
+def test_an_unloading_with_no_load_on_the_lid_reads_nothing_and_says_so():
+    """Unloading from zero has no drop to read: before the guard the speed from a zero drop divided by zero and
+    failed the whole battery (a DEM campaign with it)."""
+    ctx = RunContext.from_spec(JobSpec(test="cct", fidelity="screening", seed=1))
+    record = LidRecord()
+    start, end = unload_slowly(ctx, _LidOff(), 2.0e5, 3.0e7, 0.3, record, 3, "cct: unload-reload at 30 kPa: unloading")
+    assert (start, end) == (0, 1) and record.normal_stress_pa == [0.0]
+    assert any("carries no load" in w for w in ctx.warnings)
+    assert math.isnan(unload_reload_modulus(np.zeros(1), np.zeros(1)))  # and the reducer reports no value for it
+
+
+def test_a_stress_the_packing_does_not_rest_at_ends_the_unload_reload_sequence(monkeypatch):
+    """The servo holds 3 and 10 kPa, not 30: the 3 and 10 kPa unloadings are read, and none at 30 or 60 kPa, where
+    the unloading would start from a moving packing and the next from one the servo stirred; a warning names them."""
+    from engine.lab.procedures import cct
+
+    held, unloaded = [], []
+    monkeypatch.setattr(cct, "load_to", lambda *a, **k: None)
+    monkeypatch.setattr(cct, "hold_stress", lambda ctx, sim, target, speed, phase: held.append(target) or target < 30e3)
+    monkeypatch.setattr(cct, "unload_slowly", lambda *a: unloaded.append(a[-1]) or (len(unloaded), len(unloaded) + 1))
+
+    class _Sim:
+        @staticmethod
+        def body_masses_kg():
+            return np.ones(10)
+
+    ctx = RunContext.from_spec(JobSpec(test="cct", fidelity="screening", seed=1))
+    ranges = cct.unload_reload(ctx, _Sim(), 0.3, LidRecord(), 3, [3e3, 10e3, 30e3, 60e3], 3.0e7)
+    assert held == [3e3, 10e3, 30e3] and len(unloaded) == len(ranges) == 2
+    (warning,) = [w for w in ctx.warnings if "did not come to rest" in w]
+    assert warning.endswith("no unload-reload modulus at 30, 60 kPa")

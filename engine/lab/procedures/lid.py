@@ -108,9 +108,10 @@ def unload(ctx: RunContext, sim, speed_m_s: float, record: LidRecord, cycle: int
 SERVO_GAIN = 0.02
 
 
-def stabilise(ctx: RunContext, sim, target_pa: float, phase: str, min_time_s=0.05, max_time_s=DST_STABILISE_MAX_S) -> None:
+def stabilise(ctx: RunContext, sim, target_pa: float, phase: str, min_time_s=0.05, max_time_s=DST_STABILISE_MAX_S) -> bool:
     """Hold the servo until the stress is within 2 % of the target and the packing is nearly at rest
-    (kinetic energy ratio 1e-4: mean speed ~9 mm/s for 40 mm grains, a fraction of the shear speed)."""
+    (kinetic energy ratio 1e-4: mean speed ~9 mm/s for 40 mm grains, a fraction of the shear speed).
+    False when ``max_time_s`` passed first (warned): the caller decides whether what follows can be read."""
     area = ctx.preset.container_area_m2
     d = labsim.mean_diameter_m(sim)
     chunk = labsim.steps_for(sim, 0.01)
@@ -122,19 +123,21 @@ def stabilise(ctx: RunContext, sim, target_pa: float, phase: str, min_time_s=0.0
         ctx.report(elapsed / max_time_s, phase)
         if elapsed >= min_time_s and abs(stress - target_pa) < 0.02 * target_pa \
                 and labsim.kinetic_energy_ratio(sim, d) < 1e-4:
-            return
+            return True
         if elapsed >= max_time_s:
             ctx.warn(f"{phase}: not stable after {max_time_s} s (stress {stress / 1000:.2f} kPa)")
-            return
+            return False
 
 
-def hold_stress(ctx: RunContext, sim, target_pa: float, max_speed_m_s: float, phase: str) -> None:
-    """The lid on its servo at ``target_pa`` until the packing is stable (``stabilise``), then stopped there."""
+def hold_stress(ctx: RunContext, sim, target_pa: float, max_speed_m_s: float, phase: str) -> bool:
+    """The lid on its servo at ``target_pa`` until the packing is stable (``stabilise``), then stopped there;
+    False when it did not come to rest there."""
     sim.set_wall_servo("lid", ServoSpec(axis=(0.0, 0.0, -1.0), target_stress_pa=target_pa,
                                         area_m2=ctx.preset.container_area_m2, max_speed_m_s=max_speed_m_s,
                                         gain_fraction=SERVO_GAIN))
-    stabilise(ctx, sim, target_pa, phase)
+    stable = stabilise(ctx, sim, target_pa, phase)
     sim.set_wall_velocity("lid", (0.0, 0.0, 0.0))
+    return stable
 
 
 def unload_slowly(ctx: RunContext, sim, bulk_impedance_pa_s_m: float, expected_modulus_pa: float,
@@ -147,6 +150,9 @@ def unload_slowly(ctx: RunContext, sim, bulk_impedance_pa_s_m: float, expected_m
     area = ctx.preset.container_area_m2
     start = len(record.lid_z_m)
     top = record.add(sim, area, cycle)
+    if top <= 0.0:  # the lid carries nothing: no unloading to read (the reducer gets one sample and says NaN)
+        ctx.warn(f"{phase}: the lid carries no load ({top / 1000:.3g} kPa), nothing to unload")
+        return start, len(record.lid_z_m)
     drop = UNLOAD_RELOAD_FRACTION * top
     speed = min(UNLOAD_RELOAD_JUMP_FRACTION * drop / (2.0 * bulk_impedance_pa_s_m), ctx.lid_speed_m_s)
     travel = drop / expected_modulus_pa * packing_height_m
