@@ -426,7 +426,8 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
              density_bias: float = DENSITY_PRIOR_BIAS, reduced: bool = False,
              polish_steps: int | None = None, confirmation_seeds: int | None = None,
              diagnose_always: bool = False, max_iterations: int = MAX_ITERATIONS,
-             polish_when: str | None = None, more_iterations: int = 0) -> tuple[int, dict]:
+             polish_when: str | None = None, more_iterations: int = 0,
+             retry_failed: bool = False) -> tuple[int, dict]:
     """The scenario's automatic campaign and the body it was created with: an existing one calibrating
     exactly this (same measurements, priors, design and options; its name carries their digest) is
     reused, so a rerun resumes it."""
@@ -458,7 +459,14 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
     digest = hashlib.sha256(json.dumps([body, measurements] + ([material_fields] if material_fields else []),
                                        sort_keys=True).encode()).hexdigest()[:12]
     name = f"tier B {sc.name} {digest}"
-    existing = [c for c in svc.every("/campaigns") if c["name"] == name and c["status"] != "failed"]
+    named = [c for c in svc.every("/campaigns") if c["name"] == name]  # newest first
+    if retry_failed and named and all(c["status"] == "failed" for c in named):
+        # --retry-failed: the newest failed one runs on where it failed, its batteries kept (POST .../retry)
+        c = named[0]
+        print(f"{sc.name}: retrying campaign {c['id']} (it failed: {c['error']})", flush=True)
+        svc.call("POST", f"/campaigns/{c['id']}/retry")
+        return c["id"], body
+    existing = [c for c in named if c["status"] != "failed"]
     if existing:
         c = existing[0]
         print(f"{sc.name}: resuming campaign {c['id']} ({c['status']})", flush=True)
@@ -857,6 +865,9 @@ def main(argv=None) -> int:
                     help="with --data-dir: a scenario's stored campaign that stopped at its iteration limit with a step "
                          "left (an alias to fit in the kept effect's place) goes on with N more iterations "
                          "(POST /campaigns/{id}/continue), every battery run kept")
+    ap.add_argument("--retry-failed", action="store_true",
+                    help="with --data-dir: a scenario whose stored campaign failed (a battery failed) runs on where "
+                         "it failed (POST /campaigns/{id}/retry) instead of starting a new one")
     ap.add_argument("--cct-window-stresses-kpa", default=None,
                     help="comma-separated normal stresses (kPa) of the measured E' windows (default: "
                          + ",".join(f"{x / 1e3:g}" for x in OPTIONS["cct_window_stresses_pa"])
@@ -943,7 +954,7 @@ def main(argv=None) -> int:
             cid, body = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
                            args.polish_steps, args.confirmation_seeds or sc.confirmation_seeds, args.diagnose_always,
                            args.max_iterations,
-                           args.polish_when, args.more_iterations)
+                           args.polish_when, args.more_iterations, args.retry_failed)
             final = _wait_campaign(svc, cid, poll_s)
             if final["status"] != "completed":
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)

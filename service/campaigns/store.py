@@ -18,7 +18,7 @@ from calibration.errors import SettingsError
 from calibration.keys import ResponseKey
 from calibration.keys import select as select_targets
 from calibration.records import Measured
-from calibration.vocabulary import AGAINST_ADDING
+from calibration.vocabulary import AGAINST_ADDING, Phase
 from engine.lab.plausibility import settings_warnings
 from engine.lab.resolution import is_preset, label
 from engine.lab.rigs import rig_json
@@ -304,13 +304,18 @@ def retry_campaign(session: Session, campaign_id: int) -> Campaign:
     if campaign.status != CampaignStatus.FAILED:
         raise Conflict(f"campaign {campaign_id} is {campaign.status}; only a failed campaign is retried",
                        ["path", "campaign_id"])
+    current = next((it for it in campaign.iterations if it.number == campaign.current_iteration), None)
+    record = ((current.report or {}).get("automatic") or {}) if current is not None else {}
+    if current is not None and current.phase == Phase.DONE and (not record or record.get("stop_reason") is not None):
+        # the loop had ended there (no next iteration configured): running it again would start one it never asked for
+        raise Conflict(f"campaign {campaign_id}'s last iteration had completed the loop; nothing failed to retry",
+                       ["path", "campaign_id"])
     won = session.execute(update(Campaign).where(Campaign.id == campaign_id, Campaign.status == CampaignStatus.FAILED)
                           .values(status=CampaignStatus.RUNNING, error=None, finished_at=None, updated_at=utcnow())
                           .execution_options(synchronize_session=False)).rowcount
     if not won:
         session.rollback()
         raise Conflict(f"campaign {campaign_id} changed state meanwhile; try again", ["path", "campaign_id"])
-    current = next((it for it in campaign.iterations if it.number == campaign.current_iteration), None)
     for run in (current.runs if current is not None else []):
         if run.status not in (RunStatus.FAILED, RunStatus.CANCELLED):
             continue
