@@ -93,15 +93,10 @@ class CampaignRunner:
     def _validate(self, raw: dict) -> dict:
         """The next iteration's configuration as the automatic mode proposes it, checked as a campaign's
         (with the cost limits of every run)."""
-        from service.campaigns.store import campaign_targets
-        from service.limits import check_campaign_limits
+        from service.campaigns.store import checked_next_settings
 
-        validated = CampaignCreate.model_validate(raw)
-        if self.settings is not None:
-            with self.session_factory() as session:
-                keys = [t.key for t in campaign_targets(session, validated)]
-            check_campaign_limits(validated, self.settings, target_keys=keys)
-        return validated.model_dump(mode="json")
+        with self.session_factory() as session:
+            return checked_next_settings(session, raw, self.settings)
 
     def _new_iteration(self, session: Session, campaign: Campaign, config: CampaignCreate) -> None:
         number = campaign.current_iteration + 1

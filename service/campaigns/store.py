@@ -112,12 +112,23 @@ def with_material_world(session: Session, body: CampaignCreate, field_prefix: st
                                           "particles": (body.particles or particles).model_dump(mode="json", exclude_none=True)})
 
 
-def check_limits_with_targets(session: Session, config: CampaignCreate, field_prefix: str = "") -> None:
+def check_limits_with_targets(session: Session, config: CampaignCreate, field_prefix: str = "",
+                              settings: Settings | None = None) -> None:
     """``check_campaign_limits`` with the options the material's measurements derive, as queued later (in the
     material's rig, with its particles, at a material resolution)."""
     config = with_material_world(session, config, field_prefix)
-    check_campaign_limits(config, _settings(session), field_prefix,
+    check_campaign_limits(config, settings or _settings(session), field_prefix,
                           [t.key for t in campaign_targets(session, config)])
+
+
+def checked_next_settings(session: Session, raw: dict, settings: Settings | None = None) -> dict:
+    """The next iteration's configuration as the automatic mode proposes it (or a continued loop decides it
+    again), checked as a new campaign's is: the schema, then the cost limits of every run it would queue.
+    One check for the runner and for ``continue_campaign``, so a continued loop cannot configure an
+    iteration the runner would refuse."""
+    validated = CampaignCreate.model_validate(raw)
+    check_limits_with_targets(session, validated, settings=settings)
+    return validated.model_dump(mode="json")
 
 
 def check_targets_simulated(session: Session, body: CampaignCreate) -> None:
@@ -265,10 +276,8 @@ def continue_campaign(session: Session, campaign_id: int, more_iterations: int) 
     config = CampaignCreate.model_validate(campaign.config)
     targets, left_out = split_targets(session, config)
 
-    def validate(raw: dict) -> dict:  # the next iteration's settings, checked as the runner checks them
-        validated = CampaignCreate.model_validate(raw)
-        check_limits_with_targets(session, validated)
-        return validated.model_dump(mode="json")
+    def validate(raw: dict) -> dict:
+        return checked_next_settings(session, raw)
 
     last = max(campaign.iterations, key=lambda it: it.number)
     try:
