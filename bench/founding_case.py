@@ -116,7 +116,7 @@ def main(argv=None) -> int:
     digest = hashlib.sha256(json.dumps([body, material_body(bundled, "")], sort_keys=True).encode()).hexdigest()[:12]
     name = f"founding case as spheres {digest}"
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
-    svc = Service(None, args.workers, args.data_dir)
+    svc = Service(None, args.workers, args.data_dir, args.evaluator)
     started = time.monotonic()
     try:
         existing = [c for c in svc.every("/campaigns") if c["name"] == name and c["status"] != "failed"]
