@@ -12,6 +12,11 @@ that use them are moved to the end of the session: the runs go on while the rest
 which waits on servers and browsers, runs beside them. Each fixture then waits for its own result. A run
 wanted only when an earlier result asks for it (a sequential test's second stage) goes through the
 `lab_run` fixture, which submits it to the same pool then.
+
+Under pytest-xdist (the README's test command runs the suite on every core): the tests that use these runs are
+one work unit (xdist_group LAB_GROUP), so one worker holds the pool, and they go first (tests/conftest.py) so that
+the runs start at once; that worker starts the pool at its first such test (a worker that collects them does not
+know whether it will run them) and waits for the runs while the other workers take the rest of the suite.
 """
 from __future__ import annotations
 
@@ -25,6 +30,9 @@ from lab_runs import GROUPS, RUNS, call
 
 _FUTURES = pytest.StashKey[dict]()
 _POOL = pytest.StashKey[ProcessPoolExecutor]()
+_NEEDED = pytest.StashKey[set]()
+# the xdist_group of the tests that use the pool (tests/conftest.py schedules it first)
+LAB_GROUP = "lab-dem-pool"
 
 
 def _runs_of(item) -> list[str]:
@@ -36,18 +44,44 @@ def _runs_of(item) -> list[str]:
     return names
 
 
+def _xdist_worker(config) -> bool:
+    return hasattr(config, "workerinput")
+
+
+def pytest_itemcollected(item):
+    # before any collection_modifyitems hook: xdist turns the mark into the item's work unit in its own.
+    # `lab_run`'s users too: in another worker they would start a pool of their own
+    if _runs_of(item) or "lab_run" in getattr(item, "fixturenames", ()):
+        item.add_marker(pytest.mark.xdist_group(LAB_GROUP))
+
+
 @pytest.hookimpl(trylast=True)  # after -m / -k have deselected
 def pytest_collection_modifyitems(session, config, items):
     needed = {name for item in items for name in _runs_of(item)}
     config.stash[_FUTURES] = {}
-    if not needed or config.option.collectonly:
+    config.stash[_NEEDED] = needed
+    if not needed or config.option.collectonly or _xdist_worker(config):
         return
     items.sort(key=lambda item: bool(_runs_of(item)))  # stable: the pool's users last, in their order
+    _start_pool(config)
+
+
+def _start_pool(config) -> ProcessPoolExecutor:
+    needed = config.stash.get(_NEEDED, set())
     pool = ProcessPoolExecutor(max_workers=max(1, min(len(needed), os.cpu_count() or 1)),
                                mp_context=multiprocessing.get_context("spawn"))
     config.stash[_POOL] = pool
     # RUNS is longest first, so the last run to start is short
     config.stash[_FUTURES] = {name: pool.submit(call, name) for name in RUNS if name in needed}
+    return pool
+
+
+def _pool(config) -> ProcessPoolExecutor | None:
+    """The session's pool; in an xdist worker, started by the first test that needs a run."""
+    pool = config.stash.get(_POOL, None)
+    if pool is None and _xdist_worker(config) and config.stash.get(_NEEDED, None):
+        pool = _start_pool(config)
+    return pool
 
 
 def pytest_sessionfinish(session):
@@ -57,6 +91,7 @@ def pytest_sessionfinish(session):
 
 
 def _result(config, name: str):
+    _pool(config)
     future: Future | None = config.stash.get(_FUTURES, {}).get(name)
     # a run no collected test named (asked for through getfixturevalue) runs here
     return call(name) if future is None else future.result()
@@ -69,8 +104,8 @@ def lab_run(request):
     config = request.config
 
     def get(names: list[str]) -> list:
+        pool = _pool(config)
         futures = config.stash.get(_FUTURES, {})
-        pool = config.stash.get(_POOL, None)
         if pool is not None:
             for name in names:
                 if name not in futures:
