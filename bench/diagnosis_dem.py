@@ -938,7 +938,8 @@ def main(argv=None) -> int:
             if args.own_scale_factor is not None:
                 own = dataclasses.replace(own, scale_factor=args.own_scale_factor)
             SCENARIOS[key] = dataclasses.replace(sc, own=own)
-    poll_s = 0.2 if args.evaluator == "analytic" else 5.0
+    # how often the bench asks the service: a reduced DEM battery takes tens of seconds, a screening one minutes
+    poll_s = 0.2 if args.evaluator == "analytic" else 1.0 if args.reduced else 5.0
     if args.url and args.data_dir:
         ap.error("--data-dir applies to the local service; not with --url")
     if args.truth_floor_for:
