@@ -66,21 +66,23 @@ def pytest_collection_modifyitems(session, config, items):
     _start_pool(config)
 
 
-def _start_pool(config) -> ProcessPoolExecutor:
+def _start_pool(config, submit_all: bool = True) -> ProcessPoolExecutor:
     needed = config.stash.get(_NEEDED, set())
     pool = ProcessPoolExecutor(max_workers=max(1, min(len(needed), os.cpu_count() or 1)),
                                mp_context=multiprocessing.get_context("spawn"))
     config.stash[_POOL] = pool
     # RUNS is longest first, so the last run to start is short
-    config.stash[_FUTURES] = {name: pool.submit(call, name) for name in RUNS if name in needed}
+    config.stash[_FUTURES] = {name: pool.submit(call, name) for name in RUNS if name in needed and submit_all}
     return pool
 
 
 def _pool(config) -> ProcessPoolExecutor | None:
-    """The session's pool; in an xdist worker, started by the first test that needs a run."""
+    """The session's pool; in an xdist worker, started by the first test that needs a run. With --dist
+    loadgroup every user of the pool is in this worker, so every run it needs starts then; with another
+    distribution the users are spread over the workers, and each worker runs only what its tests ask for."""
     pool = config.stash.get(_POOL, None)
     if pool is None and _xdist_worker(config) and config.stash.get(_NEEDED, None):
-        pool = _start_pool(config)
+        pool = _start_pool(config, submit_all=bool(config.getvalue("loadgroup")))
     return pool
 
 
@@ -91,9 +93,12 @@ def pytest_sessionfinish(session):
 
 
 def _result(config, name: str):
-    _pool(config)
-    future: Future | None = config.stash.get(_FUTURES, {}).get(name)
-    # a run no collected test named (asked for through getfixturevalue) runs here
+    pool = _pool(config)
+    futures = config.stash.get(_FUTURES, {})
+    if pool is not None and name not in futures:
+        futures[name] = pool.submit(call, name)
+    future: Future | None = futures.get(name)
+    # a run no collected test named (asked for through getfixturevalue) joins the pool, or runs here without one
     return call(name) if future is None else future.result()
 
 
