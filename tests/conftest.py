@@ -6,25 +6,25 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "2")
 
 import pytest  # noqa: E402
 
-LAB_GROUP = "lab-dem-pool"  # tests/lab/conftest.py marks the users of its pool of DEM runs with it
-
-
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (the README's test command: ``-n auto --dist loadgroup --no-loadscope-reorder``) a
     test file is one unit of work, so its module- and class-scoped fixtures (a Janssen column, a live server)
-    are built once, and the lab's DEM pool is one unit too (LAB_GROUP). The units go out in this order: the
-    pool first (its runs are most of the suite's CPU and start when its first test asks), then the files that
-    hold a slow test, then the rest, so no long file starts last. Without xdist nothing changes here."""
+    are built once. A group a conftest gave its tests while collecting them (the lab's pool of DEM runs,
+    tests/lab/conftest.py) stays one unit and goes out first: its runs are most of the suite's CPU and start
+    when its first test asks. Then the files that hold a slow test, then the rest, so no long file starts last.
+    Without xdist nothing changes here."""
     if not hasattr(config, "workerinput"):
         return
-    unit_of = {}
+    unit_of, grouped = {}, set()
     for item in items:
         if item.get_closest_marker("xdist_group") is None:
             item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::", 1)[0]))
+        else:
+            grouped.add(item)
         unit_of[item] = next(item.iter_markers("xdist_group")).args[0]
     slow_units = {unit_of[item] for item in items if item.get_closest_marker("slow") is not None}
-    items.sort(key=lambda item: 0 if unit_of[item] == LAB_GROUP else 1 if unit_of[item] in slow_units else 2)
+    items.sort(key=lambda item: 0 if item in grouped else 1 if unit_of[item] in slow_units else 2)
 
 
 @pytest.fixture

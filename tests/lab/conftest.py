@@ -31,7 +31,7 @@ from lab_runs import GROUPS, RUNS, call
 _FUTURES = pytest.StashKey[dict]()
 _POOL = pytest.StashKey[ProcessPoolExecutor]()
 _NEEDED = pytest.StashKey[set]()
-# the xdist_group of the tests that use the pool (tests/conftest.py schedules it first)
+# the xdist_group of the tests that use the pool (tests/conftest.py schedules a group given at collection first)
 LAB_GROUP = "lab-dem-pool"
 
 
