@@ -2,7 +2,9 @@
 
 Each target is matched to the runs' responses by its key; a target no run produced is "not
 simulated", one the factors do not move is "not modelled" (reported, not fatal). The pure error of
-centre replicates is the simulator's seed-to-seed scatter.
+centre replicates is the simulator's seed-to-seed scatter. A response some runs lack is fitted on the
+runs that hold it, with a smaller model where those cannot estimate the full one (doe.missing); the
+fit's reduction log says so and the report repeats it beside the target.
 """
 from __future__ import annotations
 
@@ -14,7 +16,8 @@ import numpy as np
 
 from doe.designs import Design
 from doe.factors import DoeError
-from doe.fit import ResponseFit, fit_response, pure_error
+from doe.fit import ResponseFit, pure_error
+from doe.missing import fit_available
 
 from .keys import ResponseKey, find
 from .records import Measured
@@ -57,9 +60,11 @@ def fit_targets(design: Design, runs: Sequence[Sequence[dict]], targets: Sequenc
     if len(runs) != design.n_runs:
         raise ValueError(f"{len(runs)} runs for a design of {design.n_runs}")
     values = [run_values(r) for r in runs]
+    # every response any run gave (the first run may lack one that a hold at its corner could not settle)
+    produced = list(dict.fromkeys(k for v in values for k in v))
     out = []
     for target in targets:
-        key = find(values[0].keys(), target.key)
+        key = find(produced, target.key)
         model = TargetModel(target, key)
         out.append(model)
         if key is None:
@@ -75,7 +80,7 @@ def fit_targets(design: Design, runs: Sequence[Sequence[dict]], targets: Sequenc
             model.error = "the response does not change over the design; the factors do not move it"
             continue
         try:
-            model.fit = fit_response(design, y, response=key.name)
+            model.fit = fit_available(design, y, response=key.name)
         except DoeError as exc:
             model.error = str(exc)
     return out

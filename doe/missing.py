@@ -1,0 +1,113 @@
+"""A response some runs lack: the largest model the runs that hold a value can estimate.
+
+Why: a simulated test can fail to give a value at some design points (a DEM hold that does not settle at
+a stiff corner, a fill that never comes to rest) while the other runs give it. The design's full model
+(main effects and every two-factor interaction of a resolution V fraction) then has more coefficients
+than the remaining points can tell apart, and refusing to fit would leave that target out of the
+calibration altogether, although the runs that hold it still say how the factors move it. A practitioner
+faced with missing runs fits a smaller model: the main effects, which a fraction with a few corners lost
+still estimates, and those interactions the remaining runs can separate and the data support. Here that
+is forward selection under hierarchy: every estimable main effect, then, one at a time, the estimable
+interaction that lowers the residual sum of squares most, while its partial F test has p <= ``alpha_in``
+and the model keeps ``min_error_df`` residual degrees of freedom for its error estimate. The fit's
+``reduction_log`` names the runs left out, the terms kept and the terms that could not be estimated, so a
+report says the surface rests on fewer points than the design had.
+
+A response every run holds is fitted with the full model exactly as ``fit_response`` would.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+from .designs import Design
+from .factors import DoeError
+from .fit import ResponseFit, default_terms, fit_response
+from .terms import model_matrix, parents, sort_terms, term_label
+
+ALPHA_IN = 0.10
+MIN_ERROR_DF = 2
+
+
+def _sse(X: np.ndarray, y: np.ndarray) -> float:
+    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ beta
+    return float(r @ r)
+
+
+def _rank(X: np.ndarray) -> int:
+    return int(np.linalg.matrix_rank(X))
+
+
+def estimable_terms(design: Design, y, terms=None, alpha_in: float = ALPHA_IN,
+                    min_error_df: int = MIN_ERROR_DF) -> tuple[list, list]:
+    """(kept, not kept) terms of ``terms`` (default: the design's full model) for the runs where ``y`` is finite.
+
+    Main effects enter in order while each adds a direction the runs can estimate; higher-order terms
+    whose parents are in enter by forward selection (largest drop in the residual sum of squares first,
+    partial F with p <= ``alpha_in``), as long as ``min_error_df`` residual degrees of freedom remain.
+    """
+    y = np.asarray(y, dtype=float).reshape(-1)
+    ok = np.isfinite(y)
+    coded, y = design.coded[ok], y[ok]
+    n = y.size
+    terms = sort_terms(default_terms(design) if terms is None else terms)
+    kept: list = []
+    for t in (t for t in terms if sum(t) == 1):
+        trial = model_matrix(coded, kept + [t])
+        if _rank(trial) == trial.shape[1] and n - trial.shape[1] >= min_error_df:
+            kept.append(t)
+    rest = [t for t in terms if sum(t) > 1]
+    while True:
+        X = model_matrix(coded, kept)
+        sse_now = _sse(X, y)
+        best = None
+        for t in rest:
+            if t in kept or not set(parents(t)) <= set(kept):
+                continue
+            trial = model_matrix(coded, kept + [t])
+            df_resid = n - trial.shape[1]
+            if _rank(trial) < trial.shape[1] or df_resid < min_error_df:
+                continue
+            sse = _sse(trial, y)
+            if best is None or sse < best[1]:
+                best = (t, sse, df_resid)
+        if best is None:
+            break
+        t, sse, df_resid = best
+        if sse <= 0.0:
+            p = 0.0 if sse_now > 0 else 1.0
+        else:
+            p = float(stats.f.sf((sse_now - sse) / (sse / df_resid), 1, df_resid))
+        if p > alpha_in:
+            break
+        kept.append(t)
+    return sort_terms(kept), [t for t in terms if t not in kept]
+
+
+def fit_available(design: Design, y, response: str = "y", alpha: float = 0.05, curvature: bool = True,
+                  alpha_in: float = ALPHA_IN, min_error_df: int = MIN_ERROR_DF) -> ResponseFit:
+    """``fit_response`` on the runs that hold a value, with a smaller model where the full one cannot be fitted.
+
+    Raises DoeError when not even the mean and one main effect can be estimated.
+    """
+    y = np.asarray(y, dtype=float).reshape(-1)
+    if y.size != design.n_runs:
+        raise DoeError(f"{response}: {y.size} values for {design.n_runs} runs")
+    ok = np.isfinite(y)
+    full = default_terms(design)
+    X = model_matrix(design.coded[ok], full)
+    if ok.all() or (X.shape[0] >= X.shape[1] and _rank(X) == X.shape[1]):
+        return fit_response(design, y, response=response, alpha=alpha, curvature=curvature)
+    kept, dropped = estimable_terms(design, y, full, alpha_in, min_error_df)
+    if not kept:
+        raise DoeError(f"{response}: the {int(ok.sum())} runs with a value cannot estimate any factor's effect "
+                       f"({int((~ok).sum())} of {design.n_runs} runs have none)")
+    fit = ResponseFit(design, y, kept, response, alpha, curvature)
+    letters = design.letters
+    fit.reduction_log = [
+        f"{int((~ok).sum())} of {design.n_runs} runs have no value, and the rest cannot estimate the full model "
+        f"({len(full)} terms): kept {', '.join(term_label(t, letters) for t in kept)} (every estimable main "
+        f"effect, interactions by forward selection with p <= {alpha_in:g}); not in the model: "
+        f"{', '.join(term_label(t, letters) for t in dropped) or 'none'}"]
+    return fit
