@@ -141,7 +141,8 @@ class ServoSpec(_Model):
     area_m2: float | None = Field(None, gt=0)
     max_speed_m_s: float = Field(0.05, gt=0)
     gain_fraction: float = Field(
-        0.05, gt=0, le=1, description="fraction of the force error closed per step; above ~0.1 the wall chatters on its own dashpot forces")
+        0.3, gt=0, le=1, description="fraction of the force error closed per step through the wall contacts' springs "
+                                     "and dashpots; stable below about 1 (2 / (1 + c / (k dt + c)))")
 
     @model_validator(mode="after")
     def _target(self) -> "ServoSpec":

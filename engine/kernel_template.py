@@ -34,7 +34,8 @@ def contact(props, row, hist, hp, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w
 
     root_km = sqrt(kn m_eff), precomputed per pair at rebuild (a stiffness effect recomputes it).
     i_roll is the contact's rolling inertia (Ai et al. 2011): 1/i_roll = sum over the two bodies of
-    1/(7/5 m r^2), the wall counting as infinite; only the EPSD rolling dashpot reads it."""
+    1/(7/5 m r^2), the wall counting as infinite; only the EPSD rolling dashpot reads it.
+    Returns the force, the rolling torque, the normal tangent stiffness and the normal dashpot coefficient."""
     ks = props[row, 0] * kn
     fn_el = kn * delta
     knt = kn
@@ -73,7 +74,7 @@ def contact(props, row, hist, hp, delta, dist, n0, n1, n2, v0, v1, v2, w0, w1, w
     hist[hp, 0], hist[hp, 1], hist[hp, 2] = u0, u1, u2
     tr0, tr1, tr2 = 0.0, 0.0, 0.0
 {ROLLING_HOOKS}
-    return f0 - fn * n0, f1 - fn * n1, f2 - fn * n2, tr0, tr1, tr2, knt
+    return f0 - fn * n0, f1 - fn * n1, f2 - fn * n2, tr0, tr1, tr2, knt, cn
 
 
 @njit(cache=True, inline='always', error_model='numpy')
@@ -171,7 +172,7 @@ def pair_block(lo, hi, row_start, pj, hist, pconst, pk, acc, s_pos, s_vel, s_rad
             row = np.uint64(mat_row + s_mat[j])
             # rolling inertia: only kernels with a rolling effect compute it (ROLL_INERTIA is 0.0 otherwise)
             i_roll = {ROLL_INERTIA}
-            f0, f1, f2, tr0, tr1, tr2, knt = contact(
+            f0, f1, f2, tr0, tr1, tr2, knt, _cn = contact(
                 props, row, hist, p, delta, dist, n0, n1, n2, v0, v1, v2,
                 wi0 - wj0, wi1 - wj1, wi2 - wj2, r_i, r_j, pconst[p, 1], i_roll, pconst[p, 0], pconst[p, 2],
                 props[row, 3], dt, repulsive_only)
@@ -268,7 +269,7 @@ def wall_block(s_lo, s_hi, start, w_ids, t_ids, hist, out_f, out_pt, out_k, s_po
             kw = w_kn[w]
             row = n_mat * n_mat + s_mat[i] * n_mat + w_mat[w]
             kn = kp * kw / (kp + kw)
-            f0, f1, f2, tr0, tr1, tr2, knt = contact(
+            f0, f1, f2, tr0, tr1, tr2, knt, cn = contact(
                 props, row, hist, e, delta, dist, n0, n1, n2, v0, v1, v2, wi0, wi1, wi2,
                 r_i, -1.0, b_mass[b], 1.4 * b_mass[b] * r_i * r_i, kn, math.sqrt(kn * b_mass[b]), w_mu[w], dt,
                 repulsive_only)
@@ -282,7 +283,9 @@ def wall_block(s_lo, s_hi, start, w_ids, t_ids, hist, out_f, out_pt, out_k, s_po
             out_pt[e, 0] = s_pos[i, 0] + a_i * n0
             out_pt[e, 1] = s_pos[i, 1] + a_i * n1
             out_pt[e, 2] = s_pos[i, 2] + a_i * n2
-            out_k[e] = knt
+            # what the contact adds to the wall's force per metre the wall moves within one step: the spring's
+            # k, and the dashpot's c over the step (a servo's move is felt through both; engine.stepping)
+            out_k[e] = knt + cn / dt if dt > 0.0 else knt
 '''
 
 TEMPLATE += '''

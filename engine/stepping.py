@@ -62,6 +62,12 @@ def move_walls(W, t, dt):
             applied = -(W.force[w, 0] * a0 + W.force[w, 1] * a1 + W.force[w, 2] * a2)
             err = W.servo_target[w] - applied
             vmax = W.servo_vmax[w]
+            # k_sum: what the wall's contacts add to its force per metre it moves within one step, the springs'
+            # k plus the dashpots' c / dt. A move v dt is felt through both (the dashpots at once), so the step
+            # closes servo_gain of the error whatever the damping. With springs alone in the denominator, a
+            # dashpot ratio c / (k dt) above (2 / gain - 1) / 2 (49.5 at the lab's 0.02) made every step
+            # overshoot: on Hertzian contacts at small forces (k ~ F^(1/3), Rayleigh's step fixed) the lid
+            # chattered and stirred the packing (tests/engine/test_servo.py)
             if W.k_sum[w] > 0.0:
                 speed = W.servo_gain[w] * err / (W.k_sum[w] * dt)
             else:
@@ -119,7 +125,8 @@ def _rotate_vec(r, x, about):
 
 @njit(cache=True)
 def wall_resultants(n_walls, wc_wall, wc_force, wc_point, wc_k, origin, force, moment, k_sum):
-    """Per-wall force by the particles on it, moment about its reference point, contact stiffness sum."""
+    """Per-wall force by the particles on it, moment about its reference point, and what its contacts add to
+    that force per metre the wall moves within one step (springs' k plus dashpots' c / dt, for the servo)."""
     force[:] = 0.0
     moment[:] = 0.0
     k_sum[:] = 0.0

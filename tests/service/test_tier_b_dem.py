@@ -5,8 +5,8 @@ workers; the engine, with EPSD2 rolling resistance (mu_r 0.15) switched on, is t
 three seeds the calibration never uses, plus laboratory scatter and a pycnometer prior 2 % off; then one
 automatic campaign runs the 2^(4-1) design with 3 centre runs, the confirmation, the diagnosis, the top
 candidate added as a fifth factor and its confirmation, every battery a DEM job through the queue.
-Reduced: 35 mm spheres (about 130 bodies in Appendix A's container) and no polish rounds, so a battery
-costs about a quarter of a screening one; and two iterations (the first effect added and judged), since
+Reduced: 35 mm spheres (about 130 bodies in Appendix A's container), so a battery costs about a quarter
+of a screening one, polished only where the surfaces miss the batteries (as the service's default); and two iterations (the first effect added and judged), since
 every criterion is settled by then and a third iteration nearly doubled the batteries (51 -> 92).
 
 Asked: the issue's pass criteria for the scenario. The model without the effect cannot follow the
