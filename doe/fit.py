@@ -26,6 +26,7 @@ from .effects import EffectsResult, compute_effects
 from .factors import DoeError, coded_matrix
 from .terms import (Term, mask_to_term, model_matrix, natural_transform, parents, parse_term,
                     sort_terms, term_label, term_name)
+from .transform import TRANSFORMS, forward, inverse
 
 NO_ERROR_MESSAGE = ("No error estimate: the model has as many coefficients as distinct runs and there are "
                     "no replicates, so F and p-values do not exist. Judge effects from the half-normal plot "
@@ -84,10 +85,16 @@ class ResponseFit:
     """Fitted model of one response; build with `fit_response`."""
 
     def __init__(self, design: Design, y, terms=None, response: str = "y", alpha: float = 0.05,
-                 curvature: bool = True):
+                 curvature: bool = True, transform: str = "none"):
         y_all = np.asarray(y, dtype=float).reshape(-1)
         if y_all.size != design.n_runs:
             raise DoeError(f"{response}: {y_all.size} values for {design.n_runs} runs")
+        if transform not in TRANSFORMS:
+            raise DoeError(f"{response}: transform must be one of {', '.join(TRANSFORMS)}")
+        if transform == "log" and not np.all(y_all[np.isfinite(y_all)] > 0):
+            raise DoeError(f"{response}: a log transform needs every value positive")
+        # the model, its ANOVA and its coefficients are on the transformed scale; predictions come back on y's
+        self.transform = transform
         self.design, self.response, self.alpha = design, response, alpha
         self.curvature_requested = curvature
         self.messages: list[str] = []
@@ -96,7 +103,11 @@ class ResponseFit:
         if not ok.all():
             self.messages.append(f"{int((~ok).sum())} run(s) without a value for {response} were left out.")
         self.used = ok
-        self.coded, self.y = design.coded[ok], y_all[ok]
+        self.coded, self.y_raw = design.coded[ok], y_all[ok]
+        self.y = forward(self.y_raw, transform)
+        if transform == "log":
+            self.messages.append(f"Fitted to ln({response}): coefficients, ANOVA and effects are on that scale; "
+                                 "predictions and their intervals are transformed back.")
         factors = design.factors
         letters = design.letters
         if terms is None:
@@ -257,14 +268,16 @@ class ResponseFit:
         return coded_matrix(self.design.factors, points, row_label="prediction point")
 
     def predict_coded(self, coded: np.ndarray) -> np.ndarray:
-        return model_matrix(coded, self.terms) @ self.params
+        return inverse(model_matrix(coded, self.terms) @ self.params, self.transform)
 
     def predict(self, points, alpha: float | None = None, n_future: int = 1) -> list[dict]:
         """Mean prediction with confidence and prediction intervals at natural-unit points.
 
         The prediction interval is for the mean of ``n_future`` new runs at a point (variance
         se^2 + MSE / n_future, the regression textbooks' interval for a future mean): a confirmation
-        averaged over several seeds is judged against the interval of an average."""
+        averaged over several seeds is judged against the interval of an average. On a log scale the mean
+        and the interval bounds are transformed back (the mean is then the median of y's distribution) and
+        ``se_mean`` is the delta method's, exp(m) times the standard error of m."""
         if n_future < 1:
             raise DoeError("n_future must be at least 1")
         alpha = self.alpha if alpha is None else alpha
@@ -273,13 +286,16 @@ class ResponseFit:
         out = []
         t_crit = stats.t.ppf(1 - alpha / 2, self.error_variance_df) if self.has_error else None
         for i in range(len(mean)):
-            d = {"response": self.response, "mean": float(mean[i]), "se_mean": None, "ci_low": None,
+            back = float(inverse(mean[i], self.transform))
+            d = {"response": self.response, "mean": back, "se_mean": None, "ci_low": None,
                  "ci_high": None, "pi_low": None, "pi_high": None, "alpha": alpha}
             if self.has_error:
                 se = float(np.sqrt(Xp[i] @ self.cov @ Xp[i]))
                 sp = math.sqrt(se**2 + self.mse / n_future)
-                d.update(se_mean=se, ci_low=mean[i] - t_crit * se, ci_high=mean[i] + t_crit * se,
-                         pi_low=mean[i] - t_crit * sp, pi_high=mean[i] + t_crit * sp)
+                b = {k: float(inverse(v, self.transform)) for k, v in (
+                    ("ci_low", mean[i] - t_crit * se), ("ci_high", mean[i] + t_crit * se),
+                    ("pi_low", mean[i] - t_crit * sp), ("pi_high", mean[i] + t_crit * sp))}
+                d.update(se_mean=se * back if self.transform == "log" else se, **b)
             out.append({k: _clean(v) for k, v in d.items()})
         return out
 
@@ -289,7 +305,8 @@ class ResponseFit:
         parts = [f"{vals[0]:.{digits}g}"]
         for nme, v in zip(names[1:], vals[1:]):
             parts.append(f"{'-' if v < 0 else '+'} {abs(v):.{digits}g} * {nme}")
-        return f"{self.response} = " + " ".join(parts)
+        lhs = f"ln({self.response})" if self.transform == "log" else self.response
+        return f"{lhs} = " + " ".join(parts)
 
     # --- model reduction -----------------------------------------------------------
     def reduce(self, alpha_out: float = 0.10, method: str = "auto") -> "ResponseFit":
@@ -298,8 +315,9 @@ class ResponseFit:
         return reduce_fit(self, alpha_out, method)
 
     def _y_full(self) -> np.ndarray:
+        """The responses as given (untransformed), NaN where a run had none: what a refit starts from."""
         y = np.full(self.design.n_runs, np.nan)
-        y[self.used] = self.y
+        y[self.used] = self.y_raw
         return y
 
     # --- output --------------------------------------------------------------------
@@ -315,7 +333,7 @@ class ResponseFit:
         nat = [{"name": nme, "estimate": float(v),
                 "std_error": _clean(self.natural_std_errors[i]) if self.natural_std_errors is not None else None}
                for i, (nme, v) in enumerate(zip(self.natural_names, self.natural_params))]
-        return {"response": self.response, "terms": list(self.term_labels),
+        return {"response": self.response, "transform": self.transform, "terms": list(self.term_labels),
                 "factors": [f.to_dict() for f in self.design.factors],
                 "coefficients_coded": self._coef_rows(), "coefficients_natural": nat,
                 "equation_coded": self.equation(natural=False), "equation_natural": self.equation(),
@@ -346,9 +364,10 @@ class ResponseFit:
 
 
 def fit_response(design: Design, y, terms=None, response: str = "y", alpha: float = 0.05,
-                 curvature: bool = True) -> ResponseFit:
-    """Fit one response; `y` is aligned with the design's rows (standard order)."""
-    return ResponseFit(design, y, terms, response, alpha, curvature)
+                 curvature: bool = True, transform: str = "none") -> ResponseFit:
+    """Fit one response; `y` is aligned with the design's rows (standard order); ``transform`` "log" fits
+    ln(y) (doe.transform says when that is the better scale)."""
+    return ResponseFit(design, y, terms, response, alpha, curvature, transform)
 
 
 def fit_responses(design: Design, results: list[dict], responses=None, terms=None,

@@ -13,7 +13,8 @@ and the model keeps ``min_error_df`` residual degrees of freedom for its error e
 ``reduction_log`` names the runs left out, the terms kept and the terms that could not be estimated, so a
 report says the surface rests on fewer points than the design had.
 
-A response every run holds is fitted with the full model exactly as ``fit_response`` would.
+A response every run holds is fitted with the full model exactly as ``fit_response`` would, on the scale
+doe.transform chooses (a power law of a log-scaled factor is fitted to ln(y)).
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from .designs import Design
 from .factors import DoeError
 from .fit import ResponseFit, default_terms, fit_response
 from .terms import model_matrix, parents, sort_terms, term_label
+from .transform import choose as choose_transform, forward
 
 ALPHA_IN = 0.10
 MIN_ERROR_DF = 2
@@ -86,10 +88,12 @@ def estimable_terms(design: Design, y, terms=None, alpha_in: float = ALPHA_IN,
 
 
 def fit_available(design: Design, y, response: str = "y", alpha: float = 0.05, curvature: bool = True,
-                  alpha_in: float = ALPHA_IN, min_error_df: int = MIN_ERROR_DF) -> ResponseFit:
+                  alpha_in: float = ALPHA_IN, min_error_df: int = MIN_ERROR_DF, transform: str = "auto") -> ResponseFit:
     """``fit_response`` on the runs that hold a value, with a smaller model where the full one cannot be fitted.
 
-    Raises DoeError when not even the mean and one main effect can be estimated.
+    ``transform``: "none", "log", or "auto" (doe.transform's Box-Cox choice, judged with the full model where
+    the runs can fit it and with the estimable main effects where they cannot). Raises DoeError when not even
+    the mean and one main effect can be estimated.
     """
     y = np.asarray(y, dtype=float).reshape(-1)
     if y.size != design.n_runs:
@@ -97,17 +101,29 @@ def fit_available(design: Design, y, response: str = "y", alpha: float = 0.05, c
     ok = np.isfinite(y)
     full = default_terms(design)
     X = model_matrix(design.coded[ok], full)
-    if ok.all() or (X.shape[0] >= X.shape[1] and _rank(X) == X.shape[1]):
-        return fit_response(design, y, response=response, alpha=alpha, curvature=curvature)
-    kept, dropped = estimable_terms(design, y, full, alpha_in, min_error_df)
-    if not kept:
-        raise DoeError(f"{response}: the {int(ok.sum())} runs with a value cannot estimate any factor's effect "
-                       f"({int((~ok).sum())} of {design.n_runs} runs have none)")
-    fit = ResponseFit(design, y, kept, response, alpha, curvature)
-    letters = design.letters
-    fit.reduction_log = [
-        f"{int((~ok).sum())} of {design.n_runs} runs have no value, and the rest cannot estimate the full model "
-        f"({len(full)} terms): kept {', '.join(term_label(t, letters) for t in kept)} (every estimable main "
-        f"effect, interactions by forward selection with p <= {alpha_in:g}); not in the model: "
-        f"{', '.join(term_label(t, letters) for t in dropped) or 'none'}"]
+    whole = bool(ok.all() or (X.shape[0] >= X.shape[1] and _rank(X) == X.shape[1]))
+    choice = None
+    if transform == "auto":
+        judged_with = full if whole else [t for t in estimable_terms(design, y, full, alpha_in, min_error_df)[0]
+                                          if sum(t) == 1]
+        choice = choose_transform(design.coded[ok], y[ok], judged_with, alpha)
+        transform = choice.transform
+    if whole:
+        fit = fit_response(design, y, response=response, alpha=alpha, curvature=curvature, transform=transform)
+    else:
+        z = np.full_like(y, np.nan)
+        z[ok] = forward(y[ok], transform)  # the interactions are selected on the scale the model is fitted on
+        kept, dropped = estimable_terms(design, z, full, alpha_in, min_error_df)
+        if not kept:
+            raise DoeError(f"{response}: the {int(ok.sum())} runs with a value cannot estimate any factor's "
+                           f"effect ({int((~ok).sum())} of {design.n_runs} runs have none)")
+        fit = ResponseFit(design, y, kept, response, alpha, curvature, transform)
+        letters = design.letters
+        fit.reduction_log = [
+            f"{int((~ok).sum())} of {design.n_runs} runs have no value, and the rest cannot estimate the full "
+            f"model ({len(full)} terms): kept {', '.join(term_label(t, letters) for t in kept)} (every estimable "
+            f"main effect, interactions by forward selection with p <= {alpha_in:g}); not in the model: "
+            f"{', '.join(term_label(t, letters) for t in dropped) or 'none'}"]
+    if choice is not None and choice.transform != "none":
+        fit.messages.append(choice.reason)
     return fit

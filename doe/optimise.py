@@ -105,7 +105,8 @@ class _Problem:
                 a.append(g.half_range_t / f.half_range_t)
                 b.append((g.centre_t - f.centre_t) / f.half_range_t)
             E = np.array([(0,) * m.design.k] + [tuple(t) for t in m.terms], dtype=float)
-            self.compiled[key] = (np.array(idx), np.array(a), np.array(b), E, np.asarray(m.params, float))
+            self.compiled[key] = (np.array(idx), np.array(a), np.array(b), E, np.asarray(m.params, float),
+                                  getattr(m, "transform", "none") == "log")
 
     def coded_all(self, u) -> np.ndarray:
         x = self.base.copy()
@@ -127,7 +128,7 @@ class _Problem:
         return np.array(out)
 
     def value_grad(self, key, u) -> tuple[float, np.ndarray]:
-        idx, a, b, E, beta = self.compiled[key]
+        idx, a, b, E, beta, log_scale = self.compiled[key]
         xm = a * self.coded_all(u)[idx] + b
         P = xm[None, :] ** E
         val = float(beta @ np.prod(P, axis=1))
@@ -138,6 +139,9 @@ class _Problem:
         suffix = np.cumprod(np.hstack([ones, P[:, :0:-1]]), axis=1)[:, ::-1]
         dP = np.where(E > 0, E * xm[None, :] ** np.maximum(E - 1, 0), 0.0)
         g = a * (beta @ (dP * prefix * suffix))
+        if log_scale:  # a surface of ln(y): y = exp(polynomial), dy = y d(polynomial)
+            val = math.exp(val)
+            g = val * g
         g_all = np.zeros(len(self.names))
         np.add.at(g_all, idx, g)
         return val, g_all[self.free_idx]

@@ -28,7 +28,7 @@ def reduce_fit(fit0, alpha_out: float = 0.10, method: str = "auto"):
             keep |= {t, *parents(t)}
         keep &= set(fit0.terms) | {p for t in keep for p in parents(t)}
         fit = ResponseFit(fit0.design, fit0._y_full(), sorted(keep), fit0.response, fit0.alpha,
-                          fit0.curvature_requested)
+                          fit0.curvature_requested, fit0.transform)
         fit.reduction_log = [f"kept {', '.join(fit.term_labels) or 'the mean only'} (beyond Lenth ME "
                              f"{fit0.effects.margin_of_error:.4g} or needed by hierarchy)"]
         return fit
@@ -50,7 +50,7 @@ def reduce_fit(fit0, alpha_out: float = 0.10, method: str = "auto"):
             break
         log.append(f"removed {lbl} (p = {p_max:.4g})")
         fit = ResponseFit(fit0.design, fit0._y_full(), [t for t in fit.terms if t != t_drop],
-                          fit0.response, fit0.alpha, fit0.curvature_requested)
+                          fit0.response, fit0.alpha, fit0.curvature_requested, fit0.transform)
     fit.reduction_log = log
     return fit
 

@@ -45,22 +45,24 @@ def _run(bench: Bench, lo: float, hi: float) -> Run:
         lo = split
     dst = run_dst(ctx, precompressed, fill.packing_height_m, lo, hi)
     props, curves, psis = [], {}, []
-    for run in dst.runs:
+    held = [run for run in dst.runs if run.held]  # a load not held on the servo has no values (procedures.dst)
+    for run in held:
         s = run.normal_stress_target_pa
         props.append(TEST.property("residual_shear_stress_pa", run.reduction.residual_shear_stress_pa,
                                    normal_stress_pa=s))
         props.append(TEST.property("dilatancy_angle_deg", run.reduction.dilatancy_angle_deg, normal_stress_pa=s))
         psis.append(run.reduction.dilatancy_angle_deg)
         curves[f"dst_{s:.0f}"] = run.curve
-    props.append(TEST.property("dilatancy_angle_deg", sum(psis) / len(psis)))
+    if psis:
+        props.append(TEST.property("dilatancy_angle_deg", sum(psis) / len(psis)))
     if dst.fit is not None:
         props.append(TEST.property("friction_angle_deg", dst.fit.friction_angle_deg))
         props.append(TEST.property("cohesion_pa", dst.fit.cohesion_pa))
         props.append(TEST.property("mohr_coulomb_r2", dst.fit.r2))
     curves["dst_envelope"] = {
-        "normal_stress_target_pa": [r.normal_stress_target_pa for r in dst.runs],
-        "residual_normal_stress_pa": [r.reduction.residual_normal_stress_pa for r in dst.runs],
-        "residual_shear_stress_pa": [r.reduction.residual_shear_stress_pa for r in dst.runs],
+        "normal_stress_target_pa": [r.normal_stress_target_pa for r in held],
+        "residual_normal_stress_pa": [r.reduction.residual_normal_stress_pa for r in held],
+        "residual_shear_stress_pa": [r.reduction.residual_shear_stress_pa for r in held],
     }
     return Run(dst, props, curves)
 

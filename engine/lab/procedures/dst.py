@@ -3,6 +3,14 @@
 Per load, from the precompressed packing: reload to the target, hold it with the servo until the
 packing is stable (stress within 2 %, at rest; the thesis waited 20 s), then move every bottom-half
 wall in +x at the shear speed over the shear distance while the servo holds the normal stress.
+
+A load the packing does not come to rest at on the servo is not sheared (warned): its residual shear
+stress and dilatancy would be read at another stress than the one they are reported at, from a moving
+packing. Seen on DEM (hertz_strong's second design, session 33): at E 4 GPa six corners of eight missed
+some loads, one read 1.2 Pa of residual shear at "52.4 kPa" with the lid's stress at zero and a dilatancy
+of -45 deg, and those values bent every surface through the DST's targets. No value there rather than a
+wrong one, as the CCT's unload-reload holds do (procedures.cct.unload_reload); the Mohr-Coulomb fit takes
+the loads that held, at least two.
 """
 from __future__ import annotations
 
@@ -27,8 +35,12 @@ SHEAR_BAND_DIAMETERS = 10.0  # shear band thickness for the inertial number, in 
 @dataclass
 class DstRun:
     normal_stress_target_pa: float
-    reduction: DstReduction
+    reduction: DstReduction | None  # None: the load was not held, so not sheared
     curve: dict[str, list[float]]
+
+    @property
+    def held(self) -> bool:
+        return self.reduction is not None
 
 
 @dataclass
@@ -48,7 +60,10 @@ def run_one(ctx: RunContext, precompressed: dict, packing_height_m: float, targe
     v = ctx.shear_speed_m_s * scale
     sim.set_wall_servo("lid", ServoSpec(axis=(0.0, 0.0, -1.0), target_stress_pa=target_pa, area_m2=area,
                                         max_speed_m_s=max(v, lid_speed), gain_fraction=SERVO_GAIN))
-    stabilise(ctx, sim, target_pa, f"{tag}: stabilising")
+    if not stabilise(ctx, sim, target_pa, f"{tag}: stabilising"):
+        ctx.warn(f"{tag}: the packing did not come to rest at this normal stress on the servo; not sheared, "
+                 "no residual shear stress or dilatancy at this load")
+        return DstRun(target_pa, None, {})
 
     opts = ctx.spec.options
     distance = ctx.shear_distance_m
@@ -111,8 +126,9 @@ def run_dst(ctx: RunContext, precompressed: dict, packing_height_m: float, lo: f
     for k, target in enumerate(stresses):
         ctx.phase(lo + (hi - lo) * k / len(stresses), lo + (hi - lo) * (k + 1) / len(stresses))
         runs.append(run_one(ctx, precompressed, packing_height_m, target))
+    held = [r for r in runs if r.held]
     fit = None
-    if len(runs) >= 2:
-        fit = mohr_coulomb_fit([r.reduction.residual_normal_stress_pa for r in runs],
-                               [r.reduction.residual_shear_stress_pa for r in runs])
+    if len(held) >= 2:
+        fit = mohr_coulomb_fit([r.reduction.residual_normal_stress_pa for r in held],
+                               [r.reduction.residual_shear_stress_pa for r in held])
     return DstOutcome(runs, fit)
