@@ -3,8 +3,9 @@
 Each target is matched to the runs' responses by its key; a target no run produced is "not
 simulated", one the factors do not move is "not modelled" (reported, not fatal). The pure error of
 centre replicates is the simulator's seed-to-seed scatter. A response some runs lack is fitted on the
-runs that hold it, with a smaller model where those cannot estimate the full one (doe.missing); the
-fit's reduction log says so and the report repeats it beside the target.
+runs that hold it, with a smaller model where those cannot estimate the full one (doe.missing), and on a
+log scale where Box-Cox rejects the plain one (doe.transform: a modulus is a power law of a log-scaled
+contact modulus); the report repeats both beside the target.
 """
 from __future__ import annotations
 

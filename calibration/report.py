@@ -85,9 +85,12 @@ def build_report(config, models: dict, optimum: dict, confirmations: list, targe
             reachability=opt_target.get("reachability"),
             reachable=opt_target.get("reachable"),
         )
-        fitted_on_fewer = (((models.get(name) or {}).get("fit") or {}).get("reduction_log") or [])
-        if fitted_on_fewer:  # a surface on the runs that hold this response (doe.missing)
-            row["note"] = "; ".join(fitted_on_fewer)
+        surface = (models.get(name) or {}).get("fit") or {}
+        # a surface on the runs that hold this response (doe.missing), or on ln(y) (doe.transform)
+        notes = list(surface.get("reduction_log") or []) + (
+            ["surface fitted to ln(y): Box-Cox rejected the plain scale"] if surface.get("transform") == "log" else [])
+        if notes:
+            row["note"] = "; ".join(notes)
         rows.append(row)
     modelled = [r for r in rows if r["status"] == "modelled"]
     if assessment.get("polished"):

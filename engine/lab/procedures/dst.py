@@ -4,13 +4,13 @@ Per load, from the precompressed packing: reload to the target, hold it with the
 packing is stable (stress within 2 %, at rest; the thesis waited 20 s), then move every bottom-half
 wall in +x at the shear speed over the shear distance while the servo holds the normal stress.
 
-A load the packing does not come to rest at on the servo is not sheared (warned): its residual shear
-stress and dilatancy would be read at another stress than the one they are reported at, from a moving
-packing. Seen on DEM (hertz_strong's second design, session 33): at E 4 GPa six corners of eight missed
-some loads, one read 1.2 Pa of residual shear at "52.4 kPa" with the lid's stress at zero and a dilatancy
-of -45 deg, and those values bent every surface through the DST's targets. No value there rather than a
-wrong one, as the CCT's unload-reload holds do (procedures.cct.unload_reload); the Mohr-Coulomb fit takes
-the loads that held, at least two.
+A load the servo does not bring the lid to (its stabilising ends with the stress more than 10 % off) is
+not sheared (warned): its residual shear stress and dilatancy would be read at another stress than the
+one they are reported at, from a packing the servo is still driving. Seen on DEM (hertz_strong's second
+design, session 33): at E 4 GPa six corners of eight missed some loads, one read 1.2 Pa of residual shear
+at "52.4 kPa" with the lid's stress at zero and a dilatancy of -45 deg, and those values bent every
+surface through the DST's targets. No value there rather than a wrong one, as the CCT's unload-reload
+holds do (procedures.cct.unload_reload); the Mohr-Coulomb fit takes the loads that held, at least two.
 """
 from __future__ import annotations
 
@@ -30,6 +30,12 @@ from engine.lab.stops import LID_MAX_TRAVEL_FRACTION
 
 SAMPLES_PER_RUN = 800  # shear samples over the shear distance (the 8-10 % window gets ~150)
 SHEAR_BAND_DIAMETERS = 10.0  # shear band thickness for the inertial number, in mean diameters
+# A load whose stabilising ended with the lid's stress further than this from the target never reached it. The
+# servo's own scatter while shearing packings that did settle: the residual window's normal stress was 0.94-1.14
+# of the target in the middle 90 % of hertz_strong's 592 settled loads (session 34). A load at its stress whose
+# packing was still moving a little is sheared (the stabilising's warning says so): the reduced form's 130 grains
+# often miss the at-rest ratio in 0.5 s with the stress on target.
+LOAD_NOT_REACHED_FRACTION = 0.10
 
 
 @dataclass
@@ -61,9 +67,11 @@ def run_one(ctx: RunContext, precompressed: dict, packing_height_m: float, targe
     sim.set_wall_servo("lid", ServoSpec(axis=(0.0, 0.0, -1.0), target_stress_pa=target_pa, area_m2=area,
                                         max_speed_m_s=max(v, lid_speed), gain_fraction=SERVO_GAIN))
     if not stabilise(ctx, sim, target_pa, f"{tag}: stabilising"):
-        ctx.warn(f"{tag}: the packing did not come to rest at this normal stress on the servo; not sheared, "
-                 "no residual shear stress or dilatancy at this load")
-        return DstRun(target_pa, None, {})
+        stress_pa = float(sim.wall_force("lid")[2]) / area
+        if abs(stress_pa / target_pa - 1.0) > LOAD_NOT_REACHED_FRACTION:
+            ctx.warn(f"{tag}: the servo did not bring the lid to this normal stress ({stress_pa / 1000:.3g} kPa); "
+                     "not sheared, no residual shear stress or dilatancy at this load")
+            return DstRun(target_pa, None, {})
 
     opts = ctx.spec.options
     distance = ctx.shear_distance_m

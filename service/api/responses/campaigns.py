@@ -163,6 +163,8 @@ class Fit(Out):
     """A fitted response surface (doe.fit.ResponseFit.to_dict)."""
 
     response: str
+    transform: str = Field("none", description="'log': fitted to ln(y) (Box-Cox, doe.transform); coefficients, "
+                           "ANOVA and effects on that scale, predictions transformed back")
     terms: list[str]
     factors: list[Factor]
     coefficients_coded: list[dict[str, Any]] = Field(description="per term: estimate, standard error, t, p")

@@ -32,8 +32,9 @@ class TargetRow(Out):
     measured: float = Field(description="mean of the replicates, in the unit (SI)")
     n: int = Field(description="replicates")
     status: str = Field(description="modelled, not_modelled or not_simulated")
-    note: str | None = Field(None, description="why a target is not modelled or not simulated, or that its "
-                                               "surface rests on fewer runs than the design had")
+    note: str | None = Field(None, description="why a target is not modelled or not simulated; for a "
+                                               "modelled one, that its surface rests on fewer runs than the design "
+                                               "had, or was fitted to ln(y)")
     response: str | None = Field(None, description="the matched response name")
     confirmed: float | None = Field(None, description="mean of the confirmation batteries, in the unit")
     confirmed_per_seed: list[float | None] | None = None

@@ -123,6 +123,7 @@ export function targetsSection(report) {
           r.confirmed !== undefined && r.confirmed !== null ? h("span", { className: r.confirmation_in_interval === false ? "bad" : "" }, fmt(r.confirmed)) : "–",
           r.standardised_residual !== undefined ? h("span", { className: fails ? "bad target-fails" : "target-ok" }, fmt(r.standardised_residual, 3)) : "–",
           r.reachability !== undefined ? h("span", { className: r.reachable ? "good" : "bad" }, `${fmt(r.reachability, 3)} ${r.reachable ? "reachable" : "out of reach"}`) : "–",
-          status(r.status)];
+          // why a target is not modelled, or that its surface rests on fewer runs or on ln(y)
+          r.note ? h("span", {}, status(r.status), h("div", { className: "muted target-note" }, r.note)) : status(r.status)];
       })));
 }
