@@ -6,8 +6,9 @@ three seeds the calibration never uses, plus laboratory scatter and a pycnometer
 automatic campaign runs the 2^(4-1) design with 3 centre runs, the confirmation, the diagnosis, the top
 candidate added as a fifth factor and its confirmation, every battery a DEM job through the queue.
 Reduced: 35 mm spheres (about 130 bodies in Appendix A's container), so a battery costs about a quarter
-of a screening one, polished only where the surfaces miss the batteries (as the service's default); and two iterations (the first effect added and judged), since
-every criterion is settled by then and a third iteration nearly doubled the batteries (51 -> 92).
+of a screening one, polished only where the surfaces miss the batteries (the service's default); and two
+iterations (the first effect added and judged), since every criterion is settled by then and a third
+iteration nearly doubled the batteries (51 -> 92).
 
 Asked: the issue's pass criteria for the scenario. The model without the effect cannot follow the
 measurements (the lack of fit rejects), the diagnosis names it among its first two candidates, adding it
