@@ -26,6 +26,7 @@ from .effects import EffectsResult, compute_effects
 from .factors import DoeError, coded_matrix
 from .terms import (Term, mask_to_term, model_matrix, natural_transform, parents, parse_term,
                     sort_terms, term_label, term_name)
+from .lstsq import rank, residual_ss
 from .transform import TRANSFORMS, forward, inverse
 
 NO_ERROR_MESSAGE = ("No error estimate: the model has as many coefficients as distinct runs and there are "
@@ -56,9 +57,7 @@ def _clean(v):
 
 
 def _sse(X: np.ndarray, y: np.ndarray) -> tuple[float, int]:
-    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
-    r = y - X @ beta
-    return float(r @ r), int(np.linalg.matrix_rank(X))
+    return residual_ss(X, y), rank(X)
 
 
 def default_terms(design: Design) -> list[Term]:

@@ -24,21 +24,12 @@ from scipy import stats
 from .designs import Design
 from .factors import DoeError
 from .fit import ResponseFit, default_terms, fit_response
+from .lstsq import rank, residual_ss
 from .terms import model_matrix, parents, sort_terms, term_label
 from .transform import choose as choose_transform, forward
 
 ALPHA_IN = 0.10
 MIN_ERROR_DF = 2
-
-
-def _sse(X: np.ndarray, y: np.ndarray) -> float:
-    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
-    r = y - X @ beta
-    return float(r @ r)
-
-
-def _rank(X: np.ndarray) -> int:
-    return int(np.linalg.matrix_rank(X))
 
 
 def estimable_terms(design: Design, y, terms=None, alpha_in: float = ALPHA_IN,
@@ -57,21 +48,21 @@ def estimable_terms(design: Design, y, terms=None, alpha_in: float = ALPHA_IN,
     kept: list = []
     for t in (t for t in terms if sum(t) == 1):
         trial = model_matrix(coded, kept + [t])
-        if _rank(trial) == trial.shape[1] and n - trial.shape[1] >= min_error_df:
+        if rank(trial) == trial.shape[1] and n - trial.shape[1] >= min_error_df:
             kept.append(t)
     rest = [t for t in terms if sum(t) > 1]
     while True:
         X = model_matrix(coded, kept)
-        sse_now = _sse(X, y)
+        sse_now = residual_ss(X, y)
         best = None
         for t in rest:
             if t in kept or not set(parents(t)) <= set(kept):
                 continue
             trial = model_matrix(coded, kept + [t])
             df_resid = n - trial.shape[1]
-            if _rank(trial) < trial.shape[1] or df_resid < min_error_df:
+            if rank(trial) < trial.shape[1] or df_resid < min_error_df:
                 continue
-            sse = _sse(trial, y)
+            sse = residual_ss(trial, y)
             if best is None or sse < best[1]:
                 best = (t, sse, df_resid)
         if best is None:
@@ -101,7 +92,7 @@ def fit_available(design: Design, y, response: str = "y", alpha: float = 0.05, c
     ok = np.isfinite(y)
     full = default_terms(design)
     X = model_matrix(design.coded[ok], full)
-    whole = bool(ok.all() or (X.shape[0] >= X.shape[1] and _rank(X) == X.shape[1]))
+    whole = bool(ok.all() or (X.shape[0] >= X.shape[1] and rank(X) == X.shape[1]))
     choice = None
     if transform == "auto":
         judged_with = full if whole else [t for t in estimable_terms(design, y, full, alpha_in, min_error_df)[0]

@@ -5,9 +5,10 @@ contact's E' grows as E^(2/3) at a given stress), and a factor such as Young's m
 scale over a decade or more. A power law of a log-scaled factor is an exponential in coded units, so a
 first-order surface with interactions bends the wrong way between the corners: on hertz_strong's second
 design (E 0.25-4 GPa) the linear surfaces of the unload-reload modulus over-predicted the eight batteries at
-the kept optimum by 26-72 %, outside their own prediction intervals at three stresses of four; fitted to ln(y),
-the same terms' surfaces held the batteries inside their intervals at all four. A moderate response (max/min below 3) is not worth a transform
-(Montgomery, Design and Analysis of Experiments, 8th ed., section 15.1.1; Design-Expert's rule of thumb).
+the kept optimum by 26-72 %, outside their own prediction intervals at three stresses of four; fitted to
+ln(y), the surfaces held the batteries inside their intervals at all four. A moderate response (max/min
+below 3) is not worth a transform (Montgomery, Design and Analysis of Experiments, 8th ed., section
+15.1.1; Design-Expert's rule of thumb).
 
 The choice is Box and Cox's (1964): compare the residual sums of squares of the geometric-mean-scaled
 responses, SS_E(1) on y and SS_E(0) = ydot^2 SS_E(ln y) with ydot the geometric mean, which are on one
@@ -23,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from .lstsq import rank, residual_ss
 from .terms import model_matrix
 
 TRANSFORMS = ("none", "log")
@@ -56,12 +58,6 @@ class Choice:
     df: int = 0
 
 
-def _sse(X: np.ndarray, y: np.ndarray) -> float:
-    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
-    r = y - X @ beta
-    return float(r @ r)
-
-
 def choose(coded: np.ndarray, y, terms, alpha: float = 0.05) -> Choice:
     """The scale to fit ``y`` (finite values, rows of ``coded``) on with the model ``terms``."""
     y = np.asarray(y, dtype=float)
@@ -71,12 +67,12 @@ def choose(coded: np.ndarray, y, terms, alpha: float = 0.05) -> Choice:
     if ratio < MIN_RATIO:
         return Choice("none", f"max/min {ratio:.3g} < {MIN_RATIO:g}")
     X = model_matrix(coded, terms)
-    df = y.size - int(np.linalg.matrix_rank(X))
+    df = y.size - rank(X)
     if df <= 0:
         return Choice("none", "no residual degrees of freedom to judge a transform")
-    sse_plain = _sse(X, y)
+    sse_plain = residual_ss(X, y)
     ydot = math.exp(float(np.mean(np.log(y))))
-    sse_log = ydot**2 * _sse(X, np.log(y))
+    sse_log = ydot**2 * residual_ss(X, np.log(y))
     t = float(stats.t.ppf(1 - alpha / 2, df))
     bound = sse_log * (1 + t * t / df)
     if sse_plain > bound:
