@@ -345,14 +345,19 @@ class Simulation:
         dist = np.linalg.norm(s.offset, axis=1) + s.radius
         np.maximum.at(reach, s.body, dist)
         rot = rotation_factor(b.mass, b.inertia, reach)
-        extra = []
+        extra, stiff = [], []
+        r_min = float(s.radius.min())
         for spec in self.config.effects:
             eff = get_effect(spec.name)
+            params = eff.params_model.model_validate(spec.params)
             if eff.timestep_limit is not None:
-                params = eff.params_model.model_validate(spec.params)
                 rho = min(m.density_kg_m3 for m in self.config.materials)
-                extra.append((spec.name, eff.timestep_limit(params, rho, float(s.radius.min()))))
-        crit, mode = critical_timestep(b.mass, rot, s.kp, s.body, self.walls.kn, self.props, self.n_materials, extra)
+                extra.append((spec.name, eff.timestep_limit(params, rho, r_min)))
+            if eff.contact_stiffness is not None:
+                for contact_type in ("particle-particle", "particle-wall"):
+                    stiff.append((spec.name, contact_type, *eff.contact_stiffness(params, contact_type, r_min)))
+        crit, mode = critical_timestep(b.mass, rot, s.kp, s.body, self.walls.kn, self.props, self.n_materials, extra,
+                                       stiff)
         user = self.config.timestep_s
         if user is not None:
             if user > crit:

@@ -33,26 +33,35 @@ def _mode_limit(omega: float, zeta: float) -> float:
 
 
 def critical_timestep(body_mass, body_rot_factor, sphere_kp, sphere_body, wall_kn, props, n_mat,
-                      extra_limits=()) -> tuple[float, str]:
-    """Smallest stable step over the normal and tangential modes of particle-particle and -wall contacts."""
+                      extra_limits=(), effect_stiffness=()) -> tuple[float, str]:
+    """Smallest stable step over the normal and tangential modes of particle-particle and -wall contacts.
+
+    ``effect_stiffness``: (label, contact_type, kn, kt) of a contact law that replaces the linear springs (Hertz
+    at its reference overlap), judged with the same masses, damping and rotation as the linear modes."""
     m_min = float(body_mass.min())
     rot = float(body_rot_factor.max())
     kp = float(sphere_kp.max())
     nn = n_mat * n_mat
     modes = {}
     pp, pw = props[:nn], props[nn:]
-    for label, k, m_eff, rows in (
-        ("particle-particle", 0.5 * kp, 0.5 * m_min, pp),
-        ("particle-wall", kp * float(wall_kn.max()) / (kp + float(wall_kn.max())) if wall_kn.size else 0.0,
-         m_min, pw),
-    ):
-        if k <= 0.0:
-            continue
-        ratio, zn, zs = float(rows[:, 0].max()), float(rows[:, 1].max()), float(rows[:, 2].max())
+    contact_types = {"particle-particle": (0.5 * m_min, pp), "particle-wall": (m_min, pw)}
+
+    def add(label, k, ks, m_eff, rows):
+        zn, zs = float(rows[:, 1].max()), float(rows[:, 2].max())
         modes[f"{label} normal"] = _mode_limit(math.sqrt(k / m_eff), zn)
-        ks = ratio * k
         if ks > 0:
             modes[f"{label} tangential"] = _mode_limit(math.sqrt(ks * rot / m_eff), zs * math.sqrt(rot))
+
+    for label, k in (("particle-particle", 0.5 * kp),
+                     ("particle-wall", kp * float(wall_kn.max()) / (kp + float(wall_kn.max())) if wall_kn.size else 0.0)):
+        if k <= 0.0:
+            continue
+        m_eff, rows = contact_types[label]
+        add(label, k, float(rows[:, 0].max()) * k, m_eff, rows)
+    for label, contact_type, kn, kt in effect_stiffness:
+        m_eff, rows = contact_types[contact_type]
+        if kn > 0.0:
+            add(f"{label} {contact_type}", kn, kt, m_eff, rows)
     for label, dt in extra_limits:
         modes[label] = dt
     name = min(modes, key=modes.get)

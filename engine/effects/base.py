@@ -149,6 +149,10 @@ class Effect:
     doc: str = ""
     # critical time step this effect imposes: (params, density_kg_m3, r_min_m) -> dt_s (None: none)
     timestep_limit: Callable[..., float] | None = None
+    # a contact law replacing the linear springs: (params, contact_type, r_min_m) -> (kn, kt), its normal tangent
+    # and tangential stiffness at the largest overlap it is meant for; the critical step judges them with the
+    # damping and the rotation as it judges the linear springs (engine.timestep). None: no such law
+    contact_stiffness: Callable[..., tuple[float, float]] | None = None
     # the missing-physics diagnosis's view of this effect; None: not a diagnosis candidate
     candidate: Candidate | None = None
     # how the closed-form stand-in (calibration.standin) represents it: (params) -> {term: value} over
