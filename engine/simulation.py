@@ -21,7 +21,7 @@ from .ordering import cell_order, permute, sphere_rows
 from .pairtable import build_props
 from .state import (Bodies, Pairs, Spheres, WallContacts, Walls, empty_bodies, empty_pairs, empty_spheres,
                     empty_wall_contacts)
-from .timestep import TimestepReport, critical_timestep, rotation_factor
+from .timestep import TimestepReport, critical_timestep, effect_limits, rotation_factor
 from .wallgeom import MESH
 from .walls import build_walls, mesh_bounds, set_motion, set_rotation, set_servo, wall_triangles
 
@@ -345,17 +345,10 @@ class Simulation:
         dist = np.linalg.norm(s.offset, axis=1) + s.radius
         np.maximum.at(reach, s.body, dist)
         rot = rotation_factor(b.mass, b.inertia, reach)
-        extra, stiff = [], []
-        r_min = float(s.radius.min())
-        for spec in self.config.effects:
-            eff = get_effect(spec.name)
-            params = eff.params_model.model_validate(spec.params)
-            if eff.timestep_limit is not None:
-                rho = min(m.density_kg_m3 for m in self.config.materials)
-                extra.append((spec.name, eff.timestep_limit(params, rho, r_min)))
-            if eff.contact_stiffness is not None:
-                for contact_type in ("particle-particle", "particle-wall"):
-                    stiff.append((spec.name, contact_type, *eff.contact_stiffness(params, contact_type, r_min)))
+        active = [(spec.name, get_effect(spec.name), get_effect(spec.name).params_model.model_validate(spec.params))
+                  for spec in self.config.effects]
+        rho = min(m.density_kg_m3 for m in self.config.materials)
+        extra, stiff = effect_limits(active, rho, float(s.radius.min()))
         crit, mode = critical_timestep(b.mass, rot, s.kp, s.body, self.walls.kn, self.props, self.n_materials, extra,
                                        stiff)
         user = self.config.timestep_s

@@ -68,6 +68,20 @@ def critical_timestep(body_mass, body_rot_factor, sphere_kp, sphere_body, wall_k
     return modes[name], name
 
 
+def effect_limits(effects, density_kg_m3: float, r_min_m: float) -> tuple[list, list]:
+    """(extra_limits, effect_stiffness) for ``critical_timestep`` from the active contact effects, given as
+    (name, effect, validated params): each effect's own step limit and the stiffness of a law that replaces the
+    linear springs. One place for the simulation and for the step an export hands to LIGGGHTS."""
+    extra, stiff = [], []
+    for name, eff, params in effects:
+        if eff.timestep_limit is not None:
+            extra.append((name, eff.timestep_limit(params, density_kg_m3, r_min_m)))
+        if eff.contact_stiffness is not None:
+            for contact_type in ("particle-particle", "particle-wall"):
+                stiff.append((name, contact_type, *eff.contact_stiffness(params, contact_type, r_min_m)))
+    return extra, stiff
+
+
 def rotation_factor(mass, inertia, reach) -> np.ndarray:
     """1 + m r^2 / I_min per body: how much rotation speeds up a tangential contact mode."""
     return 1.0 + mass * reach * reach / inertia.min(axis=1)

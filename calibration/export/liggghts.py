@@ -107,7 +107,7 @@ def demcal_timestep_s(material: ExportMaterial) -> float:
     """demcal's step for this material: 0.3 x the critical step of its integrator over the normal and
     tangential (rotation-coupled) modes of particle and wall contacts (engine/timestep.py)."""
     from engine.effects import REGISTRY
-    from engine.timestep import critical_timestep, rotation_factor
+    from engine.timestep import critical_timestep, effect_limits, rotation_factor
 
     rho = material.particles.solid_density_kg_m3
     c = material.contact
@@ -128,13 +128,10 @@ def demcal_timestep_s(material: ExportMaterial) -> float:
     rot = rotation_factor(mass, np.asarray(inertias), np.asarray(reaches))
     row = [c.shear_to_normal_stiffness_ratio, c.damping_ratio_normal, c.damping_ratio_shear, c.friction_pp]
     props = np.asarray([row, row], dtype=float)
-    extra = []
-    for name, params in material.effects.items():
-        eff = REGISTRY[name]
-        if eff.timestep_limit is not None:
-            extra.append((name, eff.timestep_limit(eff.params_model.model_validate(params), rho, r_min)))
+    extra, stiff = effect_limits([(name, REGISTRY[name], REGISTRY[name].params_model.model_validate(params))
+                                  for name, params in material.effects.items()], rho, r_min)
     crit, _ = critical_timestep(mass, rot, np.asarray([c.particle_stiffness_n_per_m]), np.zeros(1, dtype=np.int64),
-                                np.asarray([c.wall_stiffness_n_per_m]), props, 1, extra)
+                                np.asarray([c.wall_stiffness_n_per_m]), props, 1, extra, stiff)
     return DEMCAL_SAFETY_FACTOR * crit
 
 
