@@ -4,11 +4,10 @@ Why: a granular packing's moduli follow power laws of the stress and of the cont
 contact's E' grows as E^(2/3) at a given stress), and a factor such as Young's modulus is varied on a log
 scale over a decade or more. A power law of a log-scaled factor is an exponential in coded units, so a
 first-order surface with interactions bends the wrong way between the corners: on hertz_strong's second
-design (E 0.25-4 GPa) the linear surfaces of the unload-reload modulus over-predicted the eight batteries at
-the kept optimum by 26-72 %, outside their own prediction intervals at three stresses of four; fitted to
-ln(y), the surfaces held the batteries inside their intervals at all four. A moderate response (max/min
-below 3) is not worth a transform (Montgomery, Design and Analysis of Experiments, 8th ed., section
-15.1.1; Design-Expert's rule of thumb).
+design (E 0.25-4 GPa) the linear surfaces of the unload-reload modulus over-predicted the mean of the eight
+batteries at the kept optimum by 26-72 %; fitted to ln(y), by 17-24 % (`bench/reanalyse.py`). A moderate
+response (max/min below 3) is not worth a transform (Montgomery, Design and Analysis of Experiments, 8th
+ed., section 15.1.1; Design-Expert's rule of thumb).
 
 The choice is Box and Cox's (1964): compare the residual sums of squares of the geometric-mean-scaled
 responses, SS_E(1) on y and SS_E(0) = ydot^2 SS_E(ln y) with ydot the geometric mean, which are on one
