@@ -10,8 +10,8 @@ Every finished job stores its wall time, so the service measures its own ratio
 over its latest finished jobs of the same evaluator, and a new job's wall time is median(r) x its own
 particles x simulated seconds. Because r divides the actual time by the same ceilings the new job's estimate
 uses, the ceilings' bias cancels. Jobs of the same set-up (test, rig, resolution and size factor) are used
-when there are any, since their time step is alike; otherwise the evaluator's other jobs, and the basis says
-so. With no finished job there is no estimate, said as such rather than guessed.
+when there are any, since their time step is alike (the contact law too: a Hertzian battery takes about 3x the
+steps of a linear one); otherwise the evaluator's other jobs, and the basis says so. With no finished job there is no estimate, said as such rather than guessed.
 """
 from __future__ import annotations
 
@@ -31,7 +31,7 @@ RECENT_JOBS = 30
 
 
 @lru_cache(maxsize=1024)
-def _footprint(spec_json: str) -> tuple[tuple[str, str, str, float], float] | None:
+def _footprint(spec_json: str) -> tuple[tuple[str, str, str, float, str], float] | None:
     """A stored spec's set-up and its cost model's particles x simulated seconds (specs never change, so the
     digest is cached by their text); None where this version cannot read the spec any more."""
     from engine.lab.cost import estimate_view
@@ -46,9 +46,11 @@ def _footprint(spec_json: str) -> tuple[tuple[str, str, str, float], float] | No
     return (setup_of(spec.test, view), size) if size > 0 else None
 
 
-def setup_of(test: str, view: dict[str, Any]) -> tuple[str, str, str, float]:
-    """What makes two jobs' time steps and particle counts alike: test, rig, resolution, size factor."""
-    return (test, view["rig"], view["resolution"], round(float(view["scale_factor"]), 6))
+def setup_of(test: str, view: dict[str, Any]) -> tuple[str, str, str, float, str]:
+    """What makes two jobs' time steps and particle counts alike: test, rig, resolution, size factor and the
+    contact law (Hertz's step is about 3x shorter than the linear springs')."""
+    return (test, view["rig"], view["resolution"], round(float(view["scale_factor"]), 6),
+            view.get("contact_law", "linear"))
 
 
 def wall_time_estimate(session: Session, test: str, view: dict[str, Any], evaluator: str) -> dict[str, Any]:

@@ -114,6 +114,16 @@ def estimated_simulated_time_s(spec: JobSpec) -> float:
     return estimate(spec).simulated_time_s
 
 
+def contact_law(spec: JobSpec) -> str:
+    """The contact effects that set the time step ("linear" for none): two jobs of one set-up run at about the
+    same step only under the same law (a Hertzian battery takes about 3x the steps of a linear one, engine.timestep)."""
+    from engine.effects import REGISTRY
+
+    names = sorted(name for name in spec.parameters.effects
+                   if REGISTRY[name].contact_stiffness is not None or REGISTRY[name].timestep_limit is not None)
+    return "+".join(names) or "linear"
+
+
 def estimate_view(spec: JobSpec) -> dict:
     """What a job will cost where it runs, as shown when it is created: the rig, the resolution and its size
     factor, the particles of the largest packing and the simulated time (ceilings, per test)."""
@@ -121,6 +131,6 @@ def estimate_view(spec: JobSpec) -> dict:
 
     setup, cost = setup_for(spec), estimate(spec)
     return {"rig": setup.rig_name, "resolution": label(spec.resolution, spec.fidelity),
-            "scale_factor": setup.scale_factor, "particles": cost.particles,
+            "scale_factor": setup.scale_factor, "contact_law": contact_law(spec), "particles": cost.particles,
             "particles_stage": cost.particles_stage if cost.stages else None,
             "simulated_time_s": cost.simulated_time_s, "stages_s": cost.stages_s}

@@ -63,6 +63,21 @@ def test_another_set_up_scales_by_particles_and_simulated_time(client):
     assert "other set-ups" in estimate["wall_time_basis"]
 
 
+def test_a_hertzian_job_is_not_read_off_linear_jobs_of_its_set_up(client):
+    """Hertz's time step is about 3x shorter than the linear springs' (engine.timestep): a Hertzian fill in the
+    box where linear fills finished is another set-up, and a Hertzian one of the same box is the same."""
+    linear = {"test": "fill", "seed": 1}
+    hertz = {"test": "fill", "seed": 2, "parameters": {"effects": {"hertz_mindlin": {"young_modulus_pa": 1.0e9}}}}
+    _finish(client, _submit(client, **linear)["id"], 10.0)
+    estimate = _submit(client, **hertz)["estimate"]
+    assert estimate["contact_law"] == "hertz_mindlin" and "other set-ups" in estimate["wall_time_basis"]
+    _finish(client, _submit(client, **hertz)["id"], 30.0)
+    estimate = _submit(client, **{**hertz, "seed": 3})["estimate"]
+    assert estimate["wall_time_s"] == pytest.approx(30.0)
+    assert estimate["wall_time_basis"] == "1 finished analytic job of the same set-up on this service"
+    assert _submit(client, **{**linear, "seed": 4})["estimate"]["contact_law"] == "linear"
+
+
 def test_another_evaluator_s_jobs_do_not_count(client):
     _finish(client, _submit(client, test="fill", seed=1)["id"], 5.0)
     estimate = _submit(client, test="fill", seed=2, evaluator="dem")["estimate"]

@@ -71,6 +71,8 @@ class CostEstimate(Out):
     rig: str = Field(description="the rig the batteries run in")
     resolution: str = Field(description="'thesis' or 'screening' (presets), 'as_measured' or 'coarse'")
     scale_factor: float = Field(description="particle sizes over the material's (1: as measured)")
+    contact_law: str = Field("linear", description="the contact effects that set the time step, e.g. "
+                             "'hertz_mindlin' ('linear': none); the wall time is read off jobs of the same law")
     particles: int = Field(description="spheres of the largest packing")
     particles_stage: str | None = Field(None, description="the test that builds it")
     simulated_time_s: float = Field(description="simulated time of one battery, at most")
