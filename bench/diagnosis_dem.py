@@ -858,11 +858,11 @@ def main(argv=None) -> int:
                     help="own-rig scenarios: the campaign's coarse-graining factor (default: the scenario's, 1.875 for "
                          "the gravel as described, the largest at which its 300 mm box holds 10 grains across)")
     ap.add_argument("--polish-steps", type=int, default=None,
-                    help="Gauss-Newton rounds on the batteries after each confirmation (default: the service's); each costs 3 batteries, plus one per factor for the Jacobian, "
-                         "times the confirmation seeds")
+                    help="Gauss-Newton rounds on the batteries after each confirmation (default: the service's); "
+                         "each costs 3 batteries, plus one per factor for the Jacobian, times the confirmation seeds")
     ap.add_argument("--polish-when", choices=["always", "surrogate_misses"], default=None,
-                    help="polish every iteration, or only one whose confirmation the "
-                         "response surfaces did not predict (the service's default; typically an added effect's iteration)")
+                    help="polish every iteration, or only one whose confirmation the response surfaces did not "
+                         "predict (the service's default; typically an added effect's iteration)")
     ap.add_argument("--confirmation-seeds", type=int, default=None,
                     help="batteries at each optimum, one per seed (default: the service's, 2); the lack of fit "
                          "compares their mean, so the simulator's scatter counts divided by this number, and "

@@ -32,7 +32,7 @@ def _dst_load(spec_json: str, precompressed: dict, packing_height_m: float, targ
     ctx = RunContext.from_spec(JobSpec.model_validate_json(spec_json))
     run = run_one(ctx, precompressed, packing_height_m, target_pa)
     out = {"target_pa": target_pa, **_provenance(ctx, ctx.wall_time_s)}
-    if run.held:  # a load the packing did not come to rest at is not sheared (its warning says so)
+    if run.held:  # a load the servo did not bring the lid to is not sheared (its warning says so)
         out.update(residual_normal_stress_pa=run.reduction.residual_normal_stress_pa,
                    residual_shear_stress_pa=run.reduction.residual_shear_stress_pa,
                    dilatancy_angle_deg=run.reduction.dilatancy_angle_deg)
@@ -90,7 +90,7 @@ def main() -> None:
             save(f"dst_{result['target_pa']:.0f}", result)
     loads = [done[t] for t in sorted(done) if "residual_shear_stress_pa" in done[t]]
     if len(loads) < 2:
-        raise SystemExit(f"{len(loads)} DST load(s) held on the servo: no Mohr-Coulomb fit (see the loads' warnings)")
+        raise SystemExit(f"{len(loads)} DST load(s) reached on the servo: no Mohr-Coulomb fit (see the loads' warnings)")
     fit = mohr_coulomb_fit([r["residual_normal_stress_pa"] for r in loads],
                            [r["residual_shear_stress_pa"] for r in loads])
     save("mohr_coulomb", {"wall_time_s": time.perf_counter() - started, "friction_angle_deg": fit.friction_angle_deg,
