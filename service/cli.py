@@ -89,6 +89,37 @@ def cmd_db_upgrade(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_db_backup(args: argparse.Namespace) -> int:
+    from service.backup import backup
+    from service.storage import StorageError
+
+    settings = _settings(args)
+    try:
+        done = backup(settings.database_url, args.file)
+    except StorageError as exc:
+        print(f"demcal db backup: {exc}", file=sys.stderr)
+        return 1
+    print(f"backed up {done['database']} ({done['pages']} pages) to {done['backup']} ({done['bytes']} bytes)")
+    return 0
+
+
+def cmd_db_restore(args: argparse.Namespace) -> int:
+    from service.backup import restore
+    from service.storage import StorageError, describe
+
+    settings = _settings(args)
+    try:
+        done = restore(args.file, settings.database_url, force=args.force)
+    except StorageError as exc:
+        print(f"demcal db restore: {exc}", file=sys.stderr)
+        return 1
+    except Exception as exc:  # the schema upgrade after the copy: one line, no traceback
+        print(f"demcal db restore: {describe(exc)}", file=sys.stderr)
+        return 1
+    print(f"restored {done['backup']} to {done['database']}, at revision {done['revision']}")
+    return 0
+
+
 def _db_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--db", metavar="URL", help="SQLAlchemy URL or SQLite file "
                         "(default: $DEMCAL_DATABASE_URL or ./demcal-data/demcal.db)")
@@ -111,12 +142,23 @@ def build_parser(plugins: bool = True) -> argparse.ArgumentParser:
     _db_option(worker)
     worker.set_defaults(func=cmd_worker)
 
-    db = sub.add_parser("db", help="database schema")
+    db = sub.add_parser("db", help="database schema, backup and restore")
     db_sub = db.add_subparsers(dest="db_command", required=True, metavar="ACTION")
     up = db_sub.add_parser("upgrade", help="apply Alembic migrations")
     up.add_argument("--revision", default="head", help="target revision (default head)")
     _db_option(up)
     up.set_defaults(func=cmd_db_upgrade)
+    save = db_sub.add_parser("backup", help="copy the SQLite database's committed state to FILE (gzip if FILE "
+                             "ends .gz); safe while the service runs")
+    save.add_argument("file", metavar="FILE")
+    _db_option(save)
+    save.set_defaults(func=cmd_db_backup)
+    back = db_sub.add_parser("restore", help="check a backup and put it in the database's place (service stopped)")
+    back.add_argument("file", metavar="FILE")
+    back.add_argument("--force", action="store_true", help="replace an existing database (kept as "
+                      "NAME.before-restore)")
+    _db_option(back)
+    back.set_defaults(func=cmd_db_restore)
 
     for module_name in PLUGINS if plugins else ():
         importlib.import_module(module_name).register(sub)
