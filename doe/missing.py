@@ -45,11 +45,7 @@ def estimable_terms(design: Design, y, terms=None, alpha_in: float = ALPHA_IN,
     coded, y = design.coded[ok], y[ok]
     n = y.size
     terms = sort_terms(default_terms(design) if terms is None else terms)
-    kept: list = []
-    for t in (t for t in terms if sum(t) == 1):
-        trial = model_matrix(coded, kept + [t])
-        if rank(trial) == trial.shape[1] and n - trial.shape[1] >= min_error_df:
-            kept.append(t)
+    kept = estimable_mains(coded, terms, min_error_df)
     rest = [t for t in terms if sum(t) > 1]
     while True:
         X = model_matrix(coded, kept)
@@ -78,6 +74,17 @@ def estimable_terms(design: Design, y, terms=None, alpha_in: float = ALPHA_IN,
     return sort_terms(kept), [t for t in terms if t not in kept]
 
 
+def estimable_mains(coded: np.ndarray, terms, min_error_df: int = MIN_ERROR_DF) -> list:
+    """The main effects of ``terms`` the runs ``coded`` can estimate, taken in order while each adds a direction
+    and ``min_error_df`` residual degrees of freedom remain (it depends on the runs only, not on a response)."""
+    kept: list = []
+    for t in (t for t in sort_terms(terms) if sum(t) == 1):
+        trial = model_matrix(coded, kept + [t])
+        if rank(trial) == trial.shape[1] and coded.shape[0] - trial.shape[1] >= min_error_df:
+            kept.append(t)
+    return kept
+
+
 def fit_available(design: Design, y, response: str = "y", alpha: float = 0.05, curvature: bool = True,
                   alpha_in: float = ALPHA_IN, min_error_df: int = MIN_ERROR_DF, transform: str = "auto") -> ResponseFit:
     """``fit_response`` on the runs that hold a value, with a smaller model where the full one cannot be fitted.
@@ -95,8 +102,7 @@ def fit_available(design: Design, y, response: str = "y", alpha: float = 0.05, c
     whole = bool(ok.all() or (X.shape[0] >= X.shape[1] and rank(X) == X.shape[1]))
     choice = None
     if transform == "auto":
-        judged_with = full if whole else [t for t in estimable_terms(design, y, full, alpha_in, min_error_df)[0]
-                                          if sum(t) == 1]
+        judged_with = full if whole else estimable_mains(design.coded[ok], full, min_error_df)
         choice = choose_transform(design.coded[ok], y[ok], judged_with, alpha)
         transform = choice.transform
     if whole:
