@@ -74,50 +74,50 @@ def cmd_worker(args: argparse.Namespace) -> int:
     return run_worker(settings)
 
 
+def _db_action(name: str, action) -> int:
+    """Run a ``demcal db`` action; its failure is one line on stderr and exit 1 (unreachable server, unknown
+    revision, a backup that is not one), never a traceback."""
+    from service.storage import StorageError, describe
+
+    try:
+        line = action()
+    except StorageError as exc:
+        print(f"demcal db {name}: {exc}", file=sys.stderr)
+        return 1
+    except Exception as exc:  # noqa: BLE001 - the driver's or Alembic's, said in one line
+        print(f"demcal db {name}: {describe(exc)}", file=sys.stderr)
+        return 1
+    print(line)
+    return 0
+
+
 def cmd_db_upgrade(args: argparse.Namespace) -> int:
     from service.migrate import upgrade
 
-    settings = _settings(args)
-    from service.storage import describe
-
-    try:
-        revision = upgrade(settings.database_url, args.revision)
-    except Exception as exc:  # unreachable server, unknown revision: say so, no traceback
-        print(f"demcal db upgrade: {describe(exc)}", file=sys.stderr)
-        return 1
-    print(f"database {settings.database_url} is at revision {revision}")
-    return 0
+    url = _settings(args).database_url
+    return _db_action("upgrade", lambda: f"database {url} is at revision {upgrade(url, args.revision)}")
 
 
 def cmd_db_backup(args: argparse.Namespace) -> int:
     from service.backup import backup
-    from service.storage import StorageError
 
-    settings = _settings(args)
-    try:
-        done = backup(settings.database_url, args.file)
-    except StorageError as exc:
-        print(f"demcal db backup: {exc}", file=sys.stderr)
-        return 1
-    print(f"backed up {done['database']} ({done['pages']} pages) to {done['backup']} ({done['bytes']} bytes)")
-    return 0
+    url = _settings(args).database_url
+
+    def action() -> str:
+        done = backup(url, args.file)
+        return f"backed up {done['database']} ({done['pages']} pages) to {done['backup']} ({done['bytes']} bytes)"
+    return _db_action("backup", action)
 
 
 def cmd_db_restore(args: argparse.Namespace) -> int:
     from service.backup import restore
-    from service.storage import StorageError, describe
 
-    settings = _settings(args)
-    try:
-        done = restore(args.file, settings.database_url, force=args.force)
-    except StorageError as exc:
-        print(f"demcal db restore: {exc}", file=sys.stderr)
-        return 1
-    except Exception as exc:  # the schema upgrade after the copy: one line, no traceback
-        print(f"demcal db restore: {describe(exc)}", file=sys.stderr)
-        return 1
-    print(f"restored {done['backup']} to {done['database']}, at revision {done['revision']}")
-    return 0
+    url = _settings(args).database_url
+
+    def action() -> str:
+        done = restore(args.file, url, force=args.force)
+        return f"restored {done['backup']} to {done['database']}, at revision {done['revision']}"
+    return _db_action("restore", action)
 
 
 def _db_option(parser: argparse.ArgumentParser) -> None:
