@@ -4,7 +4,11 @@ Why: every run a team stores (jobs, batteries, campaigns) lives in one SQLite fi
 outlives the machine it started on. Copying the file with ``cp`` while workers write can tear it (the WAL
 holds the newest pages beside it); SQLite's online backup API copies committed pages only, page by page,
 under the database's own locks, so a backup taken while the service runs is a state the service was in.
-A name ending ``.gz`` is gzip-compressed (a stored campaign shrinks about 5x).
+A name ending ``.gz`` is gzip-compressed (a stored campaign shrinks to about 40 %). ``without_curves`` drops
+each job result's raw curves (the time series behind its values, nearly all of a battery's stored result) and
+keeps everything a campaign reads (values, properties, provenance, designs, reports): a campaign carried to
+another machine that way resumes and reports as it would have, and only the curve plots of its jobs are gone
+(11 tier B screening batteries: 3.1 MB gzip'd with curves, 21 kB without).
 
 Restore checks before it writes anything: the file must be a SQLite database that passes
 ``PRAGMA integrity_check`` and carries a demcal schema revision, and an existing target is only replaced
@@ -17,6 +21,7 @@ PostgreSQL has its own tools (``pg_dump``/``pg_restore``); this module says so i
 from __future__ import annotations
 
 import gzip
+import json
 import os
 import shutil
 import sqlite3
@@ -50,8 +55,9 @@ def sqlite_path(database_url: str) -> Path:
     return Path(url.database)
 
 
-def backup(database_url: str, destination: str | os.PathLike) -> dict:
-    """Copy the database's committed state to ``destination`` (gzip when it ends in .gz); returns sizes."""
+def backup(database_url: str, destination: str | os.PathLike, without_curves: bool = False) -> dict:
+    """Copy the database's committed state to ``destination`` (gzip when it ends in .gz); returns sizes and,
+    with ``without_curves``, how many results lost their curves."""
     source = sqlite_path(database_url)
     if not source.is_file():
         raise StorageError(f"database {source} does not exist")
@@ -62,6 +68,7 @@ def backup(database_url: str, destination: str | os.PathLike) -> dict:
     with tempfile.TemporaryDirectory(dir=destination.parent) as scratch:
         copy = Path(scratch) / "copy.db"
         _online_copy(source, copy)
+        stripped = _drop_curves(copy) if without_curves else 0
         pages = _check(copy)
         final = Path(scratch) / "final"
         if destination.name.endswith(GZIP_SUFFIX):
@@ -71,7 +78,7 @@ def backup(database_url: str, destination: str | os.PathLike) -> dict:
             copy.replace(final)
         os.replace(final, destination)  # atomic: a reader never sees half a backup
     return {"database": str(source), "backup": str(destination), "pages": pages,
-            "bytes": destination.stat().st_size}
+            "bytes": destination.stat().st_size, "curves_dropped": stripped}
 
 
 def restore(backup_file: str | os.PathLike, database_url: str, force: bool = False) -> dict:
@@ -112,6 +119,26 @@ def _online_copy(source: Path, copy: Path) -> None:
         raise StorageError(f"database {source} could not be read: {exc}") from exc
     finally:
         src.close()
+
+
+def _drop_curves(copy: Path) -> int:
+    """Remove ``curves`` from every job result of the copy (never the live database), then VACUUM.
+
+    The text is rewritten with Python's json, as SQLAlchemy writes a JSON column on SQLite (NaN kept as NaN)."""
+    conn = sqlite3.connect(copy)
+    try:
+        ids = [row[0] for row in conn.execute("SELECT id FROM jobs WHERE result IS NOT NULL")]
+        dropped = 0
+        for job_id in ids:  # one row at a time: a campaign's results together are hundreds of MB as objects
+            result = json.loads(conn.execute("SELECT result FROM jobs WHERE id = ?", (job_id,)).fetchone()[0])
+            if isinstance(result, dict) and result.pop("curves", None) is not None:
+                conn.execute("UPDATE jobs SET result = ? WHERE id = ?", (json.dumps(result), job_id))
+                dropped += 1
+        conn.commit()
+        conn.execute("VACUUM")
+    finally:
+        conn.close()
+    return dropped
 
 
 def _unpack(backup_file: Path, staged: Path) -> None:

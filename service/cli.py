@@ -104,8 +104,10 @@ def cmd_db_backup(args: argparse.Namespace) -> int:
     url = _settings(args).database_url
 
     def action() -> str:
-        done = backup(url, args.file)
-        return f"backed up {done['database']} ({done['pages']} pages) to {done['backup']} ({done['bytes']} bytes)"
+        done = backup(url, args.file, without_curves=args.without_curves)
+        dropped = f", curves dropped from {done['curves_dropped']} results" if args.without_curves else ""
+        return (f"backed up {done['database']} ({done['pages']} pages) to {done['backup']} ({done['bytes']} "
+                f"bytes{dropped})")
     return _db_action("backup", action)
 
 
@@ -151,6 +153,8 @@ def build_parser(plugins: bool = True) -> argparse.ArgumentParser:
     save = db_sub.add_parser("backup", help="copy the SQLite database's committed state to FILE (gzip if FILE "
                              "ends .gz); safe while the service runs")
     save.add_argument("file", metavar="FILE")
+    save.add_argument("--without-curves", action="store_true", help="leave out the job results' raw curves (time "
+                      "series): everything a campaign reads is kept, in about 1 % of the space")
     _db_option(save)
     save.set_defaults(func=cmd_db_backup)
     back = db_sub.add_parser("restore", help="check a backup and put it in the database's place (service stopped)")

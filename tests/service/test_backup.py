@@ -103,3 +103,32 @@ def test_cli_backup_and_restore_print_one_line(tmp_path):
     done = run("restore", str(tmp_path / "a.db.gz"), "--db", str(tmp_path / "b.db"))
     assert done.returncode == 0 and head_revision() in done.stdout, done.stderr
     assert _seeds(tmp_path / "b.db") == [5]
+
+
+def test_backup_without_curves_keeps_every_value_and_leaves_the_live_database_whole(tmp_path):
+    import json
+    import math
+
+    _database(tmp_path / "live.db", [1, 2])
+    result = {"properties": {"bulk_density_kg_m3": 1550.0, "angle_deg": math.nan},
+              "curves": {"dst_10500": {"shear_displacement_m": [0.0, 0.001], "shear_stress_pa": [0.0, 5e3]}}}
+    conn = sqlite3.connect(tmp_path / "live.db")
+    conn.execute("UPDATE jobs SET result = ? WHERE json_extract(spec, '$.seed') = 1", (json.dumps(result),))
+    conn.commit()
+    conn.close()
+    done = backup(f"sqlite:///{tmp_path / 'live.db'}", tmp_path / "lean.db.gz", without_curves=True)
+    assert done["curves_dropped"] == 1
+    restore(tmp_path / "lean.db.gz", f"sqlite:///{tmp_path / 'back.db'}")
+
+    def stored(path):
+        conn = sqlite3.connect(path)
+        try:
+            text = conn.execute("SELECT result FROM jobs WHERE json_extract(spec, '$.seed') = 1").fetchone()[0]
+        finally:
+            conn.close()
+        return json.loads(text)
+
+    lean = stored(tmp_path / "back.db")
+    assert "curves" not in lean and lean["properties"]["bulk_density_kg_m3"] == 1550.0
+    assert math.isnan(lean["properties"]["angle_deg"])
+    assert stored(tmp_path / "live.db")["curves"] == result["curves"]  # the live database keeps its curves
