@@ -548,10 +548,11 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
     accepted = [h for h in later if (h.get("decision") or {}).get("accepted")]
     final = accepted[-1] if accepted else (later[-1] if later else first)
     # an alias fitted in place of an effect that passed: the comparison names the iteration kept
+    # or an added effect the fit turned off, its iteration kept as the base model refitted
     kept_number = history[-1].get("kept_iteration")
     if kept_number is not None:
         final = next(h for h in history if h["number"] == kept_number)
-        accepted = [final] if final is not first else []
+        accepted = [final] if final is not first and (final.get("decision") or {}).get("accepted", True) else []
     out["undistinguished"] = history[-1].get("undistinguished")
     if later:
         out["added"] = (final.get("added_effect") or [None])[0] if accepted else None
@@ -564,7 +565,7 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
         out["error_ratio"] = final["chi2"] / first["chi2"] if first["chi2"] else None
         out["chi2_per_dof_after"] = final["chi2_per_dof"]
         out["dof_after"] = final.get("dof")
-    kept = accepted[-1] if accepted else first
+    kept = final if kept_number is not None else (accepted[-1] if accepted else first)
     out["coverage"] = coverage(svc, sc, cid, kept["number"])
     # measured quantities the campaign could not compare at its resolution or rig (issue 29: none in the own rig)
     report = svc.call("GET", f"/campaigns/{cid}/iterations/1").get("report") or {}

@@ -59,10 +59,23 @@ def judge_iteration(iterations: list, it, report: dict) -> tuple[dict | None, in
     decision = judge(c, chi2_before=before["statistic"], chi2_after=after["statistic"], n_residuals=n,
                      free_before=n - int(before["dof"]), free_after=n - int(after["dof"]),
                      lof_p_before=before["p_value"], lof_p_after=after["p_value"],
-                     strength=((report.get("optimum") or {}).get(c.factor)))
+                     strength=((report.get("optimum") or {}).get(c.factor)), turned_off=turned_off(c, it, report))
     # kept or not, say how much of the misfit it explains: an effect kept with the fit still outside the
     # noise "partly explains" it, with what remains, and is not presented as the answer
-    return {**decision.to_dict(), **explanation([name], decision.accepted, base.report or {}, report)}, base_number
+    return {**decision.to_dict(), **explanation([name], decision.accepted, base.report or {}, report,
+                                                decision.turned_off)}, base_number
+
+
+def turned_off(candidate, it, report: dict) -> bool:
+    """Does iteration ``it``'s optimum put ``candidate``'s strength on the low edge of its factor where that
+    edge is the effect's "off" value (the report's active bounds)? A switch-type effect has no off strength."""
+    if candidate.is_switch or candidate.off_value is None:
+        return False
+    factor = next((f for f in (it.parameters or {}).get("factors", []) if f["name"] == candidate.factor), None)
+    if factor is None or abs(float(factor["low"]) - float(candidate.off_value)) > 1e-12 * max(1.0, abs(factor["high"])):
+        return False
+    return any(b.get("parameter") == candidate.factor and b.get("side") == "low"
+               for b in (report.get("conflicts") or {}).get("active_bounds", []))
 
 
 def widening(config, iterations: list, it, report: dict) -> dict | None:
@@ -316,6 +329,14 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         return {**record, "alias_settled": settled, "kept_iteration": settled["kept_iteration"],
                 "stop_reason": f"{StopReason.PASSES.value}; {settled['message']}"}
     rejected = decision is not None and not decision["accepted"]
+    if rejected and decision.get("turned_off") and not model_fails(report) \
+            and report.get("verdict") != Verdict.OUT_OF_REACH:
+        # the effect sits at its off strength and the fit is in the noise: this iteration is the base model
+        # refitted (its polish found a better base fit than the iteration it was built on), and it is kept
+        # without the effect
+        return {**record, "kept_iteration": it.number, "stop_reason": (
+            f"{StopReason.PASSES.value} with {decision['effect']} at its off strength: the fit does not ask for it, "
+            f"and iteration {it.number} is the base model refitted; {decision['effect']} is not added")}
     base = next(p for p in iterations if p.number == base_number) if rejected else it
     base_report = report if base is it else (base.report or {})
     passes = not model_fails(report)

@@ -114,6 +114,7 @@ class Decision:
     lof_p_before: float
     lof_p_after: float
     strength: float | None
+    turned_off: bool = False          # the optimum put the effect at its "off" strength (never accepted)
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -121,10 +122,17 @@ class Decision:
 
 def judge(candidate: Candidate, *, chi2_before: float, chi2_after: float, n_residuals: int,
           free_before: int, free_after: int, lof_p_before: float, lof_p_after: float,
-          strength: float | None = None) -> Decision:
+          strength: float | None = None, turned_off: bool = False) -> Decision:
     """The added effect is accepted when the weighted error falls, a lack of fit that passed still
-    passes, and the fall is significant (LR p < ALPHA, or BIC falls by more than 2).
+    passes, and the fall is significant (LR p < ALPHA, or BIC falls by more than 2), and never when
+    the optimum puts it at its "off" strength (``turned_off``).
 
+    Why ``turned_off``: the likelihood-ratio test reads the fall in chi2 as the effect's, which holds only
+    when the base's chi2 is at the base model's own best fit. It is not always: an iteration that polishes
+    on the batteries (or confirms at other seeds) can find a better base fit than the iteration it is
+    judged against. Tier B's weak Hertz world (session 35) showed it: cohesion added, the polish drove the
+    surface energy to 3e-12 J/m2 and friction from 0.73 to 0.58, chi2 fell from 29.8 to 16.2 (LR p 1e-4),
+    and the effect that was "accepted" was not in the model at all.
     Why the lack of fit is compared by its outcome and not by its p-value: each iteration's p-value
     is read against that iteration's own null (the simulator's scatter at its own confirmation
     points, drawn by Monte Carlo), so two p-values below ALPHA are two statements "far outside the
@@ -140,11 +148,12 @@ def judge(candidate: Candidate, *, chi2_before: float, chi2_after: float, n_resi
     turned_failing = lof_p_before >= ALPHA and lof_p_after < ALPHA
     improves = chi2_after < chi2_before and not turned_failing
     significant = (p is not None and p < ALPHA) or delta_bic < -2.0
-    return Decision(candidate.name, bool(improves and significant), float(chi2_before), float(chi2_after),
-                    float(lr), p, float(delta_bic), float(lof_p_before), float(lof_p_after), strength)
+    return Decision(candidate.name, bool(improves and significant and not turned_off), float(chi2_before),
+                    float(chi2_after), float(lr), p, float(delta_bic), float(lof_p_before), float(lof_p_after),
+                    strength, bool(turned_off))
 
 
-def explanation(effects: list[str], kept: bool, before: dict, after: dict) -> dict[str, Any]:
+def explanation(effects: list[str], kept: bool, before: dict, after: dict, turned_off: bool = False) -> dict[str, Any]:
     """How much of the misfit the added ``effects`` explain, judged on the report of the iteration with
     them (``after``) against the one it was built on (``before``): "explains" only when its verdict is
     "calibrated" (every check holds); "partly explains" when the effect was kept but the fit is still
@@ -169,6 +178,8 @@ def explanation(effects: list[str], kept: bool, before: dict, after: dict) -> di
         text += f", failing tests: {', '.join(failing)}"
     if word == Explains.PARTLY:
         text += "; the misfit left is not explained by it"
+    if turned_off:
+        text += "; the fit sets it to its off strength, so what changed is the base parameters' fit"
     return {"explains": word.value, "remaining": remaining, "explains_message": text}
 
 

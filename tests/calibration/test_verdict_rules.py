@@ -216,6 +216,53 @@ def test_an_inconclusive_stop_says_what_to_measure_next():
     assert record["stop_reason"] == "diagnosis: inconclusive; measure next: dst residual_shear_stress_pa"
 
 
+# -- an effect the fit turns off is not added -----------------------------------------------------------
+def _turned_off_case(lof_after, strength):
+    """Tier B's weak Hertz world (session 35): iteration 1 misses (chi2 29.8 on 13 dof), its diagnosis indicates
+    cohesion; iteration 2 adds it on a 0-200 J/m2 factor and its polish ends at ``strength``."""
+    case = make_case(3, "null")
+    settings = loop_settings(case)
+    factors = [f.model_dump() for f in settings.factors]
+    campaign = {"factors": factors, "fidelity": settings.fidelity, "fixed_parameters": {}}
+    first_lof = {"statistic": 29.84, "dof": 13, "n_residuals": 17, "p_value": 0.040, "chi2_per_dof": 2.30,
+                 "noise_band": [0.22, 1.78]}
+    first = SimpleNamespace(number=1, parameters={"factors": factors, "fixed": {}, "effects": {}}, report={
+        "verdict": Verdict.MISSES.value, "lack_of_fit": first_lof, "adequacy": {"fails": True},
+        "diagnosis": {"verdict": DiagnosisVerdict.INDICATED.value, "indicated": ["cohesion_adhesive"], "ranking": []},
+        "automatic": {"next_effect": "cohesion_adhesive", "next_base": 1}})
+    factor = "effects.cohesion_adhesive.surface_energy_j_m2"
+    second_factors = factors + [{"name": factor, "low": 0.0, "high": 200.0, "log": False}]
+    pinned = [{"parameter": factor, "side": "low", "value": strength}] if strength < 1e-6 else []
+    report = {"verdict": Verdict.CALIBRATED.value if lof_after["p_value"] >= 0.05 else Verdict.MISSES.value,
+              "lack_of_fit": lof_after, "adequacy": {"fails": lof_after["p_value"] < 0.05},
+              "optimum": {factor: strength}, "conflicts": {"active_bounds": pinned, "priors_pulled": []}}
+    second = SimpleNamespace(number=2, parameters={"factors": second_factors, "fixed": {}, "effects": {}}, report=None)
+    return automatic.next_step(loop_settings(case, max_iterations=3), campaign, [first, second], second, report,
+                               validate=lambda c: c)
+
+
+def test_an_added_effect_the_fit_turns_off_is_not_added():
+    """The likelihood-ratio test credits the effect with the whole fall in chi2, which holds only when the base
+    was at its own best fit; a polish that finds a better base fit with the effect at zero must not make the
+    effect "accepted" (LR 13.6 here, p 1e-4). The iteration is kept as the base model refitted."""
+    passing = {"statistic": 16.20, "dof": 13, "n_residuals": 17, "p_value": 0.32, "chi2_per_dof": 1.25,
+               "noise_band": [0.22, 1.78]}
+    record = _turned_off_case(passing, 2.8e-12)
+    decision = record["decision"]
+    assert decision["turned_off"] and not decision["accepted"] and decision["p_value"] < 0.05
+    assert decision["explains"] == Explains.DOES_NOT and "off strength" in decision["explains_message"]
+    assert record["kept_iteration"] == 2 and record["next_effect"] is None
+    assert record["stop_reason"].startswith(StopReason.PASSES) and "is not added" in record["stop_reason"]
+    # the same fall with the strength away from zero: the effect earned its place
+    kept = _turned_off_case(passing, 40.0)
+    assert kept["decision"]["accepted"] and not kept["decision"]["turned_off"] and "kept_iteration" not in kept
+    # turned off and still outside the noise: rejected like any other, and the loop goes on from the base
+    failing = {**passing, "statistic": 26.0, "p_value": 0.017, "chi2_per_dof": 2.0}
+    record = _turned_off_case(failing, 0.0)
+    assert record["decision"]["turned_off"] and not record["decision"]["accepted"]
+    assert "kept_iteration" not in record and record["stop_reason"] == StopReason.NOTHING_IMPROVES
+
+
 # -- an effect that leaves misfit partly explains it ---------------------------------------------------
 def test_an_effect_that_leaves_the_fit_outside_the_noise_partly_explains_it():
     before = {"lack_of_fit": {"chi2_per_dof": 1320.0}}

@@ -163,6 +163,8 @@ class Decision(Out):
     lof_p_before: float | None
     lof_p_after: float | None
     strength: float | None
+    turned_off: bool = Field(False, description="the optimum put the effect at its off strength: never accepted; "
+                             "an iteration in the noise that way is kept as the base model refitted")
     explains: Explains | None = Field(None, description="explains, partly explains or does not explain")
     remaining: Remaining | None = None
     explains_message: str | None = None
