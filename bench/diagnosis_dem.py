@@ -537,6 +537,7 @@ def outcome(svc: Service, sc: Scenario, cid: int) -> dict[str, Any]:
         out["diagnosis_verdicts"].append(diagnosis.get("verdict"))
         # the candidates the last diagnosis could not have seen (calibration.unseen), and what would see them
         out["unseen"] = [u["effect"] for u in diagnosis.get("unseen", [])]
+        out["undetermined"] = [u["effect"] for u in diagnosis.get("undetermined", [])]
         out["measure_next"] = diagnosis.get("measure_next", [])
         if h["number"] == 1:
             out["ranking"] = [r["effect"] for r in diagnosis["ranking"]]
@@ -775,10 +776,10 @@ def weak_end_right(o: dict) -> bool:
         return o["effect"] in o["undistinguished"]
     if o.get("added"):
         return o["added"] == o["effect"]
-    # "no misfit" that names the hidden effect as one these measurements could not see, with what would see it,
-    # is the honest inconclusive about that effect (calibration.unseen)
+    # "no misfit" that names the hidden effect as one these measurements could not see, or whose probe could not
+    # tell, with what would decide, is the honest inconclusive about that effect (calibration.unseen)
     unseen = bool(o.get("diagnosis_verdicts") and o["diagnosis_verdicts"][-1] == NO_MISFIT
-                  and o["effect"] in (o.get("unseen") or []) and o.get("measure_next"))
+                  and o["effect"] in (o.get("unseen") or []) + (o.get("undetermined") or []) and o.get("measure_next"))
     return unseen or "inconclusive" in (o.get("stop_reason") or "") or bool(
         o.get("diagnosis_verdicts") and o["diagnosis_verdicts"][-1] == INCONCLUSIVE)
 

@@ -177,6 +177,7 @@ class Attribution:
     directed: stats.DirectedTest | None = None   # the max-T score test over the candidates
     adequacy_p: float | None = None               # Holm over the omnibus lack of fit and ``directed``
     unseen: list[dict] = field(default_factory=list)  # candidates these measurements could not see (unseen.py)
+    undetermined: list[dict] = field(default_factory=list)  # candidates whose probes were too noisy to tell
 
     @property
     def fails(self) -> bool:
@@ -199,6 +200,7 @@ class Attribution:
                 "alias_groups": self.alias_groups, "fingerprints": self.fingerprints,
                 "measure_next": self.measure_next, "alpha": ALPHA, "min_explained": MIN_EXPLAINED,
                 "critical_lm": unseen_mod.critical_lm(ALPHA, len(self.ranking)), "unseen": self.unseen,
+                "undetermined": self.undetermined,
                 "directed": None if self.directed is None else self.directed.to_dict(),
                 "adequacy": {"p_value": self.adequacy_p, "fails": self.fails,
                              "about": "Holm over the omnibus lack of fit and the directed test (the largest "
@@ -359,13 +361,17 @@ def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[
                     "effects": {c.name: {col: c.fingerprint.get(col, "0") for col in FINGERPRINT_COLUMNS}
                                 for c in candidates.values()}}
     verdict, message, measure_next = _verdict(loc, ranked, groups, labels, r, M, room)
-    blind = unseen_mod.unseen([s for s in signatures if s.probe == STEP], M, ALPHA, set(labels))
-    if verdict == DiagnosisVerdict.NO_MISFIT and blind:
-        # "no misfit" does not speak for an effect the measurements could not have seen: say which, and what would
-        message += "; " + unseen_mod.message(blind)
-        measure_next = list(dict.fromkeys(m for row in blind for m in row["measure"]))
+    steps = [s for s in signatures if s.probe == STEP]
+    blind = unseen_mod.unseen(steps, M, ALPHA, set(labels))
+    open_ = unseen_mod.undetermined(steps, M, ALPHA, set(labels))
+    if verdict == DiagnosisVerdict.NO_MISFIT and (blind or open_):
+        # "no misfit" does not speak for an effect the measurements could not have seen, nor for one whose probe
+        # was too noisy to tell: say which, and what would
+        message += "".join("; " + text for text in (unseen_mod.message(blind), unseen_mod.undetermined_message(open_))
+                           if text)
+        measure_next = list(dict.fromkeys(m for row in blind + open_ for m in row["measure"]))
     return Attribution(ranked, groups, fingerprints, verdict, message, measure_next, candidates, directed,
-                       loc.adequacy_p, blind)
+                       loc.adequacy_p, blind, open_)
 
 
 def _verdict(loc: Localisation, ranked: list[Ranked], groups: list[dict], labels, r, M, room=((), 0.0)):

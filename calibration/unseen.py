@@ -16,6 +16,11 @@ signature, so it is judged on an upper bound of its length: |M s_true| <= |M s| 
 whose noise could hide a visible signature names nothing: on tier B's weak Hertz scenario one seed's
 cohesion probe was 2.2 times its own length in noise, and cohesion at 80 J/m2 had been seen there.
 
+Between the two lies a candidate whose probe is too noisy to say either way: the upper bound of its length
+would be seen, the lower bound (|M s| - 1.96 sqrt(E|M e|^2), at least 0) would not. "No misfit" does not
+rule it out either; ``undetermined`` names such candidates with what would decide (tier B's weak Hertz
+world, session 35: the Hertz probe's scatter 1.17 times its projected signature, LM 0.77, and Hertz hidden).
+
 Why it matters: on tier B's packings the loading E' grows with the contact network under either contact
 law, so E' windows left a Hertzian world inside the linear model's noise, while the unload-reload modulus
 saw it (docs/diagnosis.md, hertz_strong; ``Candidate.revealed_by`` names it). The signature is a linear
@@ -57,16 +62,11 @@ def unseen(signatures, M: np.ndarray, alpha: float, measured_labels: set[str] | 
     """The candidates these measurements could not see at any plausible strength, each with the noncentrality
     at the range's top (on the upper bound of its signature's length), the one needed, the smallest strength that would be seen (None: none would) and what
     to measure: its ``revealed_by`` measurements, "more replicates of" those already measured."""
-    from calibration.attribute import noise_share
-
     need = detectable_lm(alpha, len(signatures))
     out = []
     for sig in signatures:
         c = sig.candidate
-        projected = M @ np.asarray(sig.vector, float)
-        length2 = float(projected @ projected)
-        share = noise_share(M, sig.vector, sig.noise_var)
-        upper2 = (math.sqrt(length2) + NOISE_Z * math.sqrt(_noise2(M, sig.noise_var))) ** 2
+        _, upper2, share = _length_bounds(sig, M)
         lm_top = upper2 * _top_strength(c) ** 2
         if lm_top >= need:
             continue
@@ -78,6 +78,49 @@ def unseen(signatures, M: np.ndarray, alpha: float, measured_labels: set[str] | 
                     "power": DETECTION_POWER, "smallest_seen": smallest, "signature_noise": share,
                     "measure": [_advice(test, quantity, how, measured_labels) for test, quantity, how in c.revealed_by]})
     return out
+
+
+def undetermined(signatures, M: np.ndarray, alpha: float, measured_labels: set[str] | None = None) -> list[dict[str, Any]]:
+    """The candidates whose probes cannot say whether these measurements would see them at the top of their
+    plausible range: seen on the upper bound of the signature's length, unseen on the lower. Each with its
+    noncentrality at the top on both bounds, the one needed, the probe's noise share, and what would decide:
+    its ``revealed_by`` measurements (or more replicates of them)."""
+    need = detectable_lm(alpha, len(signatures))
+    out = []
+    for sig in signatures:
+        c = sig.candidate
+        lower2, upper2, share = _length_bounds(sig, M)
+        top2 = _top_strength(c) ** 2
+        if upper2 * top2 < need or lower2 * top2 >= need:
+            continue  # unseen (``unseen`` names it) or seen whatever the probe's scatter
+        out.append({"effect": c.name, "title": c.title, "lm_at_top_low": lower2 * top2, "lm_at_top_high": upper2 * top2,
+                    "lm_needed": need, "power": DETECTION_POWER, "signature_noise": share,
+                    "measure": [_advice(test, quantity, how, measured_labels) for test, quantity, how in c.revealed_by]})
+    return out
+
+
+def undetermined_message(rows: list[dict[str, Any]]) -> str:
+    """One sentence: which candidates the probes could not judge, and what would."""
+    if not rows:
+        return ""
+    parts = []
+    for row in rows:
+        what = (f"{row['title']} ({row['effect']}): its probe's scatter is {row['signature_noise']:.2g} of its "
+                f"signature, LM {row['lm_at_top_low']:.1f}-{row['lm_at_top_high']:.1f} at its strongest plausible strength")
+        parts.append(what + (f"; measure {' or '.join(row['measure'])}" if row["measure"] else ""))
+    return (f"whether these measurements would see {len(rows)} candidate effect{'s' if len(rows) > 1 else ''} "
+            f"(LM {rows[0]['lm_needed']:.1f} needed) is not known, so the agreement does not rule "
+            f"{'them' if len(rows) > 1 else 'it'} out: " + "; ".join(parts))
+
+
+def _length_bounds(sig, M: np.ndarray) -> tuple[float, float, float | None]:
+    """(lower, upper) squared bounds on the true projected signature's length, and the probe's noise share."""
+    from calibration.attribute import noise_share
+
+    projected = M @ np.asarray(sig.vector, float)
+    length = math.sqrt(float(projected @ projected))
+    spread = NOISE_Z * math.sqrt(_noise2(M, sig.noise_var))
+    return max(length - spread, 0.0) ** 2, (length + spread) ** 2, noise_share(M, sig.vector, sig.noise_var)
 
 
 def _noise2(M: np.ndarray, noise_var) -> float:

@@ -9,7 +9,7 @@ import pytest
 from calibration import stats
 from calibration.attribute import Signature, attribute
 from calibration.localise import Localisation
-from calibration.unseen import DETECTION_POWER, critical_lm, detectable_lm, unseen
+from calibration.unseen import DETECTION_POWER, critical_lm, detectable_lm, undetermined, unseen
 from calibration.vocabulary import DiagnosisVerdict
 from engine.candidates import candidates
 from engine.lab.registry import units
@@ -101,6 +101,41 @@ def test_no_misfit_names_what_it_could_not_see():
     test, quantity, how = table["hertz_mindlin"].revealed_by[0]
     assert att.measure_next == [f"{test} {quantity} {how}"]
     assert [u["effect"] for u in att.to_dict()["unseen"]] == ["hertz_mindlin"]
+
+
+def test_a_probe_too_noisy_to_tell_leaves_its_candidate_undetermined():
+    """Cohesion at 0.01 sd per J/m2 on one row, its probe's noise sd 0.01 there: the true signature lies in
+    0.01 -+ 1.96 x 0.01, i.e. 0 to 0.0296 long, so at the plausible top (200 J/m2) LM 0 to (0.0296 x 200)^2 =
+    35.0 against the 6.18 needed (one candidate): neither seen nor unseen. Quiet, it is unseen (LM 4); ten times
+    longer and quiet, it is seen (LM 400); neither of those is undetermined."""
+    table = candidates()
+    M = np.eye(N_ROWS)
+    noisy = Signature(table["cohesion_adhesive"], _vector(0.01), 60.0, noise_var=_vector(1.0e-4))
+    rows = undetermined([noisy], M, ALPHA, set())
+    assert [row["effect"] for row in rows] == ["cohesion_adhesive"]
+    assert rows[0]["lm_at_top_low"] == 0.0
+    assert rows[0]["lm_at_top_high"] == pytest.approx((0.0296 * 200.0) ** 2, rel=1e-3)
+    assert rows[0]["lm_needed"] == pytest.approx(detectable_lm(ALPHA, 1))
+    quiet = dataclasses.replace(noisy, noise_var=None)
+    assert undetermined([quiet], M, ALPHA, set()) == [] and unseen([quiet], M, ALPHA, set())
+    seen = Signature(table["cohesion_adhesive"], _vector(0.1), 60.0, noise_var=_vector(1.0e-6))
+    assert undetermined([seen], M, ALPHA, set()) == [] and unseen([seen], M, ALPHA, set()) == []
+
+
+def test_no_misfit_does_not_rule_out_a_candidate_its_probe_could_not_judge():
+    table = candidates()
+    M = np.eye(N_ROWS)
+    r = np.zeros(N_ROWS)
+    loc = Localisation(stats.lack_of_fit(r, M, np.full(N_ROWS, np.inf)), rows=[], tests=[], trends={}, conflicts={})
+    # Hertz's switch moves the first row 2 sd with probe noise of sd 2 there: LM 0 to (2 + 3.92)^2 = 35
+    signatures = [Signature(table["hertz_mindlin"], _vector(2.0), 1.0, reference=1.1e9, noise_var=_vector(4.0)),
+                  Signature(table["rolling_epsd2"], _vector(10.0), 0.15)]
+    labels = [f"cct confined_modulus_pa @ normal_stress_pa={s}" for s in range(N_ROWS)]
+    att = attribute(loc, r, M, signatures, labels)
+    assert att.verdict == DiagnosisVerdict.NO_MISFIT and "does not rule it out" in att.message
+    assert [u["effect"] for u in att.to_dict()["undetermined"]] == ["hertz_mindlin"] and att.unseen == []
+    test, quantity, how = table["hertz_mindlin"].revealed_by[0]
+    assert att.measure_next == [f"{test} {quantity} {how}"]
 
 
 def test_every_revealing_measurement_is_one_the_lab_reports():

@@ -106,12 +106,17 @@ def _bench(name):
     (None, ["no misfit"], "lack of fit passes", True, None, ["rolling_epsd2"], ["aor angle_of_repose_deg"]),
     (None, ["no misfit"], "lack of fit passes", False, None, ["particle_shape"], ["aor angle_of_repose_deg"]),
     (None, [], "lack of fit passes", False, None, [], []),  # never diagnosed
+    # "no misfit" that cannot rule the truth out (its probe too noisy to tell), with what would decide
+    (None, ["no misfit"], "lack of fit passes", True, None, ["undetermined:rolling_epsd2"], ["aor angle_of_repose_deg"]),
+    (None, ["no misfit"], "lack of fit passes", False, None, ["undetermined:rolling_epsd2"], []),
 ])
 def test_a_weak_scenario_ends_with_its_effect_or_inconclusive(added, verdicts, stop, right, undistinguished, unseen,
                                                               measure_next):
     """Issue 33: today's weak scenarios end with the true effect added or "inconclusive", never a wrong effect kept."""
     row = {"effect": "rolling_epsd2", "kind": "weak", "added": added, "diagnosis_verdicts": verdicts, "stop_reason": stop,
-           "undistinguished": undistinguished, "unseen": unseen, "measure_next": measure_next}
+           "undistinguished": undistinguished, "measure_next": measure_next,
+           "unseen": [e for e in unseen if ":" not in e],
+           "undetermined": [e.split(":")[1] for e in unseen if e.startswith("undetermined:")]}
     assert _bench("diagnosis_dem").weak_end_right(row) is right
 
 

@@ -63,6 +63,20 @@ class UnseenEffect(Out):
     measure: list[str] = Field(description="what would show it")
 
 
+class UndeterminedEffect(Out):
+    """A candidate whose probe was too noisy to say whether these measurements would see it (calibration.unseen)."""
+
+    effect: str
+    title: str
+    lm_at_top_low: float = Field(description="noncentrality at the plausible top on the lower bound of its "
+                                             "signature's length (the probe's scatter taken away)")
+    lm_at_top_high: float = Field(description="the same on the upper bound (the scatter added)")
+    lm_needed: float = Field(description="the noncentrality at which Holm's first step flags it with `power`")
+    power: float
+    signature_noise: float | None = Field(description="share of its probe's projected length that is noise")
+    measure: list[str] = Field(description="what would decide it")
+
+
 class Separator(Out):
     effects: list[str] = Field(description="the two effects")
     cos: float = Field(description="cosine of their projected signatures")
@@ -123,6 +137,9 @@ class Diagnosis(Out):
     unseen: list[UnseenEffect] = Field(
         default_factory=list, description="candidates these measurements could not see at any plausible strength: "
                                           "a 'no misfit' does not speak for or against them")
+    undetermined: list[UndeterminedEffect] = Field(
+        default_factory=list, description="candidates whose probes were too noisy to say whether these measurements "
+                                          "would see them: a 'no misfit' does not rule them out")
     directed: DirectedTest | None
     adequacy: DiagnosisAdequacy
     lack_of_fit: LackOfFit = Field(description="over every battery at the optimum together")

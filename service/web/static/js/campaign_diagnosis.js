@@ -121,6 +121,8 @@ export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded })
   const suggested = against ? [] : d.ranking.filter((r) => r.significant);
   // candidates these measurements could not see at any plausible strength (calibration/unseen.py)
   const unseen = new Map((d.unseen || []).map((u) => [u.effect, u]));
+  // and those whose probes were too noisy to say whether they would be seen
+  const undetermined = new Map((d.undetermined || []).map((u) => [u.effect, u]));
   // chart and fingerprints one under the other: side by side at 1280 px the chart truncated the
   // effects' names and the table hid its last columns (issue 31)
   return h("section", { className: "card diagnosis" }, h("h3", {}, `Diagnosis: ${d.verdict}`),
@@ -132,6 +134,7 @@ export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded })
         h("span", {}, h("span", { className: "swatch", style: `background:${colourOf(r)}` }), ` ${r.title} `, h("code", {}, r.effect)),
         r.lm, r.p_holm, explainedCell(r), probeNoise(r), strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
         !r.significant && unseen.has(r.effect) ? h("span", { className: "muted unseen", title: `LM ${fmt(unseen.get(r.effect).lm_at_top, 2)} at its strongest plausible strength, ${fmt(unseen.get(r.effect).lm_needed, 3)} needed` }, "unseen by these measurements")
+          : !r.significant && undetermined.has(r.effect) ? h("span", { className: "muted undetermined", title: `LM ${fmt(undetermined.get(r.effect).lm_at_top_low, 2)}-${fmt(undetermined.get(r.effect).lm_at_top_high, 2)} at its strongest plausible strength, ${fmt(undetermined.get(r.effect).lm_needed, 3)} needed` }, "not ruled out: probe too noisy")
           : !r.significant ? h("span", { className: "muted" }, "not significant")
           : against ? h("span", { className: "muted" }, "not offered: against the diagnosis")
             : addEffectForm(campaignId, r, nextNumber, canAdd, onAdded)]))),
