@@ -7,7 +7,13 @@ kept), the surfaces' optimum, and the surfaces against the iteration's own confi
 it stored (mean over the seeds, and whether it lies inside the surface's 95 % prediction interval for that mean).
 Session 34 used it on hertz_strong's stopped second iteration (docs/diagnosis.md).
 
+With --diagnosis it also diagnoses the iteration again from its stored diagnosis batteries (its stored plan, the
+batteries at its final optimum): the verdict, ranking, and the candidates unseen or undetermined, as today's
+code words them. The settings are the campaign's configuration, which is its last iteration's: the diagnosis of
+an earlier iteration is computed with the last one's settings (its priors, options).
+
     python3 bench/reanalyse.py --data-dir /work/tierb/s33/hs --campaign 1 --iteration 2
+    python3 bench/reanalyse.py --data-dir /work/tierb/s35/weak --campaign 1 --iteration 2 --diagnosis
     python3 bench/reanalyse.py --url postgresql+psycopg://... --campaign 7 --iteration 1
 """
 from __future__ import annotations
@@ -60,6 +66,34 @@ def load(url: str, campaign_id: int, number: int):
     return settings, _json(it[1]), runs["design"], targets, _json(it[2]), runs["confirmation"]
 
 
+def stored_iteration(url: str, campaign_id: int, number: int):
+    """The iteration as the loop's phases read it: its runs (every kind, with ids), optimum and report."""
+    with create_engine(url).connect() as db:
+        it = db.execute(text("select id, optimum, report from campaign_iterations where campaign_id = :c and "
+                             "number = :n"), {"c": campaign_id, "n": number}).first()
+        runs = [types.SimpleNamespace(id=r[0], kind=r[1], std_order=r[2], seed=r[3], responses=_json(r[4]))
+                for r in db.execute(text("select id, kind, std_order, seed, responses from campaign_runs where "
+                                         "iteration_id = :i order by id"), {"i": it[0]})]
+    return types.SimpleNamespace(number=number, runs=runs, optimum=_json(it[1]), report=_json(it[2]) or {})
+
+
+def diagnose_again(settings, design: dict, design_runs, targets, it) -> dict:
+    """The iteration's diagnosis computed by today's code from its stored batteries (as calibration.machine's
+    diagnosis phase computes it)."""
+    from calibration import attribute, polish
+    from calibration.vocabulary import RunKind
+
+    plan = [(p["effect"], p["seed"], p.get("probe", attribute.STEP)) for p in it.report.get("diagnosis_plan") or []]
+    runs = sorted((r for r in it.runs if r.kind == RunKind.DIAGNOSIS), key=lambda r: r.std_order)
+    if not plan or len(runs) < len(plan) or any(r.responses is None for r in runs[:len(plan)]):
+        raise SystemExit(f"iteration {it.number} has no complete stored diagnosis to compute again")
+    final = polish.final_runs(it)
+    return analysis.diagnose(settings, design["doe"], design_runs, targets, it.optimum,
+                             [list((r.responses or {}).values()) for r in final], [r.seed for r in final],
+                             [(name, seed, list((r.responses or {}).values()), probe)
+                              for (name, seed, probe), r in zip(plan, runs)])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     where = ap.add_mutually_exclusive_group(required=True)
@@ -67,6 +101,8 @@ def main() -> None:
     where.add_argument("--url", help="a database URL")
     ap.add_argument("--campaign", type=int, required=True)
     ap.add_argument("--iteration", type=int, required=True)
+    ap.add_argument("--diagnosis", action="store_true", help="also diagnose the iteration again from its stored "
+                    "diagnosis batteries")
     args = ap.parse_args()
     url = args.url or f"sqlite:///{Path(args.data_dir) / 'demcal.db'}"
     settings, design, runs, targets, stored_optimum, confirmations = load(url, args.campaign, args.iteration)
@@ -97,6 +133,16 @@ def main() -> None:
             err = 100 * (p["mean"] - mean) / abs(mean) if mean else math.nan
             print(f"  {m.key.name:55s} batteries {mean:.4g}  surface {p['mean']:.4g} [{p['pi_low']:.4g}, "
                   f"{p['pi_high']:.4g}] ({err:+.0f} %){'' if inside else '  OUTSIDE'}")
+    if args.diagnosis:
+        it = stored_iteration(url, args.campaign, args.iteration)
+        d = diagnose_again(settings, design, runs, targets, it)
+        stored = (it.report.get("diagnosis") or {}).get("verdict")
+        print(f"diagnosis by today's code: {d['verdict']} (stored: {stored})\n  {d['message']}")
+        for row in d["ranking"]:
+            print(f"  {row['effect']:20s} LM {row['lm']:.3g}  Holm p {row['p_holm']:.3g}  probe noise "
+                  f"{row['signature_noise'] if row['signature_noise'] is None else round(row['signature_noise'], 3)}")
+        print(f"  unseen: {[u['effect'] for u in d['unseen']]}  undetermined: "
+              f"{[u['effect'] for u in d['undetermined']]}  measure next: {d['measure_next']}")
 
 
 if __name__ == "__main__":
