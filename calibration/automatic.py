@@ -404,6 +404,20 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
 EQUAL_SCORE = 1e-9
 
 
+def kept_number(number: int, report: dict | None) -> int:
+    """The iteration whose model the loop keeps, read off iteration ``number``'s ``report`` (the loop's last so
+    far): the one its automatic record names (an alias compared, an effect turned off), else, when the effect it
+    added was not accepted, the iteration it was built on, else itself. The library loop's ``LoopResult.final``
+    and the service's material card and export read it here, so the model handed on is the model kept."""
+    record = (report or {}).get("automatic") or {}
+    if record.get("kept_iteration") is not None:
+        return int(record["kept_iteration"])
+    decision = record.get("decision")
+    if decision is not None and not decision.get("accepted") and record.get("base_iteration") is not None:
+        return int(record["base_iteration"])
+    return number
+
+
 def may_continue(record: dict | None, number: int) -> bool:
     """Could more iterations change where the loop stopped after iteration ``number`` (its automatic
     ``record``)? When it stopped at the iteration limit, or kept an effect whose alias it had no iteration left

@@ -17,6 +17,7 @@ from typing import Any, Mapping, Sequence
 from . import machine
 from . import parameters as factor_paths
 from .analysis import model_fails
+from .automatic import kept_number
 from .errors import SettingsError
 from .evaluators import BatchEvaluator
 from .history import history
@@ -44,13 +45,8 @@ class LoopResult:
         then the iteration it was built on, or an alias fitted in place of an effect that passed was compared
         with it, then the one the comparison kept (``calibration.automatic.settle_alias``)."""
         last = self.iterations[-1]
-        record = (last.report or {}).get("automatic") or {}
-        if record.get("kept_iteration") is not None:
-            return next(it for it in self.iterations if it.number == record["kept_iteration"])
-        decision = record.get("decision")
-        if decision is not None and not decision.get("accepted"):
-            return next(it for it in self.iterations if it.number == record["base_iteration"])
-        return last
+        number = kept_number(last.number, last.report)
+        return next(it for it in self.iterations if it.number == number)
 
     @property
     def decisions(self) -> list[dict]:

@@ -115,14 +115,14 @@ def register_campaign(csub) -> None:
                         help="card (YAML, default), card-json, or another format the service lists at "
                              "GET /api/v1/export-formats")
     export.add_argument("--output", "-o", help="file to write (default stdout)")
-    export.add_argument("--iteration", type=int, help="a calibrated iteration (default the latest with a report)")
+    export.add_argument("--iteration", type=int, help="a calibrated iteration (default the model the loop keeps)")
     verify = _leaf(csub, "verify-export", campaign_verify_export, "run the LIGGGHTS export of the calibrated "
                    "material beside demcal's own lab (fill, confined compression) and say whether the hand-off "
                    "holds (exit 1 when it does not)")
     verify.add_argument("id", type=int)
     verify.add_argument("--packings", type=int, default=3, choices=range(1, 11), metavar="N",
                         help="packings per engine (default 3)")
-    verify.add_argument("--iteration", type=int, help="a calibrated iteration (default the latest with a report)")
+    verify.add_argument("--iteration", type=int, help="a calibrated iteration (default the model the loop keeps)")
 
 
 def register_material(msub) -> None:

@@ -28,8 +28,12 @@ def demcal_version() -> str:
 
 
 def calibrated_iteration(campaign, number: int | None = None):
-    """The iteration whose report the card is built from: ``number``, else the latest with a report; a
-    409 when there is none (a card states calibrated values, and there are none before the report)."""
+    """The iteration whose report the card is built from: ``number``, else the model the loop keeps as of its
+    latest report (``calibration.automatic.kept_number``: an added effect rejected leaves the iteration it was
+    built on; a page or LIGGGHTS input must not hand on the rejected one); a 409 when there is none (a card
+    states calibrated values, and there are none before the report)."""
+    from calibration.automatic import kept_number
+
     done = sorted((it for it in campaign.iterations if it.report), key=lambda it: it.number)
     if number is not None:
         it = next((it for it in campaign.iterations if it.number == number), None)
@@ -44,7 +48,8 @@ def calibrated_iteration(campaign, number: int | None = None):
         raise Conflict(f"campaign {campaign.id} is not calibrated yet (status {campaign.status}, phase "
                        f"{current.phase if current else '-'}): a material card states calibrated values, which "
                        "come with the first iteration's report", ["path", "campaign_id"])
-    return done[-1]
+    kept = kept_number(done[-1].number, done[-1].report)
+    return next((it for it in done if it.number == kept), done[-1])
 
 
 def campaign_card(session: Session, campaign_id: int, number: int | None = None) -> dict[str, Any]:

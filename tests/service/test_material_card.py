@@ -301,3 +301,25 @@ def test_a_card_of_given_parameters_round_trips_too(s2):
     response = client.post(f"{API}/materials/import-card", json=card)
     assert response.status_code == 201, response.text
     assert client.get(f"{API}/materials/{response.json()['id']}/material-card").text == dump_json(card)
+
+
+def test_the_default_card_is_the_model_the_loop_keeps():
+    """The automatic mode rejected the effect iteration 2 added (or turned it off in the noise, or compared an
+    alias): the card, the export and the HTML report default to the model it keeps, never the rejected one."""
+    from types import SimpleNamespace
+
+    from service.export.store import calibrated_iteration
+
+    def campaign(record):
+        first = SimpleNamespace(number=1, report={"verdict": "model misses the measurements"}, phase="done")
+        second = SimpleNamespace(number=2, report={"automatic": record}, phase="done")
+        return SimpleNamespace(id=1, iterations=[first, second], current_iteration=2, status="completed")
+
+    rejected = {"decision": {"accepted": False}, "base_iteration": 1, "stop_reason": "nothing improves"}
+    assert calibrated_iteration(campaign(rejected)).number == 1
+    assert calibrated_iteration(campaign(rejected), 2).number == 2  # asked for by number: that one
+    turned_off = {"decision": {"accepted": False, "turned_off": True}, "base_iteration": 1, "kept_iteration": 2}
+    assert calibrated_iteration(campaign(turned_off)).number == 2
+    accepted = {"decision": {"accepted": True}, "base_iteration": 1, "stop_reason": "lack of fit passes"}
+    assert calibrated_iteration(campaign(accepted)).number == 2
+    assert calibrated_iteration(campaign({})).number == 2  # not automatic: the latest report
