@@ -133,6 +133,7 @@ def judge(candidate: Candidate, *, chi2_before: float, chi2_after: float, n_resi
     judged against. Tier B's weak Hertz world (session 35) showed it: cohesion added, the polish drove the
     surface energy to 3e-12 J/m2 and friction from 0.73 to 0.58, chi2 fell from 29.8 to 16.2 (LR p 1e-4),
     and the effect that was "accepted" was not in the model at all.
+
     Why the lack of fit is compared by its outcome and not by its p-value: each iteration's p-value
     is read against that iteration's own null (the simulator's scatter at its own confirmation
     points, drawn by Monte Carlo), so two p-values below ALPHA are two statements "far outside the
