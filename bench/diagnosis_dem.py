@@ -56,9 +56,12 @@ With --data-dir the local service keeps its database there. Measuring jobs and c
 digest of what they measure and how they calibrate, so rerunning the same command against the same
 folder picks up the jobs and campaigns already there (a campaign resumes where its runner stopped):
 the full screening table, hours of both cores, can be run a few scenarios at a time. A run longer than
-a machine lasts moves with its database: `python3 -m service.cli db backup --without-curves --db DIR/demcal.db state.db.gz`
-while it runs (a few kB a battery), `python3 -m service.cli db restore state.db.gz --db NEWDIR/demcal.db` on the next machine, then the same
-command with `--data-dir NEWDIR` (the batteries that were running are run again).
+a machine lasts moves with its database, backed up while it runs (a few kB a battery):
+
+    python3 -m service.cli db backup --without-curves --db DIR/demcal.db state.db.gz
+    python3 -m service.cli db restore state.db.gz --db NEWDIR/demcal.db     # on the next machine
+
+then the same command with `--data-dir NEWDIR` (the batteries that were running are run again).
 
 --reduced is the form CI can afford (tests/service/test_tier_b_dem.py): the same path, design and loads,
 on 35 mm spheres instead of 20 mm (about 130 bodies instead of 840 in Appendix A's container), so a battery

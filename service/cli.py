@@ -154,7 +154,7 @@ def build_parser(plugins: bool = True) -> argparse.ArgumentParser:
                              "ends .gz); safe while the service runs")
     save.add_argument("file", metavar="FILE")
     save.add_argument("--without-curves", action="store_true", help="leave out the job results' raw curves (time "
-                      "series): everything a campaign reads is kept, in about 1 % of the space")
+                      "series): everything a campaign reads is kept, in about 1 %% of the space")
     _db_option(save)
     save.set_defaults(func=cmd_db_backup)
     back = db_sub.add_parser("restore", help="check a backup and put it in the database's place (service stopped)")

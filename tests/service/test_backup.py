@@ -96,6 +96,9 @@ def test_cli_backup_and_restore_print_one_line(tmp_path):
         return subprocess.run([sys.executable, "-m", "service.cli", "db", *args], capture_output=True, text=True,
                               timeout=60)
 
+    for action in ("backup", "restore"):  # the help itself prints (a bare % in it once raised a TypeError)
+        shown = run(action, "--help")
+        assert shown.returncode == 0 and "usage" in shown.stdout and "Traceback" not in shown.stderr
     done = run("backup", str(tmp_path / "a.db.gz"), "--db", str(tmp_path / "a.db"))
     assert done.returncode == 0 and "backed up" in done.stdout, done.stderr
     done = run("restore", str(tmp_path / "a.db.gz"), "--db", str(tmp_path / "a.db"))
