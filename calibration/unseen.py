@@ -80,7 +80,8 @@ def unseen(signatures, M: np.ndarray, alpha: float, measured_labels: set[str] | 
     return out
 
 
-def undetermined(signatures, M: np.ndarray, alpha: float, measured_labels: set[str] | None = None) -> list[dict[str, Any]]:
+def undetermined(signatures, M: np.ndarray, alpha: float,
+                 measured_labels: set[str] | None = None) -> list[dict[str, Any]]:
     """The candidates whose probes cannot say whether these measurements would see them at the top of their
     plausible range: seen on the upper bound of the signature's length, unseen on the lower. Each with its
     noncentrality at the top on both bounds, the one needed, the probe's noise share, and what would decide:
@@ -93,7 +94,8 @@ def undetermined(signatures, M: np.ndarray, alpha: float, measured_labels: set[s
         top2 = _top_strength(c) ** 2
         if upper2 * top2 < need or lower2 * top2 >= need:
             continue  # unseen (``unseen`` names it) or seen whatever the probe's scatter
-        out.append({"effect": c.name, "title": c.title, "lm_at_top_low": lower2 * top2, "lm_at_top_high": upper2 * top2,
+        out.append({"effect": c.name, "title": c.title, "lm_at_top_low": lower2 * top2,
+                    "lm_at_top_high": upper2 * top2,
                     "lm_needed": need, "power": DETECTION_POWER, "signature_noise": share,
                     "measure": [_advice(test, quantity, how, measured_labels) for test, quantity, how in c.revealed_by]})
     return out
@@ -106,7 +108,8 @@ def undetermined_message(rows: list[dict[str, Any]]) -> str:
     parts = []
     for row in rows:
         what = (f"{row['title']} ({row['effect']}): its probe's scatter is {row['signature_noise']:.2g} of its "
-                f"signature, LM {row['lm_at_top_low']:.1f}-{row['lm_at_top_high']:.1f} at its strongest plausible strength")
+                f"signature, LM {row['lm_at_top_low']:.1f}-{row['lm_at_top_high']:.1f} at its strongest "
+                "plausible strength")
         parts.append(what + (f"; measure {' or '.join(row['measure'])}" if row["measure"] else ""))
     return (f"whether these measurements would see {len(rows)} candidate effect{'s' if len(rows) > 1 else ''} "
             f"(LM {rows[0]['lm_needed']:.1f} needed) is not known, so the agreement does not rule "

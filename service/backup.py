@@ -160,7 +160,8 @@ def _check(path: Path, require_schema: bool = False) -> int:
             pages = conn.execute("PRAGMA page_count").fetchone()[0]
             revision = None
             if require_schema:
-                has = conn.execute("SELECT 1 FROM sqlite_master WHERE type='table' AND name='alembic_version'").fetchone()
+                has = conn.execute("SELECT 1 FROM sqlite_master WHERE type='table' "
+                                   "AND name='alembic_version'").fetchone()
                 revision = conn.execute("SELECT version_num FROM alembic_version").fetchone() if has else None
         finally:
             conn.close()

@@ -32,8 +32,9 @@ class ExportFormatOut(BaseModel):
     description: str
 
 
-IterationQ = Query(None, ge=1, le=2**63 - 1, description="iteration number; default the model the loop keeps (the latest "
-                   "report's, or the iteration an effect it rejected was built on)")
+IterationQ = Query(None, ge=1, le=2**63 - 1,
+                   description="iteration number; default the model the loop keeps (the latest report's, or the "
+                               "iteration an effect it rejected was built on)")
 CardFormat = Query(None, description="json (default) or yaml; an Accept of application/yaml also gives YAML")
 
 
