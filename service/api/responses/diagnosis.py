@@ -48,33 +48,32 @@ class RankedEffect(Out):
     probes: list[ProbeScore] = Field(default_factory=list, description="each probe's score, where more than one ran")
 
 
-class UnseenEffect(Out):
-    """A candidate these measurements could not see at any plausible strength (calibration.unseen)."""
+class _Visibility(Out):
+    """What ``calibration.unseen`` says of one candidate's visibility in these measurements."""
 
     effect: str
     title: str
-    lm_at_top: float = Field(description="the score test's noncentrality at the top of its plausible range "
-                                         "(the full switch for a law that replaces the baseline's)")
     lm_needed: float = Field(description="the noncentrality at which Holm's first step flags it with `power`")
     power: float
+    signature_noise: float | None = Field(description="share of its probe's projected length that is noise")
+    measure: list[str] = Field(description="what would show it or decide it")
+
+
+class UnseenEffect(_Visibility):
+    """A candidate these measurements could not see at any plausible strength (calibration.unseen)."""
+
+    lm_at_top: float = Field(description="the score test's noncentrality at the top of its plausible range "
+                                         "(the full switch for a law that replaces the baseline's)")
     smallest_seen: float | None = Field(description="the smallest strength that would be seen, in its unit "
                                                     "(a switch: the fraction of it); null: none would")
-    signature_noise: float | None = Field(description="share of its probe's projected length that is noise")
-    measure: list[str] = Field(description="what would show it")
 
 
-class UndeterminedEffect(Out):
+class UndeterminedEffect(_Visibility):
     """A candidate whose probe was too noisy to say whether these measurements would see it (calibration.unseen)."""
 
-    effect: str
-    title: str
     lm_at_top_low: float = Field(description="noncentrality at the plausible top on the lower bound of its "
                                              "signature's length (the probe's scatter taken away)")
     lm_at_top_high: float = Field(description="the same on the upper bound (the scatter added)")
-    lm_needed: float = Field(description="the noncentrality at which Holm's first step flags it with `power`")
-    power: float
-    signature_noise: float | None = Field(description="share of its probe's projected length that is noise")
-    measure: list[str] = Field(description="what would decide it")
 
 
 class Separator(Out):
