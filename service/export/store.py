@@ -61,6 +61,7 @@ def campaign_card(session: Session, campaign_id: int, number: int | None = None)
     material = get_material(session, campaign.material_id)
     view = material_dict(material)
     config, settings = campaign.config or {}, it.parameters or {}
+    report, factors = without_turned_off(it.number, it.report, settings.get("factors", config.get("factors") or []))
     return cards.build_card(
         material=view, measurements=view["measurements"],
         campaign={"id": campaign.id, "name": campaign.name, "test": config.get("test", "battery"),
@@ -68,9 +69,37 @@ def campaign_card(session: Session, campaign_id: int, number: int | None = None)
                   "evaluator": settings.get("evaluator", campaign.evaluator),
                   **card_set_up(settings.get("lab") or config, settings.get("fidelity", campaign.fidelity)),
                   "options": settings.get("options", config.get("options") or {}),
-                  "factors": settings.get("factors", config.get("factors") or [])},
-        iteration=it.number, report=it.report, parameter_std=(it.optimum or {}).get("parameter_std"),
+                  "factors": factors},
+        iteration=it.number, report=report, parameter_std=(it.optimum or {}).get("parameter_std"),
         demcal_version=demcal_version())
+
+
+def without_turned_off(number: int, report: dict[str, Any], factors: list[dict[str, Any]]):
+    """(report, factors) for the card of iteration ``number``: when the automatic mode kept this iteration as
+    the base model refitted because the fit put the contact effect it added at its off strength
+    (``calibration.automatic.turned_off``), that effect leaves the card (its parameters, its factor, its row
+    of calibrated values) and the meaning says so. Why: a surface energy of 3e-12 J/m2 handed to LIGGGHTS is a
+    model with an effect switched on in name only, and a reader of the card would take it as found. A particle
+    factor (an aspect ratio of 1) is the base model as it stands and stays."""
+    record = (report or {}).get("automatic") or {}
+    decision = record.get("decision") or {}
+    if not (decision.get("turned_off") and decision.get("effect") and record.get("kept_iteration") == number):
+        return report, factors
+    prefix = f"effects.{decision['effect']}."
+    dropped = {k: v for k, v in (report.get("optimum") or {}).items() if k.startswith(prefix)}
+    if not dropped:
+        return report, factors
+    keep = lambda names: {k: v for k, v in (names or {}).items() if not k.startswith(prefix)}  # noqa: E731
+    values = ", ".join(f"{k.removeprefix(prefix)} {v:.3g}" for k, v in dropped.items())
+    note = (f"{decision['effect']} was fitted at its off strength ({values}) and is left out of this card: "
+            "the model kept is the base model refitted.")
+    meaning = f"{report['meaning']} {note}" if report.get("meaning") else note
+    intervals = report.get("intervals") or {}
+    return ({**report, "optimum": keep(report.get("optimum")), "fixed_parameters": keep(report.get("fixed_parameters")),
+             "meaning": meaning, "intervals": {**intervals, "parameters": keep(intervals.get("parameters")),
+                                               "trades": [t for t in intervals.get("trades") or []
+                                                          if not any(n.startswith(prefix) for n in t["parameters"])]}},
+            [f for f in factors if not f["name"].startswith(prefix)])
 
 
 def card_set_up(lab: dict[str, Any], fidelity: str) -> dict[str, Any]:

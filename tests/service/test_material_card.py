@@ -323,3 +323,33 @@ def test_the_default_card_is_the_model_the_loop_keeps():
     accepted = {"decision": {"accepted": True}, "base_iteration": 1, "stop_reason": "lack of fit passes"}
     assert calibrated_iteration(campaign(accepted)).number == 2
     assert calibrated_iteration(campaign({})).number == 2  # not automatic: the latest report
+
+
+def test_an_effect_turned_off_leaves_the_card_of_the_kept_base_model():
+    """Tier B's weak Hertz world (session 35): the loop added cohesion, the polish put its surface energy at
+    3e-12 J/m2 against an off value of 0 and the iteration was kept as the base model refitted. Its card must
+    not hand LIGGGHTS a cohesion model in name only: the effect, its factor, interval and trades leave, the
+    meaning says why, and every other value stays as fitted."""
+    from service.export.store import without_turned_off
+
+    energy = "effects.cohesion_adhesive.surface_energy_j_m2"
+    report = {"optimum": {"friction_pp": 0.58, energy: 3e-12}, "meaning": "lack of fit passes.",
+              "fixed_parameters": {"density_kg_m3": 2650.0},
+              "intervals": {"parameters": {"friction_pp": {"low": 0.5, "high": 0.66, "sd": 0.04},
+                                           energy: {"low": 0.0, "high": 2.0, "sd": 1.0}},
+                            "trades": [{"parameters": ["friction_pp", energy], "correlation": -0.93,
+                                        "message": "friction_pp and surface energy trade"}]},
+              "automatic": {"decision": {"effect": "cohesion_adhesive", "accepted": False, "turned_off": True},
+                            "base_iteration": 1, "kept_iteration": 2}}
+    factors = [{"name": "friction_pp", "low": 0.2, "high": 0.9}, {"name": energy, "low": 0.0, "high": 40.0}]
+    card_report, card_factors = without_turned_off(2, report, factors)
+    assert card_report["optimum"] == {"friction_pp": 0.58}
+    assert list(card_report["intervals"]["parameters"]) == ["friction_pp"] and card_report["intervals"]["trades"] == []
+    assert [f["name"] for f in card_factors] == ["friction_pp"]
+    assert card_report["fixed_parameters"] == {"density_kg_m3": 2650.0}
+    assert "cohesion_adhesive was fitted at its off strength (surface_energy_j_m2 3e-12)" in card_report["meaning"]
+    assert report["optimum"][energy] == 3e-12  # the stored report itself is untouched
+    # asked for as iteration 3 (not the kept one), or accepted, or not turned off: the card is as fitted
+    assert without_turned_off(3, report, factors) == (report, factors)
+    accepted = {**report, "automatic": {"decision": {"effect": "cohesion_adhesive", "accepted": True}}}
+    assert without_turned_off(2, accepted, factors) == (accepted, factors)
