@@ -586,6 +586,52 @@ def test_no_physical_match_page_offers_no_add_button(page, service, shots):
     section_shot(page, shots, "Diagnosis", "campaign-diagnosis-no-match")
 
 
+def test_a_candidate_its_probe_could_not_judge_is_marked_not_ruled_out(page, service, shots):
+    """Session 35: "no misfit" no longer rules out a candidate whose probe was too noisy to say whether these
+    measurements would see it (calibration.unseen.undetermined); the table marks it "not ruled out: probe too
+    noisy", with its LM range at the plausible top in the title, apart from "unseen". The analytic evaluator's
+    probes have no scatter, so the campaign's own diagnosis is served with its unseen Hertz row given the
+    probe tier B's weak Hertz world measured (docs/results/tier_b_weak.json: scatter 1.17 of the signature,
+    LM 0-259 at the top)."""
+    import time
+
+    from calibration.unseen import detectable_lm
+    from conftest_s2 import campaign_body
+
+    material = service.api("GET", "/materials", params={"limit": 200}).json()["items"]
+    thesis = next(m for m in material if m["name"] == "thesis-coarse-aggregate")
+    cid = service.api("POST", "/campaigns", json=campaign_body(thesis["id"], name="noisy probe")).json()["id"]
+    assert service.api("POST", f"/campaigns/{cid}/start").status_code < 300
+    deadline = time.monotonic() + TIMEOUT_MS / 1000
+    while service.api("GET", f"/campaigns/{cid}").json()["status"] != "completed":
+        assert time.monotonic() < deadline, "the campaign did not complete"
+        time.sleep(0.5)
+    report = service.api("GET", f"/campaigns/{cid}/report", params={"number": 1}).json()
+    diagnosis = report["diagnosis"]
+    significant = {r["effect"] for r in diagnosis["ranking"] if r["significant"]}
+    hertz = next(u for u in diagnosis["unseen"] if u["effect"] == "hertz_mindlin")
+    assert "hertz_mindlin" not in significant
+    need = detectable_lm(0.05, len(diagnosis["ranking"]))
+    noisy = {**{k: hertz[k] for k in ("effect", "title", "power", "measure")}, "lm_needed": need,
+             "signature_noise": 1.17, "lm_at_top_low": 0.0, "lm_at_top_high": 259.0}
+    served = {**diagnosis, "unseen": [u for u in diagnosis["unseen"] if u["effect"] != "hertz_mindlin"],
+              "undetermined": [noisy]}
+    # the page reads the diagnosis from the iteration's report
+    page.route(re.compile(rf".*/api/v1/campaigns/{cid}/report\?number=1$"),
+               lambda route: route.fulfill(json={**report, "diagnosis": served}))
+    open_view(page, service, f"#/campaigns/{cid}")
+    expect_text(page, "section.diagnosis h3", "Diagnosis: ")
+    marker = page.locator("section.diagnosis .undetermined")
+    assert marker.count() == 1 and marker.inner_text() == "not ruled out: probe too noisy"
+    # core.js fmt: two significant figures for the range, three for the threshold
+    assert marker.get_attribute("title") == (f"LM 0-260 at its strongest plausible strength, "
+                                             f"{float(f'{need:.3g}'):g} needed")
+    row = page.locator("section.diagnosis tr", has=page.locator(".undetermined"))
+    assert "hertz_mindlin" in row.inner_text() and row.locator(".unseen").count() == 0
+    assert page.locator("section.diagnosis .unseen").count() == len(served["unseen"])
+    section_shot(page, shots, "Diagnosis", "campaign-diagnosis-undetermined")
+
+
 def test_long_listings_page_with_the_total_and_next_previous_links(page, service):
     """GET /materials answers a page; the list says which rows of how many and links the next page."""
     total = service.api("GET", "/materials", params={"limit": 1}).json()["total"]  # the bundled one, and earlier tests'
