@@ -445,3 +445,22 @@ def top_probes(diagnosis: dict[str, Any], probed: set[str] = frozenset()) -> lis
             if row["effect"] not in probed and row["effect"] in table and table[row["effect"]].top_step is not None
             and (row.get("p_holm") if row.get("p_holm") is not None else 1.0) < ALPHA
             and (row.get("gamma") or 0.0) > 0 and (row.get("explained") or 0.0) < MIN_EXPLAINED]
+
+
+def strength_reading(row: dict[str, Any], diagnosis: dict[str, Any]) -> str | float | None:
+    """What a table should print for a ranking ``row``'s strength, the same on the page, the CLI and the
+    HTML report: the estimate (in its unit, or a switch-type effect's fraction of the switch), else why there
+    is none. Why: the estimate is the misfit's projection on the signature, divided by the signature's
+    length; for a candidate these measurements cannot see (``calibration.unseen``) that length is noise and
+    the quotient meaningless (a cohesion of -24,200 J/m2 was printed), and a negative estimate says the
+    misfit points the other way from what the effect does. Returns "unseen", "opposite sign", the fraction
+    (a float tagged by the caller through ``row["strength"] is None``), the strength, or None (none
+    computed)."""
+    if any(u.get("effect") == row.get("effect") for u in diagnosis.get("unseen") or []) and not row.get("significant"):
+        return "unseen"
+    value = row.get("strength")
+    if value is None:
+        value = row.get("fraction_of_switch")
+    if value is None:
+        return None
+    return "opposite sign" if value < 0 else float(value)

@@ -206,25 +206,27 @@ def campaign_status(args) -> int:
     return 0 if c["status"] == CampaignStatus.COMPLETED else 1
 
 
-def _strength(row: dict) -> str:
+def _strength(row: dict, diagnosis: dict) -> str:
     """The estimated strength in its unit (the candidate's, as GET /effects gives it), or a switch-type
-    effect's share of its full switch. A negative estimate is no strength: the misfit points the other
-    way from what the effect does, so the table says that instead of printing a negative energy."""
-    if row["strength"] is not None:
-        value, unit = row["strength"], row.get("unit")
-        text = _fmt(float(value)) + ("" if unit in (None, "", "1") else f" {unit}")
-    elif row.get("fraction_of_switch") is not None:
-        value = row["fraction_of_switch"]
-        text = f"{100 * value:.3g} % of the switch"
-    else:
+    effect's share of its full switch; "none (opposite sign)" or "none (unseen)" where no strength can be
+    read (``calibration.attribute.strength_reading``: the page and the HTML report say the same)."""
+    from calibration.attribute import strength_reading
+
+    value = strength_reading(row, diagnosis)
+    if value is None:
         return "-"
-    return "none (opposite sign)" if value < 0 else text
+    if isinstance(value, str):
+        return f"none ({value})"
+    if row["strength"] is None:
+        return f"{100 * value:.3g} % of the switch"
+    unit = row.get("unit")
+    return _fmt(value) + ("" if unit in (None, "", "1") else f" {unit}")
 
 
 def campaign_diagnosis(args) -> int:
     params = {"number": args.iteration} if args.iteration else None
     d = _call(args, "GET", f"/campaigns/{args.id}/diagnosis", params=params)
-    rows = [[r["effect"], r["title"], r["lm"], r["p_holm"], r["explained"], _strength(r),
+    rows = [[r["effect"], r["title"], r["lm"], r["p_holm"], r["explained"], _strength(r, d),
              "yes" if r["plausible"] else "no", r["alias_group"] or ""] for r in d["ranking"]]
     text = (f"campaign {d['campaign_id']} iteration {d['iteration']}: {d['verdict']}\n{d['message']}\n\n"
             + _table(["effect", "physics", "LM", "Holm p", "explained", "strength", "plausible", "alias group"],

@@ -107,21 +107,24 @@ def _parity_charts(report: dict[str, Any]) -> str:
     return "".join(svg.parity_plot(points, unit) for unit, points in sorted(by_unit.items()))
 
 
-def _strength(row: dict[str, Any]) -> Any:
-    """A negative estimate is no strength: the misfit points the other way from what the effect does (as
-    the CLI's diagnosis table says)."""
-    value = row.get("strength")
-    if value is None and row.get("fraction_of_switch") is not None:
-        value = row["fraction_of_switch"]
-        return "none (opposite sign)" if value < 0 else f"{100 * value:.3g} % of the switch"
-    return "none (opposite sign)" if value is not None and value < 0 else value
+def _strength(row: dict[str, Any], diagnosis: dict[str, Any]) -> Any:
+    """The strength as the CLI's diagnosis table and the page print it (``calibration.attribute.
+    strength_reading``): the estimate, a switch's share, or why there is none."""
+    from calibration.attribute import strength_reading
+
+    value = strength_reading(row, diagnosis)
+    if isinstance(value, str):
+        return f"none ({value})"
+    if value is not None and row.get("strength") is None:
+        return f"{100 * value:.3g} % of the switch"
+    return value
 
 
 def _diagnosis(report: dict[str, Any]) -> str:
     d = report.get("diagnosis")
     if not d:
         return '<p class="note">No diagnosis in this iteration.</p>'
-    rows = [[r["effect"], r.get("title"), r.get("lm"), r.get("p_holm"), r.get("explained"), _strength(r),
+    rows = [[r["effect"], r.get("title"), r.get("lm"), r.get("p_holm"), r.get("explained"), _strength(r, d),
              r.get("unit"), r.get("plausible"), r.get("alias_group")] for r in d.get("ranking", [])]
     text = (f"<p><strong>{escape(_f(d.get('verdict')))}</strong>: {escape(_f(d.get('message')))}</p>"
             + _table(["effect", "physics", "LM", "Holm p", "explained", "strength", "unit", "plausible", "alias group"],

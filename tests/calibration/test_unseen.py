@@ -143,3 +143,23 @@ def test_every_revealing_measurement_is_one_the_lab_reports():
     for name, c in candidates().items():
         for test, quantity, _ in c.revealed_by:
             assert quantity in known.get(test, {}), (name, test, quantity)
+
+
+def test_no_strength_is_read_for_an_unseen_candidate_or_against_the_effect():
+    """The strength column (page, CLI, HTML report) reads ``calibration.attribute.strength_reading``. Cohesion
+    at 0.01 sd per J/m2 with residual -242 sd on that row projects to -24,200 J/m2 (the page drew that): its
+    signature is unseen, so no strength; a seen effect with a negative projection points against the effect;
+    a switch gives its fraction; a significant candidate is read even if a noisier probe listed it unseen."""
+    from calibration.attribute import strength_reading
+
+    diagnosis = {"unseen": [{"effect": "cohesion_adhesive"}]}
+    cohesion = {"effect": "cohesion_adhesive", "strength": -242.0 / 0.01, "fraction_of_switch": None,
+                "significant": False}
+    assert strength_reading(cohesion, diagnosis) == "unseen"
+    assert strength_reading({**cohesion, "significant": True}, diagnosis) == "opposite sign"
+    rolling = {"effect": "rolling_epsd2", "strength": 0.15, "fraction_of_switch": None, "significant": True}
+    assert strength_reading(rolling, diagnosis) == 0.15
+    assert strength_reading({**rolling, "strength": -0.05}, diagnosis) == "opposite sign"
+    hertz = {"effect": "hertz_mindlin", "strength": None, "fraction_of_switch": 0.4, "significant": True}
+    assert strength_reading(hertz, diagnosis) == 0.4
+    assert strength_reading({**hertz, "fraction_of_switch": None}, diagnosis) is None

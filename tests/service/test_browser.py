@@ -629,6 +629,10 @@ def test_a_candidate_its_probe_could_not_judge_is_marked_not_ruled_out(page, ser
     row = page.locator("section.diagnosis tr", has=page.locator(".undetermined"))
     assert "hertz_mindlin" in row.inner_text() and row.locator(".unseen").count() == 0
     assert page.locator("section.diagnosis .unseen").count() == len(served["unseen"])
+    # an unseen candidate's projection (LM 0 on a signature too short to see) is no strength: none printed
+    for effect in (u["effect"] for u in served["unseen"] if u["effect"] not in significant):
+        cells = page.locator("section.diagnosis tr", has=page.locator(f"code:text-is('{effect}')")).locator("td")
+        assert cells.nth(5).inner_text().strip() == "none (unseen)", cells.nth(5).inner_text()
     section_shot(page, shots, "Diagnosis", "campaign-diagnosis-undetermined")
 
 

@@ -41,6 +41,19 @@ function strengthBar(r) {
     ` ${fmt(r.strength, 3)} ${r.unit === "1" ? "" : r.unit} (${fmt(lo, 3)} – ${fmt(hi, 3)})`);
 }
 
+// What the strength column prints, as the CLI and the HTML report do (calibration.attribute.strength_reading):
+// the estimate, a switch's share, or why there is none. An unseen candidate's estimate divides the misfit by a
+// signature these measurements cannot see (a cohesion of -24,200 J/m2 was drawn); a negative one says the
+// misfit points the other way from what the effect does.
+function strengthCell(r, unseen) {
+  const none = (why, title) => h("span", { className: "muted no-strength", title }, `none (${why})`);
+  if (!r.significant && unseen.has(r.effect)) return none("unseen", "these measurements cannot see it, so they give no strength");
+  const value = r.strength ?? r.fraction_of_switch;
+  if (value === null || value === undefined) return "–";
+  if (value < 0) return none("opposite sign", "the misfit points the other way from what the effect does");
+  return r.strength === null || r.strength === undefined ? `${fmt(100 * value, 3)} % of the switch` : strengthBar(r);
+}
+
 // A bound as the input shows it: 1e8, not 100000000 (which the box cut to "1000000(").
 // Three significant digits: a proposed range is twice an estimate (0.5393671226083385 overflowed the box).
 const typed = (v) => {
@@ -132,7 +145,7 @@ export function diagnosisSection(campaignId, d, { canAdd, nextNumber, onAdded })
     h("div", { className: "scroll" }, table(["Effect", "LM", "Holm p", "Explained", "Probe noise", "Strength (plausible range)", "Alias group", ""],
       d.ranking.map((r) => [
         h("span", {}, h("span", { className: "swatch", style: `background:${colourOf(r)}` }), ` ${r.title} `, h("code", {}, r.effect)),
-        r.lm, r.p_holm, explainedCell(r), probeNoise(r), strengthBar(r), r.alias_group ? `group ${r.alias_group}` : "–",
+        r.lm, r.p_holm, explainedCell(r), probeNoise(r), strengthCell(r, unseen), r.alias_group ? `group ${r.alias_group}` : "–",
         !r.significant && unseen.has(r.effect) ? h("span", { className: "muted unseen", title: `LM ${fmt(unseen.get(r.effect).lm_at_top, 2)} at its strongest plausible strength, ${fmt(unseen.get(r.effect).lm_needed, 3)} needed` }, "unseen by these measurements")
           : !r.significant && undetermined.has(r.effect) ? h("span", { className: "muted undetermined", title: `LM ${fmt(undetermined.get(r.effect).lm_at_top_low, 2)}-${fmt(undetermined.get(r.effect).lm_at_top_high, 2)} at its strongest plausible strength, ${fmt(undetermined.get(r.effect).lm_needed, 3)} needed` }, "not ruled out: probe too noisy")
           : !r.significant ? h("span", { className: "muted" }, "not significant")
