@@ -86,6 +86,10 @@ class Candidate:
     # (calibration.unseen): named to the user when a "no misfit" could not have seen it; validated against
     # the lab's registry (tests/calibration/test_unseen.py)
     revealed_by: tuple[tuple[str, str, str], ...] = ()
+    # baseline micro parameters the effect's law replaces (Hertz-Mindlin's modulus takes the linear spring's
+    # place): with the effect on they change no force, only at most the time step, so a campaign that adds the
+    # effect fixes them instead of calibrating a parameter the physics no longer reads (calibration.adding)
+    supersedes: tuple[str, ...] = ()
 
     def applies_to(self, fidelity: str | None) -> bool:
         return fidelity is None or self.fidelities is None or fidelity in self.fidelities
@@ -118,6 +122,9 @@ class Candidate:
             raise ValueError(f"candidate {self.name}: unknown fingerprint columns {sorted(unknown)}")
         if self.off_value is None and self.reference is None:
             raise ValueError(f"candidate {self.name}: a switch-type effect needs a reference strength")
+        if self.supersedes and self.off_value is not None:
+            raise ValueError(f"candidate {self.name}: only an effect that replaces a baseline law (switch-type) "
+                             "supersedes baseline parameters")
 
     @property
     def is_switch(self) -> bool:

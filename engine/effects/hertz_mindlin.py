@@ -113,6 +113,8 @@ CANDIDATE = Candidate(
     # Hertzian world within the linear model's noise; E_ur at the same stresses rejected it (p 0.0032)
     revealed_by=(("cct", "unload_reload_modulus_pa", "at several normal stresses, e.g. 3-60 kPa "
                   "(options.cct_unload_reload_stresses_pa)"),),
+    # ``apply`` reads E* and G* only: the linear spring's kp is left to bound the time step (engine.timestep)
+    supersedes=("particle_stiffness_n_per_m",),
 )
 
 EFFECT = Effect(

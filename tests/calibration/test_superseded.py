@@ -1,0 +1,71 @@
+"""An effect whose law replaces a baseline one takes the replaced parameters out of the calibration
+(``Candidate.supersedes``, ``calibration.adding.without_superseded``): Hertz-Mindlin's force reads E* and G*
+only, so with it on the linear spring's kp is fixed where the effect was added, not calibrated on scatter."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from calibration.adding import with_effect_factor
+from calibration.settings import LoopSettings
+from engine.candidates import candidates
+from engine.effects import hertz_mindlin
+from engine.effects.base import Candidate
+
+FACTORS = [{"name": "particle_density_kg_m3", "low": 2300.0, "high": 2900.0},
+           {"name": "friction_pp", "low": 0.2, "high": 1.0},
+           {"name": "friction_pw", "low": 0.2, "high": 0.8},
+           {"name": "particle_stiffness_n_per_m", "low": 1.0e6, "high": 3.0e6}]
+OPTIMUM = {"particle_density_kg_m3": 2650.0, "friction_pp": 0.6, "friction_pw": 0.5,
+           "particle_stiffness_n_per_m": 2.0e6}
+MODULUS = "effects.hertz_mindlin.young_modulus_pa"
+
+
+def test_the_hertzian_force_does_not_read_the_linear_spring():
+    """Hertz: F = 4/3 E* sqrt(R* d) d, tangent 2 E* sqrt(R* d), ks = 8 G* sqrt(R* d), whatever kn and ks the
+    linear law would have given (R* 10 mm, d 0.1 mm, E* 1 GPa, G* 0.4 GPa)."""
+    p = np.array([0.0, 1.0e9, 0.4e9])
+    r_eff, delta = 0.010, 1.0e-4
+    root = math.sqrt(r_eff * delta)
+    expected = (4.0 / 3.0 * 1.0e9 * root * delta, 2.0e9 * root, 8.0 * 0.4e9 * root)
+    for kn, ks in ((1.0e6, 1.0e6), (3.0e6, 0.5e6), (0.0, 0.0)):
+        assert hertz_mindlin.apply(p, delta, r_eff, kn, ks) == pytest.approx(expected, rel=1e-12)
+    assert candidates()["hertz_mindlin"].supersedes == ("particle_stiffness_n_per_m",)
+
+
+def test_adding_hertz_fixes_kp_at_the_optimum_and_the_design_shrinks_to_four_factors():
+    config = {"factors": [dict(f) for f in FACTORS], "design": {"type": "fractional", "generators": ["D=ABC"]},
+              "fixed_parameters": {"particle_radius_m": 0.02},
+              "priors": [{"parameter": "particle_stiffness_n_per_m", "value": 2.1e6, "uncertainty": 0.2e6},
+                         {"parameter": "friction_pp", "value": 0.65, "uncertainty": 0.08}],
+              "constraints": ["friction_pw <= friction_pp", "particle_stiffness_n_per_m >= 1.5e6"]}
+    nxt = with_effect_factor(config, "hertz_mindlin", at=OPTIMUM)
+    assert [f["name"] for f in nxt["factors"]] == ["particle_density_kg_m3", "friction_pp", "friction_pw", MODULUS]
+    assert nxt["fixed_parameters"] == {"particle_radius_m": 0.02, "particle_stiffness_n_per_m": 2.0e6}
+    assert [p["parameter"] for p in nxt["priors"]] == ["friction_pp"]
+    assert nxt["constraints"] == ["friction_pw <= friction_pp"]
+    assert nxt["design"]["generators"] == ["D=ABC"]  # four factors again: the 2^(4-1) IV
+    # the modulus range is about the one matched to kp = 2e6 N/m at the optimum (matched_young_modulus_pa)
+    low, high = next((f["low"], f["high"]) for f in nxt["factors"] if f["name"] == MODULUS)
+    from engine.lab.spec import MicroParameters
+
+    matched = hertz_mindlin.matched_young_modulus_pa(MicroParameters.model_validate({**OPTIMUM, "particle_radius_m": 0.02}))
+    assert low < matched < high and math.isclose(math.sqrt(low * high), matched, rel_tol=1e-9)
+    LoopSettings.model_validate(nxt)  # the loop's own validation accepts it (no prior on a non-factor)
+    assert config["factors"][3]["name"] == "particle_stiffness_n_per_m"  # the caller's configuration untouched
+
+
+def test_without_an_optimum_kp_is_fixed_at_its_range_centre_and_other_effects_keep_it():
+    config = {"factors": [dict(f) for f in FACTORS], "design": {}, "fixed_parameters": {}}
+    nxt = with_effect_factor(config, "hertz_mindlin", strength_range=(5.0e8, 5.0e9))
+    assert nxt["fixed_parameters"]["particle_stiffness_n_per_m"] == 2.0e6
+    rolling = with_effect_factor(config, "rolling_epsd2", strength_range=(0.0, 0.3))
+    assert "particle_stiffness_n_per_m" in [f["name"] for f in rolling["factors"]]
+
+
+def test_only_a_law_that_replaces_the_baseline_may_supersede_its_parameters():
+    with pytest.raises(ValueError, match="supersedes"):
+        Candidate(name="x", title="x", factor="effects.x.k", unit="1", plausible_range=(0.0, 1.0), step=0.1,
+                  supersedes=("particle_stiffness_n_per_m",))
