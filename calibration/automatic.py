@@ -396,6 +396,11 @@ def next_step(config, campaign_config: dict, iterations: list, it, report: dict,
         nxt = with_effect_factor(base_config, name, **effect_hints(base_report, name))
     except ValueError as exc:  # SettingsError included
         return {**record, "stop_reason": _cannot_run(name, exc)}
+    if record.get("widened_box"):  # a widened factor the effect supersedes is fixed instead (adding.without_superseded)
+        kept = {f["name"] for f in nxt["factors"]}
+        record["widened_box"] = [w for w in record["widened_box"] if w["parameter"] in kept] or None
+        if record["widened_box"] is None:
+            record.pop("widened_box")
     return _configured(record, name, base.number, nxt, validate)
 
 
