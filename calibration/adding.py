@@ -11,6 +11,7 @@ from calibration import parameters as factor_paths
 from calibration.calibrate import generators_for
 from calibration.decisions import effect_range
 from calibration.errors import SettingsError
+from doe.constraints import parse_constraint
 from engine.candidates import get as get_candidate
 from engine.lab.spec import MicroParameters
 
@@ -80,8 +81,6 @@ def without_superseded(config: dict, candidate, at: dict | None) -> dict:
     point = at or {}
     values = {f["name"]: float(point[f["name"]]) if f["name"] in point else 0.5 * (f["low"] + f["high"])
               for f in config["factors"] if f["name"] in gone}
-    from doe.constraints import parse_constraint
-
     return {**config, "factors": [f for f in config["factors"] if f["name"] not in gone],
             "fixed_parameters": {**(config.get("fixed_parameters") or {}), **values},
             "priors": [p for p in config.get("priors") or [] if p["parameter"] not in gone],
