@@ -159,15 +159,16 @@ def surrogate_check(config, modelled, optimum: dict, confirmation_records: list[
                                        cal.confirm(modelled, confirmation_records, confirmation_seeds)))
 
 
-def confirmation_lack_of_fit(config, design, modelled, optimum: dict, confirmation_records: list[list[dict]],
-                             confirmation_seeds: list[int]) -> float | None:
-    """The lack of fit's p-value of the confirmation batteries at the surfaces' optimum (the report's
-    test, ``localise``), before any polishing: what ``polish_when="surrogate_misses"`` also asks of an
-    iteration that added an effect (None when nothing modelled was confirmed)."""
+def confirmation_localisation(config, design, modelled, optimum: dict, confirmation_records: list[list[dict]],
+                              confirmation_seeds: list[int]):
+    """The report's localisation (``localise``: the lack of fit, the priors pulled off, the bounds) of the
+    confirmation batteries at the surfaces' optimum, before any polishing: what ``polish_when=
+    "surrogate_misses"`` also asks of an iteration that added an effect (None when nothing modelled was
+    confirmed)."""
     conf = cal.confirm(modelled, confirmation_records, confirmation_seeds)
     if not conf.mean:
         return None
-    return _localised(config, design, modelled, optimum, conf)[1].lack_of_fit.p_value
+    return _localised(config, design, modelled, optimum, conf)[1]
 
 
 def _localised(config, design, modelled, optimum: dict, conf):

@@ -104,7 +104,8 @@ def batteries(it) -> dict[str, Any]:
         why.append(f"{RunKind.POLISH.value}: skipped ({polish['skipped']})")
     elif polish:
         why.append(f"{RunKind.POLISH.value}: {polish.get('steps', 0)} step(s), Jacobian from the "
-                   f"{polish.get('jacobian', PolishJacobian.BATTERIES.value)}")
+                   f"{polish.get('jacobian', PolishJacobian.BATTERIES.value)}"
+                   + (f" ({polish['why']})" if polish.get("why") else ""))
     return {**counts, "reused": reused, "total": sum(counts.values()), "why": why}
 
 

@@ -34,7 +34,7 @@ from .errors import LoopFailed, SettingsError
 from .records import Measured
 from .report import build_report
 from .settings import MAX_ITERATIONS, LoopSettings
-from .vocabulary import MISFIT_VERDICTS, Phase, PolishRule, PolishStage, RunKind
+from .vocabulary import MISFIT_VERDICTS, Phase, PolishJacobian, PolishRule, PolishStage, RunKind
 
 SEED_MAX = 2**31 - 1
 DESIGN_SEED_STRIDE = 7919          # the design's seeds of iteration n start at seed + 7919 (n - 1)
@@ -176,15 +176,26 @@ def _polish(ctx: Context, it) -> Transition:
     modelled = [m for m in models if m.fit is not None]
     if state is None:
         confirmations = polish.final_runs(it)
+        jacobian, why = s.polish_jacobian, None
         if s.polish_when == PolishRule.SURROGATE_MISSES:
             check = analysis.surrogate_check(s, modelled, it.optimum, records(confirmations),
                                              [r.seed for r in confirmations])
-            if check.get("confirmed") is not False and not _added_effect_misfits(s, it, design, modelled, confirmations):
+            why = _added_effect_misfits(s, it, design, modelled, confirmations)
+            if check.get("confirmed") is not False and why is None:
                 # confirmed, or nothing modelled to polish on
                 return Transition(Phase.POLISH, Phase.REPORT, {"optimum": {**it.optimum, "polish": polish.skipped(check)}})
+            if check.get("confirmed"):
+                # the surfaces predicted the optimum's batteries, so their slopes lead back to their own
+                # optimum (the first step would be the batteries' small departure from them, the misfit
+                # left where it was): only slopes measured on the batteries can see past it
+                jacobian = PolishJacobian.BATTERIES
+            else:
+                why = f"the surfaces missed the confirmation batteries ({check.get('reason')})"
         state, points = polish.start(s, design, modelled, dict(it.optimum["parameters"]),
                                      [r.id for r in confirmations], records(confirmations),
-                                     [r.seed for r in confirmations])
+                                     [r.seed for r in confirmations], jacobian=jacobian, why=why)
+        if not points:
+            return Transition(Phase.POLISH, Phase.REPORT, {"optimum": {**it.optimum, "polish": state}})
         return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
                           _polish_runs(state, points))
     state, points = polish.advance(s, design, modelled, state, round_runs(it, state), s.polish_steps)
@@ -197,23 +208,34 @@ def _polish(ctx: Context, it) -> Transition:
     return Transition(Phase.POLISH, Phase.REPORT, {"optimum": optimum})
 
 
-def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) -> bool:
-    """Does an iteration whose model has an added effect miss the measurements at the surfaces' optimum (a
-    target out of their reach, a parameter pinned at a bound, or the confirmation's lack of fit failing)?
-    Such an iteration is judged against the one it was built on, and surfaces fitted on more points
-    than they can follow (reused batteries widen their prediction intervals) may pass the surfaces'
-    check with an optimum the batteries refute: the effect would be judged on the surfaces' error,
-    not its own. An iteration without an added effect is not polished for misfit alone: the diagnosis
-    decides what its misfit means."""
+def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) -> str | None:
+    """Why an iteration whose model has an added effect misses the measurements at the surfaces' optimum
+    (a target out of their reach, a parameter pinned at a bound, the confirmation's lack of fit failing,
+    a directly measured parameter missed by more than 2 sd), or None. Such an iteration is judged against
+    the one it was built on, and surfaces fitted on more points than they can follow (reused batteries
+    widen their prediction intervals) may pass the surfaces' check with an optimum the batteries refute:
+    the effect would be judged on the surfaces' error, not its own. A prior missed is the same sign: two
+    level surfaces over a wide box are biased for saturating responses (a friction angle against mu_pp),
+    so their optimum can trade a direct measurement for a few targets that the batteries fit better
+    nearer the prior (tier B's hertz_strong, session 36: friction_pp 0.91 against a tilt-test prior of
+    0.655 +- 0.08 and a truth of 0.6). An iteration without an added effect is not polished for misfit
+    alone: the diagnosis decides what its misfit means."""
     if not analysis.active_effects(it.parameters):
-        return False
+        return None
     if any(not row.get("reachable", True) for row in it.optimum.get("reachability") or []):
-        return True  # a target the surfaces say no factor values reach: the report would say "out of reach"
+        return "a target out of the surfaces' reach"  # the report would say "out of reach"
     if it.optimum.get("active_bounds"):
-        return True  # pinned at a bound, where a two-level surface of a saturating response is most biased
-    p = analysis.confirmation_lack_of_fit(s, design, modelled, it.optimum, records(confirmations),
-                                          [r.seed for r in confirmations])
-    return p is not None and p < analysis.ALPHA
+        return "a parameter pinned at a bound"  # where a two-level surface of a saturating response is most biased
+    loc = analysis.confirmation_localisation(s, design, modelled, it.optimum, records(confirmations),
+                                             [r.seed for r in confirmations])
+    if loc is None:
+        return None
+    if loc.lack_of_fit.p_value < analysis.ALPHA:
+        return f"the confirmation's lack of fit fails (p {loc.lack_of_fit.p_value:.2g})"
+    pulled = loc.conflicts.get("priors_pulled") or []
+    if pulled:
+        return "; ".join(p["meaning"] for p in pulled)
+    return None
 
 
 def _polish_runs(state: dict, points) -> list[NewRun]:

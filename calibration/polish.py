@@ -10,7 +10,9 @@ not. The method is cut into rounds a driver can queue and resume (``calibration.
   numbers) and averaged over them, as the confirmation is; the targets' rows of J are these forward
   differences, the priors' rows stay analytic. With ``"surfaces"`` (the default) J starts as the fitted
   surfaces' slopes at the optimum and the first step is round 1: Broyden's updates correct it along
-  the steps taken, and k x m batteries are saved;
+  the steps taken, and k x m batteries are saved. Not where the surfaces predicted the optimum's
+  batteries and the loop polishes for an added effect's misfit (``calibration.machine``): their slopes
+  then lead back to their own optimum, and the forward differences are taken whatever the setting;
 * rounds 1..: the bounded Gauss-Newton step minimising |r + J du| in the box, tried at full length,
   then (only if that did not lower the batteries' misfit) at half and at quarter length, one round
   each; the first that lowers it is taken and J is updated by Broyden's rule; ``polish_steps`` steps
@@ -73,18 +75,24 @@ def seeds_of(state: dict) -> list[int]:
     return list(state.get("seeds") or [state["seed"]])
 
 
-def start(config, design, modelled, theta: dict, run_ids: list[int], records: list[list[dict]], seeds: list[int]
-          ) -> tuple[dict, list[tuple[dict, dict]]]:
+def start(config, design, modelled, theta: dict, run_ids: list[int], records: list[list[dict]], seeds: list[int],
+          jacobian: str | None = None, why: str | None = None) -> tuple[dict, list[tuple[dict, dict]]]:
     """State at the surfaces' optimum (its confirmation runs ``run_ids``, their ``records`` at ``seeds``)
-    and the Jacobian round's points (natural, coded); each point is queued once per seed."""
+    and the first round's points (natural, coded; [] with the state done when the surfaces' slopes give
+    no step); each point is queued once per seed. ``jacobian`` overrides ``config.polish_jacobian`` (the
+    loop measures the slopes on the batteries where the surfaces predicted the optimum's batteries);
+    ``why`` is kept for the report."""
     res = _residuals(config, design, modelled, theta, records, seeds)
+    jacobian = PolishJacobian(jacobian or config.polish_jacobian)
     state = {"round": 0, "stage": PolishStage.JACOBIAN.value, "theta": dict(theta), "run_ids": list(run_ids), "seeds": list(seeds),
              "chi2_start": res.chi2(), "chi2": res.chi2(), "r": res.r.tolist(), "J": res.J.tolist(),
-             "free": list(res.free), "n_targets": len(res.keys), "steps": 0, "batteries": 0, "h": []}
-    if config.polish_jacobian == PolishJacobian.SURFACES:
+             "free": list(res.free), "n_targets": len(res.keys), "steps": 0, "batteries": 0, "h": [],
+             "jacobian": jacobian.value}
+    if why:
+        state["why"] = why
+    if jacobian == PolishJacobian.SURFACES:
         # the surfaces' slopes at the optimum start the Broyden updates: no round of forward differences
         # (k x m batteries), which on the engine's scatter are as noisy as the slopes they replace
-        state.update(jacobian=PolishJacobian.SURFACES.value)
         points = _step_points(design, state)
         if not points:
             return _done(state), []
@@ -187,4 +195,5 @@ def summary(state: dict | None) -> dict[str, Any] | None:
     if "skipped" in state:
         return {"steps": 0, "batteries": 0, "skipped": state["skipped"]}
     return {"chi2_start": state["chi2_start"], "chi2": state["chi2"], "steps": state["steps"],
-            "batteries": state["batteries"], "parameters": state["theta"]}
+            "batteries": state["batteries"], "parameters": state["theta"], "why": state.get("why"),
+            "jacobian": state.get("jacobian", PolishJacobian.BATTERIES.value)}

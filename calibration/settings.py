@@ -164,7 +164,8 @@ class LoopSettings(BaseModel):
         "polishing round buys little; where they miss (typically once an effect's strength is a fifth factor) "
         "the surfaces' optimum is not the simulator's and an effect that fits can look as if it did not; an "
         "iteration with an added effect is polished too when it misses at the surfaces' optimum (a target out of "
-        "reach, a parameter at a bound, the lack of fit failing)",
+        "reach, a parameter at a bound, the lack of fit failing, a directly measured parameter missed by more "
+        "than 2 sd), then with slopes measured on the batteries if the surfaces predicted them",
     )
     adaptive_replicates: bool = Field(
         True, description="the diagnosis runs a baseline and each candidate at one seed first, and at the other "
@@ -179,7 +180,9 @@ class LoopSettings(BaseModel):
     polish_jacobian: Literal["surfaces", "batteries"] = Field(
         "surfaces", description="the polishing's first Jacobian: 'surfaces', the response surfaces' slopes at the "
         "optimum (no batteries; Broyden's updates correct it along the steps), or 'batteries', forward "
-        "differences on the batteries (one point per factor and seed)",
+        "differences on the batteries (one point per factor and seed). An iteration polished although its "
+        "surfaces predicted the optimum's batteries (an added effect missing at their optimum) measures them on "
+        "the batteries whatever this says: the surfaces' slopes lead back to their own optimum",
     )
     automatic: bool = Field(
         False, description="after each iteration, add the effect the diagnosis indicates and run the next "

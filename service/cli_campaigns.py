@@ -346,7 +346,8 @@ def campaign_report(args) -> int:
         text += ("\npolishing on the batteries: " + (
             f"skipped, the surfaces predicted the confirmation ({polished['skipped']})" if polished.get("skipped") else
             f"{polished['steps']} Gauss-Newton step(s), {polished['batteries']} batteries, "
-            f"chi2 {_fmt(polished['chi2_start'])} -> {_fmt(polished['chi2'])}"))
+            f"chi2 {_fmt(polished['chi2_start'])} -> {_fmt(polished['chi2'])}, Jacobian from the "
+            f"{polished.get('jacobian') or 'batteries'}" + (f"; why: {polished['why']}" if polished.get("why") else "")))
     return _emit(args, r, text)
 
 

@@ -121,6 +121,9 @@ class Polish(Out):
     chi2: float | None = None
     parameters: ParameterValues | None = Field(None, description=PARAMETERS)
     skipped: str | None = Field(None, description="why no step was taken")
+    why: str | None = Field(None, description="why the iteration polished (calibration.machine: the surfaces "
+                            "missed the confirmation, or an added effect misses the measurements at their optimum)")
+    jacobian: str | None = Field(None, description="where the first Jacobian came from: 'surfaces' or 'batteries'")
 
 
 class Adequacy(Out):

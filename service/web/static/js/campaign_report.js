@@ -33,7 +33,8 @@ export function verdictSection(report) {
     report.surrogate_check ? h("p", { className: "muted" }, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${humanText(report.surrogate_check.reason)}`) : "",
     report.polish ? h("p", { className: "muted" }, h("b", {}, "Polishing on the batteries: "), report.polish.skipped
       ? `skipped, the surfaces predicted the confirmation (${humanText(report.polish.skipped)})`
-      : `${report.polish.steps} Gauss-Newton step(s), ${report.polish.batteries} batteries, χ² ${fmt(report.polish.chi2_start, 3)} → ${fmt(report.polish.chi2, 3)}`) : "");
+      : `${report.polish.steps} Gauss-Newton step(s), ${report.polish.batteries} batteries, χ² ${fmt(report.polish.chi2_start, 3)} → ${fmt(report.polish.chi2, 3)}, Jacobian from the ${report.polish.jacobian || "batteries"}`
+        + (report.polish.why ? `; why: ${humanText(report.polish.why)}` : "")) : "");
 }
 
 // Parity per test. Quantities of one test have different units, so each is divided by its own

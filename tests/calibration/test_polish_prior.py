@@ -1,0 +1,60 @@
+"""An added effect whose fit misses a directly measured parameter is polished on the batteries, with slopes
+measured on the batteries (``calibration.machine._added_effect_misfits``, ``calibration.polish.start``).
+
+The case is tier B's hertz_strong in the stand-in world (tier A's seed 13, a single effect: Hertz-Mindlin
+hidden, E 1.09 GPa; friction_pp 0.604, its particle tilt test 0.52 +- 0.08). Once Hertz is added, the
+two-level surfaces over friction_pp's box put friction_pp at 0.69, 2.1 sd above the tilt test, while
+every confirmation battery lies inside the surfaces' prediction intervals: the surfaces' own slopes lead
+back to their own optimum, so only slopes measured on the batteries can move it. The numbers the test
+holds come from the world (its truth) and the measured prior, not from a run of the loop.
+"""
+from __future__ import annotations
+
+import pytest
+
+from calibration.conditions import standin_conditions
+from calibration.evaluators import StandinEvaluator
+from calibration.loop import CalibrationLoop
+from calibration.testbed import OPTIONS, loop_settings, make_case
+
+FRICTION = "friction_pp"
+
+
+@pytest.fixture(scope="module")
+def hertz_case():
+    case = make_case(13, "single")
+    assert set(case.truth["effects"]) == {"hertz_mindlin"}
+    settings = loop_settings(case, 3)
+    result = CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)), settings).run()
+    return case, settings, result
+
+
+def test_a_prior_missed_after_the_added_effect_is_polished_with_slopes_from_the_batteries(hertz_case):
+    case, settings, result = hertz_case
+    added = result.iterations[1]
+    assert "effects.hertz_mindlin.young_modulus_pa" in [f["name"] for f in added.parameters["factors"]]
+    prior = next(p for p in settings.priors if p.parameter == FRICTION)
+    state = added.optimum["polish"]
+    surfaces = added.optimum["surrogate_parameters"][FRICTION]
+    # the surfaces' optimum misses the tilt test by more than the report's 2 sd, and the loop says so
+    assert (surfaces - prior.value) / prior.uncertainty > 2.0
+    assert state["why"].startswith(f"{FRICTION} calibrates") and "above its measured value" in state["why"]
+    assert state["jacobian"] == "batteries"
+    seeds = settings.confirmation_seeds
+    first_round = [r for r in added.runs if r.kind == "polish" and r.std_order <= len(state["free"]) * seeds]
+    assert len(first_round) == len(state["free"]) * seeds  # one point per free factor at every seed
+    assert state["steps"] >= 1 and state["chi2"] < state["chi2_start"]
+
+
+def test_the_polished_optimum_meets_the_prior_and_lies_nearer_the_truth(hertz_case):
+    case, settings, result = hertz_case
+    added = result.iterations[1]
+    prior = next(p for p in settings.priors if p.parameter == FRICTION)
+    polished = added.optimum["parameters"][FRICTION]
+    surfaces = added.optimum["surrogate_parameters"][FRICTION]
+    truth = case.truth[FRICTION]
+    assert abs(polished - prior.value) / prior.uncertainty < 2.0
+    assert abs(polished - truth) < abs(surfaces - truth)
+    assert not added.report["conflicts"]["priors_pulled"]
+    assert added.report["verdict"] == "calibrated"
+
