@@ -1,0 +1,83 @@
+"""A finished iteration of a stored campaign reopened at its polishing phase, so today's loop decides the polish
+again and runs only the batteries that decision adds (the service stopped while this runs).
+
+Why: a tier B campaign is hours of DEM, and a change to the polishing rule changes nothing before the polish:
+the design, the surfaces, the optimum and its confirmation batteries are what today's code would make again.
+Rerunning them costs an hour for nothing; reopening keeps them, drops what came after the polish (the iteration's
+report, its diagnosis batteries, any later iteration, the campaign's end) and lets the service's runner carry on
+from the polish. That the kept batteries are today's loop's own is checked afterwards, not assumed:
+``bench/diagnosis_dem.py`` replays the whole campaign through the notebook loop (``calibration.replay``), and a
+battery today's code would not have run appears there as a difference. Session 37 used it on tier B's
+hertz_strong (docs/diagnosis.md).
+
+Only an iteration whose polish was skipped (or not begun) can be reopened: a polished one's optimum moved, and its
+confirmation batteries were no longer its final ones.
+
+    python3 bench/reopen.py --data-dir /work/tierb/s37/hs2 --campaign 1 --iteration 2
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from sqlalchemy import create_engine, text
+
+AFTER_POLISH = ("report", "diagnosis", "diagnosed", "done")
+DROPPED_KINDS = ("polish", "diagnosis")
+
+
+def _json(value):
+    return json.loads(value) if isinstance(value, (str, bytes)) else value
+
+
+def reopen(url: str, campaign_id: int, number: int) -> dict:
+    """Reopen iteration ``number`` of campaign ``campaign_id`` at its polish phase; what was dropped."""
+    engine = create_engine(url)
+    with engine.begin() as db:
+        campaign = db.execute(text("select status from campaigns where id = :c"), {"c": campaign_id}).first()
+        if campaign is None:
+            raise SystemExit(f"no campaign {campaign_id} in {url}")
+        it = db.execute(text("select id, phase, optimum from campaign_iterations where campaign_id = :c and number = :n"),
+                        {"c": campaign_id, "n": number}).first()
+        if it is None:
+            raise SystemExit(f"campaign {campaign_id} has no iteration {number}")
+        if it[1] not in AFTER_POLISH:
+            raise SystemExit(f"iteration {number} is at its {it[1]} phase: nothing to reopen before the polish")
+        optimum = dict(_json(it[2]) or {})
+        polish = optimum.pop("polish", None) or {}
+        if polish.get("steps") or "surrogate_parameters" in optimum:
+            raise SystemExit(f"iteration {number} was polished (its optimum moved off the surfaces'): only a skipped "
+                             "polish can be reopened")
+        later = [row[0] for row in db.execute(text(
+            "select id from campaign_iterations where campaign_id = :c and number > :n"), {"c": campaign_id, "n": number})]
+        dropped_runs = 0
+        for iteration_id in later:
+            dropped_runs += db.execute(text("delete from campaign_runs where iteration_id = :i"), {"i": iteration_id}).rowcount
+            db.execute(text("delete from campaign_iterations where id = :i"), {"i": iteration_id})
+        for kind in DROPPED_KINDS:
+            dropped_runs += db.execute(text("delete from campaign_runs where iteration_id = :i and kind = :k"),
+                                       {"i": it[0], "k": kind}).rowcount
+        db.execute(text("update campaign_iterations set phase = 'polish', optimum = :o, report = null, "
+                        "finished_at = null where id = :i"), {"o": json.dumps(optimum), "i": it[0]})
+        db.execute(text("update campaigns set status = 'running', current_iteration = :n, error = null, "
+                        "finished_at = null where id = :c"), {"n": number, "c": campaign_id})
+    return {"campaign": campaign_id, "iteration": number, "was": it[1], "campaign_was": campaign[0],
+            "later_iterations_dropped": len(later), "runs_dropped": dropped_runs, "polish_was": polish}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    where = ap.add_mutually_exclusive_group(required=True)
+    where.add_argument("--data-dir", help="a service's data folder (its demcal.db); the service must be stopped")
+    where.add_argument("--url", help="a database URL")
+    ap.add_argument("--campaign", type=int, required=True)
+    ap.add_argument("--iteration", type=int, required=True)
+    args = ap.parse_args()
+    url = args.url or f"sqlite:///{Path(args.data_dir) / 'demcal.db'}"
+    print(json.dumps(reopen(url, args.campaign, args.iteration), indent=1))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
