@@ -25,7 +25,6 @@ from pathlib import Path
 from sqlalchemy import create_engine, text
 
 AFTER_POLISH = ("report", "diagnosis", "diagnosed", "done")
-DROPPED_KINDS = ("polish", "diagnosis")
 
 
 def _json(value):
@@ -52,19 +51,25 @@ def reopen(url: str, campaign_id: int, number: int) -> dict:
                              "polish can be reopened")
         later = [row[0] for row in db.execute(text(
             "select id from campaign_iterations where campaign_id = :c and number > :n"), {"c": campaign_id, "n": number})]
-        dropped_runs = 0
+        dropped = [row[0] for row in db.execute(text(
+            "select id from campaign_runs where iteration_id in (select id from campaign_iterations where "
+            "campaign_id = :c and number > :n) or (iteration_id = :i and kind in ('polish', 'diagnosis'))"),
+            {"c": campaign_id, "n": number, "i": it[0]})]
+        for run_id in dropped:
+            # a run's job is queued under "campaign:C:run:R" (service.campaigns.runner), and SQLite gives a new run
+            # the highest id again: the dropped run's job keeps its results under a key no new run can ask for
+            key = f"campaign:{campaign_id}:run:{run_id}"
+            db.execute(text("update jobs set idempotency_key = :new where idempotency_key = :k"),
+                       {"new": f"{key}:reopened", "k": key})
+            db.execute(text("delete from campaign_runs where id = :r"), {"r": run_id})
         for iteration_id in later:
-            dropped_runs += db.execute(text("delete from campaign_runs where iteration_id = :i"), {"i": iteration_id}).rowcount
             db.execute(text("delete from campaign_iterations where id = :i"), {"i": iteration_id})
-        for kind in DROPPED_KINDS:
-            dropped_runs += db.execute(text("delete from campaign_runs where iteration_id = :i and kind = :k"),
-                                       {"i": it[0], "k": kind}).rowcount
         db.execute(text("update campaign_iterations set phase = 'polish', optimum = :o, report = null, "
                         "finished_at = null where id = :i"), {"o": json.dumps(optimum), "i": it[0]})
         db.execute(text("update campaigns set status = 'running', current_iteration = :n, error = null, "
                         "finished_at = null where id = :c"), {"n": number, "c": campaign_id})
     return {"campaign": campaign_id, "iteration": number, "was": it[1], "campaign_was": campaign[0],
-            "later_iterations_dropped": len(later), "runs_dropped": dropped_runs, "polish_was": polish}
+            "later_iterations_dropped": len(later), "runs_dropped": len(dropped), "polish_was": polish}
 
 
 def main() -> None:
