@@ -72,3 +72,38 @@ def test_only_a_law_that_replaces_the_baseline_may_supersede_its_parameters():
     with pytest.raises(ValueError, match="supersedes"):
         Candidate(name="x", title="x", factor="effects.x.k", unit="1", plausible_range=(0.0, 1.0), step=0.1,
                   supersedes=("particle_stiffness_n_per_m",))
+
+
+def test_a_pinned_stiffness_the_added_law_supersedes_is_fixed_not_widened():
+    """The stand-in's Hertz world (tier A seed 13: E 1.09 GPa, kp 1.74 MN/m) with the stiffness box drawn below
+    its kp (top at 0.75 x). Iteration 1 pins kp at that top and the diagnosis names Hertz-Mindlin. The box
+    rule alone would widen kp for the next iteration; Hertz's force reads no kp, so the record says no
+    widening, kp is fixed where it was pinned, and the next iteration calibrates E over a range holding the
+    truth (E ~ kp^1.5: the range is centred 0.65 x the modulus matched to the true kp, which it still holds)."""
+    from calibration.automatic import box_widening
+    from calibration.conditions import standin_conditions
+    from calibration.evaluators import StandinEvaluator
+    from calibration.loop import CalibrationLoop
+    from calibration.testbed import FACTORS as TIER_A_FACTORS
+    from calibration.testbed import OPTIONS, loop_settings, make_case
+
+    stiffness = "particle_stiffness_n_per_m"
+    case = make_case(13, "single")
+    truth_kp, truth_e = case.truth[stiffness], case.truth["effects"]["hertz_mindlin"]["young_modulus_pa"]
+    factors = [dict(f, low=0.5e6, high=0.75 * truth_kp) if f["name"] == stiffness else dict(f) for f in TIER_A_FACTORS]
+    settings = loop_settings(case, 3, factors=factors)
+    result = CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)), settings).run()
+    first, second = result.iterations[:2]
+    pinned = {b["parameter"]: b["side"] for b in first.report["conflicts"]["active_bounds"]}
+    assert pinned == {stiffness: "high"} and first.report["diagnosis"]["indicated"][0] == "hertz_mindlin"
+    # what the box rule alone would record for kp, before the guard drops it
+    _, box = box_widening(result.iterations[:1], first, first.report, settings.priors)
+    assert [w["parameter"] for w in box] == [stiffness]
+    record = first.report["automatic"]
+    assert record["next_effect"] == "hertz_mindlin" and "widened_box" not in record
+    assert second.parameters["fixed"] == {stiffness: pytest.approx(0.75 * truth_kp)}
+    assert stiffness not in [f["name"] for f in second.parameters["factors"]]
+    low, high = next((f["low"], f["high"]) for f in second.parameters["factors"] if f["name"] == MODULUS)
+    assert low < truth_e < high
+    assert result.history()["iterations"][1]["box_widened"] == []
+    assert second.report["verdict"] == "calibrated"
