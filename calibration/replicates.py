@@ -20,6 +20,12 @@ go the other way. So the diagnosis runs in two stages:
      less than the true one would, so a rival whose probe landed on an unlucky packing ranks below an
      effect it would beat: which of two real contenders is named first is decided on every seed
      (tier B shape_strong, docs/diagnosis.md);
+   * or **the leader's own probe is mostly noise**: its signature's expected noise is at least its
+     projected length (``attribute.noise_share`` >= 1), so its direction is mostly the packing's scatter
+     and its score says how well a random direction happens to meet the misfit, which the directed
+     test's p-value (made for a known signature) does not price; every seed's average decides. Tier B's
+     weak Hertz world (session 35) named cohesion at one seed with Holm p 0.00044 from a probe whose
+     noise was 1.42 of its length, tried it, and turned it off: Hertz, hidden, ranked third;
    * **the simulator's scatter matters**: a signature is a difference of two battery means, variance
      2 s_sim^2 / m, and it is read against residuals of variance v (measurement, discrepancy and the
      confirmation's share of s_sim^2); where the median over targets of 2 s_sim^2 / v is below
@@ -70,7 +76,7 @@ def decided(diagnosis: dict[str, Any], share: float | None = None) -> str | None
     leader = ranking[0]
     if leader["effect"] in (diagnosis.get("indicated") or []) and leader["p_holm"] < ALPHA_FIRST \
             and not _separable_by_seeds(diagnosis, leader["effect"]) \
-            and not (rivals(diagnosis) and (share is None or share >= SIMULATOR_SHARE_MIN)):
+            and not ((rivals(diagnosis) or noisy_leader(diagnosis)) and (share is None or share >= SIMULATOR_SHARE_MIN)):
         return f"{leader['effect']} indicated with Holm p {leader['p_holm']:.2g} < {ALPHA_FIRST:g}"
     if all(r["p_holm"] > FUTILE_P for r in ranking):
         return f"every candidate's Holm p above {FUTILE_P:g}"
@@ -99,6 +105,13 @@ def rivals(diagnosis: dict[str, Any]) -> list[str]:
     return out
 
 
+def noisy_leader(diagnosis: dict[str, Any]) -> float | None:
+    """The leader's probe noise share when it is mostly noise (``attribute.noise_share`` >= 1), else None."""
+    ranking = diagnosis.get("ranking") or []
+    share = float(ranking[0].get("signature_noise") or 0.0) if ranking else 0.0
+    return share if share >= 1.0 else None
+
+
 def _separable_by_seeds(diagnosis: dict[str, Any], effect: str) -> bool:
     """Is ``effect`` grouped with a rival only by the evidence (``separation_z`` below its bound), which
     more seeds can sharpen? A group made by collinear signatures (|cos| > 0.9, no separation_z) is the
@@ -120,6 +133,11 @@ def more_seeds(diagnosis: dict[str, Any], share: float | None) -> tuple[bool, st
                        f"{share:.2f} of the residuals' variance, below {SIMULATOR_SHARE_MIN:g})")
     where = "unknown" if share is None else f"{share:.2f} of the residuals' variance"
     if decided(diagnosis, 0.0) is not None:  # decided but for a rival the first seed's noise may have sunk
-        return True, (f"the ranking is close ({', '.join(rivals(diagnosis))} also explain(s) the misfit) and the "
-                      f"simulator's scatter matters ({where}): the other seeds run")
+        close = []
+        if rivals(diagnosis):
+            close.append(f"{', '.join(rivals(diagnosis))} also explain(s) the misfit")
+        if (noise := noisy_leader(diagnosis)) is not None:
+            close.append(f"the leader's probe is mostly the simulator's scatter ({noise:.2g} of its signature)")
+        return True, (f"the ranking is close ({'; '.join(close)}) and the simulator's scatter matters ({where}): "
+                      "the other seeds run")
     return True, f"the decision is close and the simulator's scatter matters ({where}): the other seeds run"

@@ -132,3 +132,19 @@ def test_the_noise_share_of_a_signature_by_hand():
 
     # 2 s_sim^2 / (m sd^2 step^2): row a 2 x 1 / (2 x 4 x 0.25) = 1; row b unknown; the prior row 0
     assert signature_noise_var(Res, {"a": 1.0}, 2, 0.5) == pytest.approx([1.0, 0.0, 0.0])
+
+
+def test_a_leader_whose_probe_is_mostly_noise_is_not_decided_on_one_seed():
+    """A probe whose expected noise is its whole projected length (share >= 1) measured the packing, not the
+    effect: its score is a random direction's against the misfit, which the directed test does not price.
+    Tier B's weak Hertz world at one seed: cohesion first at LM 13.7, Holm p 0.00044 (< alpha / 20), its probe's
+    noise 1.42 of its signature, the simulator's share of the residuals' variance above 1/4. Every seed decides;
+    where the measurements' scatter dominates, or the leader's probe is mostly signal, one seed still does."""
+    noisy = _ranked(13.7, 1.5, 0.33, 0.11)
+    noisy["ranking"][0].update(p_holm=0.00044, signature_noise=1.42)
+    more, why = replicates.more_seeds(noisy, 2.3)
+    assert more is True and "mostly the simulator's scatter (1.4 of its signature)" in why
+    assert replicates.more_seeds(noisy, 0.2)[0] is False
+    clear = _ranked(13.7, 1.5, 0.33, 0.11)
+    clear["ranking"][0].update(p_holm=0.00044, signature_noise=0.32)  # weak cohesion's own probe, session 35
+    assert replicates.more_seeds(clear, 2.3)[0] is False
