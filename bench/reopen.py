@@ -1,5 +1,6 @@
-"""A finished iteration of a stored campaign reopened at its polishing phase, so today's loop decides the polish
-again and runs only the batteries that decision adds (the service stopped while this runs).
+"""A finished iteration of a stored campaign reopened at its polishing phase or its report, so today's loop decides
+the polish (or the report and its diagnosis) again and runs only the batteries that decision adds (the service
+stopped while this runs).
 
 Why: a tier B campaign is hours of DEM, and a change to the polishing rule changes nothing before the polish:
 the design, the surfaces, the optimum and its confirmation batteries are what today's code would make again.
@@ -10,10 +11,13 @@ from the polish. That the kept batteries are today's loop's own is checked after
 battery today's code would not have run appears there as a difference. Session 37 used it on tier B's
 hertz_strong (docs/diagnosis.md).
 
-Only an iteration whose polish was skipped (or not begun) can be reopened: a polished one's optimum moved, and its
-confirmation batteries were no longer its final ones.
+At the polish (``--phase polish``) only an iteration whose polish was skipped can be reopened: a polished one's
+optimum moved, and its confirmation batteries were no longer its final ones. At the report (``--phase report``) the
+polish is kept and the diagnosis batteries are dropped with the report: a change to how the diagnosis decides
+(``calibration.replicates``) is tried on the iteration's own optimum, its diagnosis batteries run again.
 
     python3 bench/reopen.py --data-dir /work/tierb/s37/hs2 --campaign 1 --iteration 2
+    python3 bench/reopen.py --data-dir /work/tierb/s37/weak --campaign 1 --iteration 1 --phase report
 """
 from __future__ import annotations
 
@@ -24,15 +28,16 @@ from pathlib import Path
 
 from sqlalchemy import create_engine, text
 
-AFTER_POLISH = ("report", "diagnosis", "diagnosed", "done")
+AFTER = {"polish": ("report", "diagnosis", "diagnosed", "done"), "report": ("diagnosis", "diagnosed", "done")}
 
 
 def _json(value):
     return json.loads(value) if isinstance(value, (str, bytes)) else value
 
 
-def reopen(url: str, campaign_id: int, number: int) -> dict:
-    """Reopen iteration ``number`` of campaign ``campaign_id`` at its polish phase; what was dropped."""
+def reopen(url: str, campaign_id: int, number: int, phase: str = "polish") -> dict:
+    """Reopen iteration ``number`` of campaign ``campaign_id`` at ``phase`` ("polish" or "report"); what was
+    dropped."""
     engine = create_engine(url)
     with engine.begin() as db:
         campaign = db.execute(text("select status from campaigns where id = :c"), {"c": campaign_id}).first()
@@ -42,19 +47,21 @@ def reopen(url: str, campaign_id: int, number: int) -> dict:
                         {"c": campaign_id, "n": number}).first()
         if it is None:
             raise SystemExit(f"campaign {campaign_id} has no iteration {number}")
-        if it[1] not in AFTER_POLISH:
-            raise SystemExit(f"iteration {number} is at its {it[1]} phase: nothing to reopen before the polish")
+        if it[1] not in AFTER[phase]:
+            raise SystemExit(f"iteration {number} is at its {it[1]} phase: nothing to reopen before the {phase}")
         optimum = dict(_json(it[2]) or {})
-        polish = optimum.pop("polish", None) or {}
-        if polish.get("steps") or "surrogate_parameters" in optimum:
+        polish = (optimum.pop("polish", None) or {}) if phase == "polish" else (optimum.get("polish") or {})
+        if phase == "polish" and (polish.get("steps") or "surrogate_parameters" in optimum):
             raise SystemExit(f"iteration {number} was polished (its optimum moved off the surfaces'): only a skipped "
                              "polish can be reopened")
+        dropped_kinds = ("polish", "diagnosis") if phase == "polish" else ("diagnosis",)
         later = [row[0] for row in db.execute(text(
             "select id from campaign_iterations where campaign_id = :c and number > :n"), {"c": campaign_id, "n": number})]
         dropped = [row[0] for row in db.execute(text(
             "select id from campaign_runs where iteration_id in (select id from campaign_iterations where "
-            "campaign_id = :c and number > :n) or (iteration_id = :i and kind in ('polish', 'diagnosis'))"),
-            {"c": campaign_id, "n": number, "i": it[0]})]
+            "campaign_id = :c and number > :n)"), {"c": campaign_id, "n": number})]
+        dropped += [row[0] for kind in dropped_kinds for row in db.execute(text(
+            "select id from campaign_runs where iteration_id = :i and kind = :k"), {"i": it[0], "k": kind})]
         for run_id in dropped:
             # a run's job is queued under "campaign:C:run:R" (service.campaigns.runner), and SQLite gives a new run
             # the highest id again: the dropped run's job keeps its results under a key no new run can ask for
@@ -64,11 +71,11 @@ def reopen(url: str, campaign_id: int, number: int) -> dict:
             db.execute(text("delete from campaign_runs where id = :r"), {"r": run_id})
         for iteration_id in later:
             db.execute(text("delete from campaign_iterations where id = :i"), {"i": iteration_id})
-        db.execute(text("update campaign_iterations set phase = 'polish', optimum = :o, report = null, "
-                        "finished_at = null where id = :i"), {"o": json.dumps(optimum), "i": it[0]})
+        db.execute(text("update campaign_iterations set phase = :p, optimum = :o, report = null, "
+                        "finished_at = null where id = :i"), {"p": phase, "o": json.dumps(optimum), "i": it[0]})
         db.execute(text("update campaigns set status = 'running', current_iteration = :n, error = null, "
                         "finished_at = null where id = :c"), {"n": number, "c": campaign_id})
-    return {"campaign": campaign_id, "iteration": number, "was": it[1], "campaign_was": campaign[0],
+    return {"campaign": campaign_id, "iteration": number, "phase": phase, "was": it[1], "campaign_was": campaign[0],
             "later_iterations_dropped": len(later), "runs_dropped": len(dropped), "polish_was": polish}
 
 
@@ -79,9 +86,10 @@ def main() -> None:
     where.add_argument("--url", help="a database URL")
     ap.add_argument("--campaign", type=int, required=True)
     ap.add_argument("--iteration", type=int, required=True)
+    ap.add_argument("--phase", choices=sorted(AFTER), default="polish", help="where the iteration starts again")
     args = ap.parse_args()
     url = args.url or f"sqlite:///{Path(args.data_dir) / 'demcal.db'}"
-    print(json.dumps(reopen(url, args.campaign, args.iteration), indent=1))
+    print(json.dumps(reopen(url, args.campaign, args.iteration, args.phase), indent=1))
 
 
 if __name__ == "__main__":
