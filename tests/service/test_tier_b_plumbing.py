@@ -8,6 +8,7 @@ adding it halves the weighted error with chi2/dof <= 2.
 """
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -165,3 +166,32 @@ def test_the_founding_case_as_spheres_misses_then_names_rotation_resistance(tmp_
     assert figures["first_verdict"] in ("targets out of reach", "model misses the measurements"), out.stdout
     assert figures["added"] and figures["added"][0][0] in ("rolling_epsd2", "particle_shape"), out.stdout
     assert figures["rms_last"] <= 0.5 * figures["rms_first"], out.stdout
+
+
+def test_a_reopened_iteration_runs_on_to_the_same_campaign(tmp_path):
+    """bench/reopen.py (session 37) keeps an iteration's batteries and lets today's loop decide its report and
+    diagnosis again. On the stand-in, which gives the same responses for the same point and seed, the campaign run
+    on from its reopened first iteration must end as the one run straight through: the same ranking, effects,
+    errors and stop, and the notebook loop must replay it (a battery today's loop would not have run would show)."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    from reopen import reopen
+
+    data = tmp_path / "data"
+    base = [sys.executable, str(ROOT / "bench" / "diagnosis_dem.py"), "--evaluator", "analytic", "--scenarios",
+            "rolling", "--workers", "1", "--data-dir", str(data), "--replay"]
+    rows = []
+    for name in ("straight", "reopened"):
+        if name == "reopened":
+            dropped = reopen(f"sqlite:///{data / 'demcal.db'}", 1, 1, "report")
+            assert dropped["later_iterations_dropped"] >= 1 and dropped["runs_dropped"] > 0
+        out = subprocess.run([*base, "--json", str(tmp_path / f"{name}.json")], capture_output=True, text=True,
+                             timeout=900, cwd=tmp_path)
+        assert out.returncode == 0, out.stderr[-2000:]
+        assert dict(item.split("=") for item in out.stdout.strip().splitlines()[-1].split())["replay_same"] == "1", out.stdout
+        (row,) = json.loads((tmp_path / f"{name}.json").read_text())
+        rows.append(row)
+    keys = ("ranking", "added", "tried", "rms_before", "rms_after", "chi2_per_dof_after", "stop_reason", "coverage")
+    assert [rows[0][k] for k in keys] == [rows[1][k] for k in keys]
+    assert rows[0]["campaign_id"] == rows[1]["campaign_id"] == 1
+    with pytest.raises(SystemExit, match="has no iteration 9"):
+        reopen(f"sqlite:///{data / 'demcal.db'}", 1, 9, "report")
