@@ -171,6 +171,30 @@ def confirmation_localisation(config, design, modelled, optimum: dict, confirmat
     return _localised(config, design, modelled, optimum, conf)[1]
 
 
+def anchored_points(config, design, modelled, pulled: list[dict]) -> list[dict]:
+    """For each directly measured parameter the optimum misses (``pulled``: the localisation's
+    ``priors_pulled`` rows), the surfaces' optimum with that parameter held at its measured value (clipped to
+    its box) and the others free: one point of the parameter's profile, for the polish to try on the
+    batteries (``calibration.polish``). A point the constraints or the box do not allow is left out."""
+    out = []
+    for row in pulled:
+        name = row["parameter"]
+        if name not in design.names:
+            continue
+        f = design.factor(name)
+        value = min(max(float(row["value"]), f.low), f.high)
+        try:
+            result = cal.optimum(modelled, default_relative=config.default_relative_uncertainty,
+                                 discrepancy=config.model_discrepancy, priors=[p.model_dump() for p in config.priors],
+                                 constraints=list(config.constraints), fixed={name: value}, seed=config.seed,
+                                 allow_extrapolation=config.allow_extrapolation)
+        except DoeError:
+            continue
+        if result.success:
+            out.append({"held": {name: value}, "parameters": {n: float(result.parameters[n]) for n in design.names}})
+    return out
+
+
 def _localised(config, design, modelled, optimum: dict, conf):
     """(residuals, localisation) of the confirmation ``conf`` at the optimum: the one noise model and the
     one localisation every judgement of the batteries there uses."""

@@ -176,11 +176,11 @@ def _polish(ctx: Context, it) -> Transition:
     modelled = [m for m in models if m.fit is not None]
     if state is None:
         confirmations = polish.final_runs(it)
-        jacobian, why = s.polish_jacobian, None
+        jacobian, why, anchors = s.polish_jacobian, None, []
         if s.polish_when == PolishRule.SURROGATE_MISSES:
             check = analysis.surrogate_check(s, modelled, it.optimum, records(confirmations),
                                              [r.seed for r in confirmations])
-            why = _added_effect_misfits(s, it, design, modelled, confirmations)
+            why, pulled = _added_effect_misfits(s, it, design, modelled, confirmations)
             if check.get("confirmed") is not False and why is None:
                 # confirmed, or nothing modelled to polish on
                 return Transition(Phase.POLISH, Phase.REPORT, {"optimum": {**it.optimum, "polish": polish.skipped(check)}})
@@ -189,11 +189,14 @@ def _polish(ctx: Context, it) -> Transition:
                 # optimum (the first step would be the batteries' small departure from them, the misfit
                 # left where it was): only slopes measured on the batteries can see past it
                 jacobian = PolishJacobian.BATTERIES
+                # and a local slope cannot see across a saturating response's plateau: where a measured
+                # parameter is missed, the surfaces' optimum with it held at its measured value runs too
+                anchors = analysis.anchored_points(s, design, modelled, pulled)
             else:
                 why = f"the surfaces missed the confirmation batteries ({check.get('reason')})"
         state, points = polish.start(s, design, modelled, dict(it.optimum["parameters"]),
                                      [r.id for r in confirmations], records(confirmations),
-                                     [r.seed for r in confirmations], jacobian=jacobian, why=why)
+                                     [r.seed for r in confirmations], jacobian=jacobian, why=why, anchors=anchors)
         if not points:
             return Transition(Phase.POLISH, Phase.REPORT, {"optimum": {**it.optimum, "polish": state}})
         return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
@@ -208,10 +211,11 @@ def _polish(ctx: Context, it) -> Transition:
     return Transition(Phase.POLISH, Phase.REPORT, {"optimum": optimum})
 
 
-def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) -> str | None:
+def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) -> tuple[str | None, list[dict]]:
     """Why an iteration whose model has an added effect misses the measurements at the surfaces' optimum
     (a target out of their reach, a parameter pinned at a bound, the confirmation's lack of fit failing,
-    a directly measured parameter missed by more than 2 sd), or None. Such an iteration is judged against
+    a directly measured parameter missed by more than 2 sd), or None; and the priors missed (the
+    localisation's ``priors_pulled`` rows) when that is the reason. Such an iteration is judged against
     the one it was built on, and surfaces fitted on more points than they can follow (reused batteries
     widen their prediction intervals) may pass the surfaces' check with an optimum the batteries refute:
     the effect would be judged on the surfaces' error, not its own. A prior missed is the same sign: two
@@ -221,21 +225,21 @@ def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) 
     0.655 +- 0.08 and a truth of 0.6). An iteration without an added effect is not polished for misfit
     alone: the diagnosis decides what its misfit means."""
     if not analysis.active_effects(it.parameters):
-        return None
+        return None, []
     if any(not row.get("reachable", True) for row in it.optimum.get("reachability") or []):
-        return "a target out of the surfaces' reach"  # the report would say "out of reach"
+        return "a target out of the surfaces' reach", []  # the report would say "out of reach"
     if it.optimum.get("active_bounds"):
-        return "a parameter pinned at a bound"  # where a two-level surface of a saturating response is most biased
+        return "a parameter pinned at a bound", []  # where a two-level surface of a saturating response is most biased
     loc = analysis.confirmation_localisation(s, design, modelled, it.optimum, records(confirmations),
                                              [r.seed for r in confirmations])
     if loc is None:
-        return None
+        return None, []
     if loc.lack_of_fit.p_value < analysis.ALPHA:
-        return f"the confirmation's lack of fit fails (p {loc.lack_of_fit.p_value:.2g})"
+        return f"the confirmation's lack of fit fails (p {loc.lack_of_fit.p_value:.2g})", []
     pulled = loc.conflicts.get("priors_pulled") or []
     if pulled:
-        return "; ".join(p["meaning"] for p in pulled)
-    return None
+        return "; ".join(p["meaning"] for p in pulled), pulled
+    return None, []
 
 
 def _polish_runs(state: dict, points) -> list[NewRun]:

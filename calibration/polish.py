@@ -12,7 +12,11 @@ not. The method is cut into rounds a driver can queue and resume (``calibration.
   surfaces' slopes at the optimum and the first step is round 1: Broyden's updates correct it along
   the steps taken, and k x m batteries are saved. Not where the surfaces predicted the optimum's
   batteries and the loop polishes for an added effect's misfit (``calibration.machine``): their slopes
-  then lead back to their own optimum, and the forward differences are taken whatever the setting;
+  then lead back to their own optimum, and the forward differences are taken whatever the setting.
+  Where the reason is a directly measured parameter the optimum misses, the round also runs the surfaces'
+  optimum with that parameter held at its measured value (an anchor: one point of its profile), and the
+  steps start there if the batteries prefer it: a local slope cannot see across a saturating response's
+  plateau to the fit the measurement points at;
 * rounds 1..: the bounded Gauss-Newton step minimising |r + J du| in the box, tried at full length,
   then (only if that did not lower the batteries' misfit) at half and at quarter length, one round
   each; the first that lowers it is taken and J is updated by Broyden's rule; ``polish_steps`` steps
@@ -76,12 +80,16 @@ def seeds_of(state: dict) -> list[int]:
 
 
 def start(config, design, modelled, theta: dict, run_ids: list[int], records: list[list[dict]], seeds: list[int],
-          jacobian: str | None = None, why: str | None = None) -> tuple[dict, list[tuple[dict, dict]]]:
+          jacobian: str | None = None, why: str | None = None, anchors: list[dict] | None = None
+          ) -> tuple[dict, list[tuple[dict, dict]]]:
     """State at the surfaces' optimum (its confirmation runs ``run_ids``, their ``records`` at ``seeds``)
     and the first round's points (natural, coded; [] with the state done when the surfaces' slopes give
     no step); each point is queued once per seed. ``jacobian`` overrides ``config.polish_jacobian`` (the
     loop measures the slopes on the batteries where the surfaces predicted the optimum's batteries);
-    ``why`` is kept for the report."""
+    ``why`` is kept for the report. ``anchors`` ({"held", "parameters"}: natural points, with the batteries'
+    Jacobian only; ``analysis.anchored_points``) run in
+    the Jacobian's round, and the best of them that the batteries prefer to the optimum is where the steps
+    start (``machine``: the surfaces' optimum with a missed measured parameter held at its measured value)."""
     res = _residuals(config, design, modelled, theta, records, seeds)
     jacobian = PolishJacobian(jacobian or config.polish_jacobian)
     state = {"round": 0, "stage": PolishStage.JACOBIAN.value, "theta": dict(theta), "run_ids": list(run_ids), "seeds": list(seeds),
@@ -104,6 +112,9 @@ def start(config, design, modelled, theta: dict, run_ids: list[int], records: li
         h = CODED_STEP if u + CODED_STEP <= 1.0 else -CODED_STEP
         state["h"].append(h)
         points.append(_point(design, cal.move(design, theta, res.free, np.eye(len(res.free))[j] * h)))
+    if anchors:
+        state["anchors"] = [{"held": dict(a["held"]), "parameters": dict(a["parameters"])} for a in anchors]
+        points += [_point(design, a["parameters"]) for a in anchors]
     return state, points
 
 
@@ -132,11 +143,22 @@ def advance(config, design, modelled, state: dict, round_runs: list, max_steps: 
     if state["stage"] == PolishStage.JACOBIAN:
         J = np.array(state["J"])
         r0 = np.array(state["r"])
-        for j, (runs, recs) in enumerate(zip(points, records)):
+        k = len(state["h"])
+        for j, (runs, recs) in enumerate(zip(points[:k], records[:k])):
             res_j = _residuals(config, design, modelled, runs[0].natural, recs, seeds)
             if len(res_j.keys) == n_t:
                 J[:n_t, j] = (res_j.r[:n_t] - r0[:n_t]) / state["h"][j]
         state["J"] = J.tolist()
+        best = None
+        state["anchors"] = [dict(a) for a in state.get("anchors") or []] or None
+        for anchor, runs, recs in zip(state["anchors"] or [], points[k:], records[k:]):
+            res_a = _residuals(config, design, modelled, runs[0].natural, recs, seeds)
+            anchor["chi2"] = res_a.chi2() if len(res_a.keys) == n_t else None
+            if anchor["chi2"] is not None and anchor["chi2"] < (best[1].chi2() if best else state["chi2"]):
+                best = (runs, res_a, anchor)
+        if best is not None:
+            best[2]["taken"] = True
+            state = _take(design, state, best[0], best[1])
     else:
         taken = None
         for runs, recs in zip(points, records):
@@ -151,16 +173,7 @@ def advance(config, design, modelled, state: dict, round_runs: list, max_steps: 
                 state.update(shrink=state["shrink"] + 1, round=state["round"] + 1)
                 return state, [_shrunk(design, state)]
             return _done(state), []
-        runs, res_k = taken
-        natural = runs[0].natural
-        du = np.array([float(design.factor(n).to_coded(natural[n]) - design.factor(n).to_coded(state["theta"][n]))
-                       for n in state["free"]])
-        J = np.array(state["J"])
-        dr = res_k.r - np.array(state["r"])
-        J = J + np.outer(dr - J @ du, du) / float(du @ du)  # Broyden's good update
-        state.pop("run_id", None)
-        state.update(theta={n: float(v) for n, v in natural.items()}, run_ids=[r.id for r in runs],
-                     chi2=res_k.chi2(), r=res_k.r.tolist(), J=J.tolist(), steps=state["steps"] + 1)
+        state = _take(design, state, *taken)
     if state["steps"] >= max_steps:
         return _done(state), []
     points = _step_points(design, state)
@@ -168,6 +181,22 @@ def advance(config, design, modelled, state: dict, round_runs: list, max_steps: 
         return _done(state), []
     state.update(stage=PolishStage.STEP.value, round=state["round"] + 1)
     return state, points
+
+
+def _take(design, state: dict, runs: list, res_k) -> dict:
+    """The state moved to the point ``runs`` ran at (their residuals ``res_k``), J updated along the move."""
+    natural = runs[0].natural
+    du = np.array([float(design.factor(n).to_coded(natural[n]) - design.factor(n).to_coded(state["theta"][n]))
+                   for n in state["free"]])
+    J = np.array(state["J"])
+    dr = res_k.r - np.array(state["r"])
+    if float(du @ du) > 0.0:
+        J = J + np.outer(dr - J @ du, du) / float(du @ du)  # Broyden's good update
+    state = dict(state)
+    state.pop("run_id", None)
+    state.update(theta={n: float(v) for n, v in natural.items()}, run_ids=[r.id for r in runs],
+                 chi2=res_k.chi2(), r=res_k.r.tolist(), J=J.tolist(), steps=state["steps"] + 1)
+    return state
 
 
 def _done(state: dict) -> dict:
@@ -196,4 +225,4 @@ def summary(state: dict | None) -> dict[str, Any] | None:
         return {"steps": 0, "batteries": 0, "skipped": state["skipped"]}
     return {"chi2_start": state["chi2_start"], "chi2": state["chi2"], "steps": state["steps"],
             "batteries": state["batteries"], "parameters": state["theta"], "why": state.get("why"),
-            "jacobian": state.get("jacobian", PolishJacobian.BATTERIES.value)}
+            "jacobian": state.get("jacobian", PolishJacobian.BATTERIES.value), "anchors": state.get("anchors")}

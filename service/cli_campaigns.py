@@ -310,6 +310,13 @@ def _next_text(c: dict, last: dict | None, effect: str | None) -> str:
     return text + f"\nfactors ({len(new)}): " + ", ".join(f["name"] for f in new)
 
 
+def _anchor(anchor: dict) -> str:
+    """One line of a polish's anchor: what was held, its batteries' chi2, whether the steps started there."""
+    held = ", ".join(f"{name} {_fmt(value)}" for name, value in anchor["held"].items())
+    return (f"held at the measured {held}: chi2 {_fmt(anchor.get('chi2'))}, "
+            + ("the batteries preferred it and the steps started there" if anchor.get("taken") else "not better"))
+
+
 def campaign_report(args) -> int:
     params = {"number": args.iteration} if args.iteration else None
     r = _call(args, "GET", f"/campaigns/{args.id}/report", params=params)
@@ -347,7 +354,8 @@ def campaign_report(args) -> int:
             f"skipped, the surfaces predicted the confirmation ({polished['skipped']})" if polished.get("skipped") else
             f"{polished['steps']} Gauss-Newton step(s), {polished['batteries']} batteries, "
             f"chi2 {_fmt(polished['chi2_start'])} -> {_fmt(polished['chi2'])}, Jacobian from the "
-            f"{polished.get('jacobian') or 'batteries'}" + (f"; why: {polished['why']}" if polished.get("why") else "")))
+            f"{polished.get('jacobian') or 'batteries'}" + (f"; why: {polished['why']}" if polished.get("why") else "")
+            + "".join(f"\n  {_anchor(a)}" for a in polished.get("anchors") or [])))
     return _emit(args, r, text)
 
 

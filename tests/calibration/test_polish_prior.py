@@ -41,9 +41,23 @@ def test_a_prior_missed_after_the_added_effect_is_polished_with_slopes_from_the_
     assert state["why"].startswith(f"{FRICTION} calibrates") and "above its measured value" in state["why"]
     assert state["jacobian"] == "batteries"
     seeds = settings.confirmation_seeds
-    first_round = [r for r in added.runs if r.kind == "polish" and r.std_order <= len(state["free"]) * seeds]
-    assert len(first_round) == len(state["free"]) * seeds  # one point per free factor at every seed
+    first_round = [r for r in added.runs if r.kind == "polish" and r.std_order < 1000]
+    # one point per free factor and the anchor, at every seed
+    assert len(first_round) == (len(state["free"]) + 1) * seeds
     assert state["steps"] >= 1 and state["chi2"] < state["chi2_start"]
+
+
+def test_the_anchor_holds_the_missed_parameter_at_its_measurement_and_the_batteries_prefer_it(hertz_case):
+    """A local slope at 0.69 cannot see across the friction angle's plateau; the surfaces' optimum with
+    friction_pp held at its tilt test (0.52) is one point of its profile, and the batteries there fit
+    better than at the surfaces' optimum: the steps start from it."""
+    _, settings, result = hertz_case
+    state = result.iterations[1].optimum["polish"]
+    prior = next(p for p in settings.priors if p.parameter == FRICTION)
+    (anchor,) = state["anchors"]
+    assert anchor["held"] == {FRICTION: pytest.approx(prior.value)}
+    assert anchor["parameters"][FRICTION] == pytest.approx(prior.value)
+    assert anchor["taken"] and anchor["chi2"] < state["chi2_start"]
 
 
 def test_the_polished_optimum_meets_the_prior_and_lies_nearer_the_truth(hertz_case):

@@ -112,6 +112,15 @@ class SurrogateCheck(Out):
     next_design: DesignView | None = Field(None, description="the design the check proposes")
 
 
+class PolishAnchor(Out):
+    """One point of a missed measured parameter's profile that the polish ran (calibration.polish)."""
+
+    held: dict[str, float] = Field(description="the measured parameter held, at its measured value (clipped to its box)")
+    parameters: ParameterValues = Field(description=PARAMETERS)
+    chi2: float | None = Field(None, description="chi2 of its batteries (priors included); None before they ran")
+    taken: bool = Field(False, description="the steps started here: its batteries fit better than the optimum's")
+
+
 class Polish(Out):
     """Gauss-Newton steps on the batteries after the surfaces' optimum (calibration.polish.summary)."""
 
@@ -124,6 +133,8 @@ class Polish(Out):
     why: str | None = Field(None, description="why the iteration polished (calibration.machine: the surfaces "
                             "missed the confirmation, or an added effect misses the measurements at their optimum)")
     jacobian: str | None = Field(None, description="where the first Jacobian came from: 'surfaces' or 'batteries'")
+    anchors: list[PolishAnchor] | None = Field(None, description="the surfaces' optimum with a missed measured "
+                                               "parameter held at its measured value, run on the batteries")
 
 
 class Adequacy(Out):

@@ -34,7 +34,8 @@ export function verdictSection(report) {
     report.polish ? h("p", { className: "muted" }, h("b", {}, "Polishing on the batteries: "), report.polish.skipped
       ? `skipped, the surfaces predicted the confirmation (${humanText(report.polish.skipped)})`
       : `${report.polish.steps} Gauss-Newton step(s), ${report.polish.batteries} batteries, χ² ${fmt(report.polish.chi2_start, 3)} → ${fmt(report.polish.chi2, 3)}, Jacobian from the ${report.polish.jacobian || "batteries"}`
-        + (report.polish.why ? `; why: ${humanText(report.polish.why)}` : "")) : "");
+        + (report.polish.why ? `; why: ${humanText(report.polish.why)}` : "")
+        + (report.polish.anchors || []).map((a) => `; held at the measured ${Object.entries(a.held).map(([k, v]) => `${k} ${fmt(v, 3)}`).join(", ")}: χ² ${fmt(a.chi2, 3)}, ${a.taken ? "the batteries preferred it" : "not better"}`).join("")) : "");
 }
 
 // Parity per test. Quantities of one test have different units, so each is divided by its own
