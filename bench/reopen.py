@@ -11,7 +11,7 @@ from the polish. That the kept batteries are today's loop's own is checked after
 battery today's code would not have run appears there as a difference. Session 37 used it on tier B's
 hertz_strong (docs/diagnosis.md).
 
-At the polish (``--phase polish``) only an iteration whose polish was skipped can be reopened: a polished one's
+At the polish (``--phase polish``) only an iteration whose polish was skipped or took no step yet can be reopened: a polished one's
 optimum moved, and its confirmation batteries were no longer its final ones. At the report (``--phase report``) the
 polish is kept and the diagnosis batteries are dropped with the report: a change to how the diagnosis decides
 (``calibration.replicates``) is tried on the iteration's own optimum, its diagnosis batteries run again.
@@ -28,7 +28,7 @@ from pathlib import Path
 
 from sqlalchemy import create_engine, text
 
-AFTER = {"polish": ("report", "diagnosis", "diagnosed", "done"), "report": ("diagnosis", "diagnosed", "done")}
+AFTER = {"polish": ("polish", "report", "diagnosis", "diagnosed", "done"), "report": ("diagnosis", "diagnosed", "done")}
 
 
 def _json(value):
