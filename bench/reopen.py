@@ -66,8 +66,10 @@ def reopen(url: str, campaign_id: int, number: int, phase: str = "polish") -> di
             # a run's job is queued under "campaign:C:run:R" (service.campaigns.runner), and SQLite gives a new run
             # the highest id again: the dropped run's job keeps its results under a key no new run can ask for
             key = f"campaign:{campaign_id}:run:{run_id}"
+            earlier = db.execute(text("select count(*) from jobs where idempotency_key like :k"),
+                                 {"k": f"{key}:reopened%"}).scalar()
             db.execute(text("update jobs set idempotency_key = :new where idempotency_key = :k"),
-                       {"new": f"{key}:reopened", "k": key})
+                       {"new": f"{key}:reopened{earlier + 1}", "k": key})
             db.execute(text("delete from campaign_runs where id = :r"), {"r": run_id})
         for iteration_id in later:
             db.execute(text("delete from campaign_iterations where id = :i"), {"i": iteration_id})
