@@ -70,6 +70,10 @@ def reopen(url: str, campaign_id: int, number: int, phase: str = "polish") -> di
                                  {"k": f"{key}:reopened%"}).scalar()
             db.execute(text("update jobs set idempotency_key = :new where idempotency_key = :k"),
                        {"new": f"{key}:reopened{earlier + 1}", "k": key})
+            # and one not finished (queued, or running when the service was stopped) is not run for nothing
+            db.execute(text("update jobs set status = 'cancelled', finished_at = CURRENT_TIMESTAMP, error = :e "
+                            "where idempotency_key = :new and status in ('queued', 'running')"),
+                       {"new": f"{key}:reopened{earlier + 1}", "e": "its campaign run was dropped by bench/reopen.py"})
             db.execute(text("delete from campaign_runs where id = :r"), {"r": run_id})
         for iteration_id in later:
             db.execute(text("delete from campaign_iterations where id = :i"), {"i": iteration_id})
