@@ -86,10 +86,10 @@ def start(config, design, modelled, theta: dict, run_ids: list[int], records: li
     and the first round's points (natural, coded; [] with the state done when the surfaces' slopes give
     no step); each point is queued once per seed. ``jacobian`` overrides ``config.polish_jacobian`` (the
     loop measures the slopes on the batteries where the surfaces predicted the optimum's batteries);
-    ``why`` is kept for the report. ``anchors`` ({"held", "parameters"}: natural points, with the batteries'
-    Jacobian only; ``analysis.anchored_points``) run in
-    the Jacobian's round, and the best of them that the batteries prefer to the optimum is where the steps
-    start (``machine``: the surfaces' optimum with a missed measured parameter held at its measured value)."""
+    ``why`` is kept for the report. ``anchors`` ({"held", "parameters"}, natural; with the batteries'
+    Jacobian only; ``analysis.anchored_points``) run in the Jacobian's round, and the best of them that the
+    batteries prefer to the optimum is where the steps start (``machine``: the surfaces' optimum with a
+    missed measured parameter held at its measured value)."""
     res = _residuals(config, design, modelled, theta, records, seeds)
     jacobian = PolishJacobian(jacobian or config.polish_jacobian)
     state = {"round": 0, "stage": PolishStage.JACOBIAN.value, "theta": dict(theta), "run_ids": list(run_ids), "seeds": list(seeds),
