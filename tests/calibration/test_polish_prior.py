@@ -5,7 +5,8 @@ The case is tier B's hertz_strong in the stand-in world (tier A's seed 13, a sin
 hidden, E 1.09 GPa; friction_pp 0.604, its particle tilt test 0.52 +- 0.08). Once Hertz is added, the
 two-level surfaces over friction_pp's box put friction_pp at 0.69, 2.1 sd above the tilt test, while
 every confirmation battery lies inside the surfaces' prediction intervals: the surfaces' own slopes lead
-back to their own optimum, so only slopes measured on the batteries can move it. The numbers the test
+back to their own optimum, so the polish measures slopes on the batteries and tries one point of the
+parameter's profile, the surfaces' optimum with friction_pp held at its tilt test. The numbers the test
 holds come from the world (its truth) and the measured prior, not from a run of the loop.
 """
 from __future__ import annotations
@@ -71,4 +72,3 @@ def test_the_polished_optimum_meets_the_prior_and_lies_nearer_the_truth(hertz_ca
     assert abs(polished - truth) < abs(surfaces - truth)
     assert not added.report["conflicts"]["priors_pulled"]
     assert added.report["verdict"] == "calibrated"
-
