@@ -172,26 +172,36 @@ def confirmation_localisation(config, design, modelled, optimum: dict, confirmat
 
 
 def anchored_points(config, design, modelled, pulled: list[dict]) -> list[dict]:
-    """For each directly measured parameter the optimum misses (``pulled``: the localisation's
-    ``priors_pulled`` rows), the surfaces' optimum with that parameter held at its measured value (clipped to
-    its box) and the others free: one point of the parameter's profile, for the polish to try on the
-    batteries (``calibration.polish``). A point the constraints or the box do not allow is left out."""
-    out = []
-    for row in pulled:
-        name = row["parameter"]
-        if name not in design.names:
-            continue
+    """Points of the missed measured parameters' profiles for the polish to try on the batteries
+    (``calibration.polish``), each the surfaces' optimum with some parameters held at their measured values
+    (clipped to their boxes) and the others free: each missed one (``pulled``: the localisation's
+    ``priors_pulled`` rows) held alone, and, where more parameters were measured, every measured one held.
+    Why both: held alone, the others move to make up on the surfaces for what it gave up, and on a biased
+    surface they overshoot (tier B's hertz_strong, session 37: friction_pp held at 0.655 put friction_pw at
+    0.75 against its own tilt test's 0.5); held together they are the point the direct measurements define.
+    Each as {"held": {name: value}, "parameters": {...}}; a point the constraints or the box do not allow is
+    left out, and one already listed is not repeated."""
+    def held_value(name: str, value: float) -> float:
         f = design.factor(name)
-        value = min(max(float(row["value"]), f.low), f.high)
+        return min(max(float(value), f.low), f.high)
+
+    measured = {p.parameter: held_value(p.parameter, p.value) for p in config.priors if p.parameter in design.names}
+    sets = [{row["parameter"]: measured[row["parameter"]]} for row in pulled if row["parameter"] in measured]
+    if sets and len(measured) > 1:
+        sets.append(dict(measured))
+    out = []
+    for held in sets:
+        if any(point["held"] == held for point in out) or len(held) == len(design.names):
+            continue
         try:
             result = cal.optimum(modelled, default_relative=config.default_relative_uncertainty,
                                  discrepancy=config.model_discrepancy, priors=[p.model_dump() for p in config.priors],
-                                 constraints=list(config.constraints), fixed={name: value}, seed=config.seed,
+                                 constraints=list(config.constraints), fixed=held, seed=config.seed,
                                  allow_extrapolation=config.allow_extrapolation)
         except DoeError:
             continue
         if result.success:
-            out.append({"held": {name: value}, "parameters": {n: float(result.parameters[n]) for n in design.names}})
+            out.append({"held": held, "parameters": {n: float(result.parameters[n]) for n in design.names}})
     return out
 
 

@@ -190,7 +190,8 @@ def _polish(ctx: Context, it) -> Transition:
                 # left where it was): only slopes measured on the batteries can see past it
                 jacobian = PolishJacobian.BATTERIES
                 # and a local slope cannot see across a saturating response's plateau: where a measured
-                # parameter is missed, the surfaces' optimum with it held at its measured value runs too
+                # parameter is missed, the surfaces' optimum with it (and with every measured one) held at its
+                # measured value runs too
                 anchors = analysis.anchored_points(s, design, modelled, pulled)
             else:
                 why = f"the surfaces missed the confirmation batteries ({check.get('reason')})"

@@ -13,10 +13,11 @@ not. The method is cut into rounds a driver can queue and resume (``calibration.
   the steps taken, and k x m batteries are saved. Not where the surfaces predicted the optimum's
   batteries and the loop polishes for an added effect's misfit (``calibration.machine``): their slopes
   then lead back to their own optimum, and the forward differences are taken whatever the setting.
-  Where the reason is a directly measured parameter the optimum misses, the round also runs the surfaces'
-  optimum with that parameter held at its measured value (an anchor: one point of its profile), and the
-  steps start there if the batteries prefer it: a local slope cannot see across a saturating response's
-  plateau to the fit the measurement points at;
+  Where the reason is a directly measured parameter the optimum misses, the round also runs anchors,
+  points of its profile: the surfaces' optimum with that parameter held at its measured value, and with
+  every measured parameter held (``analysis.anchored_points``); the steps start at the best of them if
+  the batteries prefer it to the optimum: a local slope cannot see across a saturating response's
+  plateau to the fit the measurements point at;
 * rounds 1..: the bounded Gauss-Newton step minimising |r + J du| in the box, tried at full length,
   then (only if that did not lower the batteries' misfit) at half and at quarter length, one round
   each; the first that lowers it is taken and J is updated by Broyden's rule; ``polish_steps`` steps
