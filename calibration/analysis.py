@@ -178,7 +178,7 @@ def anchored_points(config, design, modelled, pulled: list[dict]) -> list[dict]:
     ``priors_pulled`` rows) held alone, and, where more parameters were measured, every measured one held.
     Why both: held alone, the others move to make up on the surfaces for what it gave up, and on a biased
     surface they overshoot (tier B's hertz_strong, session 37: friction_pp held at 0.655 put friction_pw at
-    0.75 against its own tilt test's 0.5); held together they are the point the direct measurements define.
+    0.75 against its own tilt test's 0.56); held together they are the point the direct measurements define.
     Each as {"held": {name: value}, "parameters": {...}}; a point the constraints or the box do not allow is
     left out, and one already listed is not repeated."""
     def held_value(name: str, value: float) -> float:
