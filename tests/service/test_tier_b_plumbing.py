@@ -173,8 +173,12 @@ def test_a_reopened_iteration_runs_on_to_the_same_campaign(tmp_path):
     diagnosis again. On the stand-in, which gives the same responses for the same point and seed, the campaign run
     on from its reopened first iteration must end as the one run straight through: the same ranking, effects,
     errors and stop, and the notebook loop must replay it (a battery today's loop would not have run would show)."""
-    sys.path.insert(0, str(ROOT / "bench"))
-    from reopen import reopen
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_reopen", ROOT / "bench" / "reopen.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    reopen = module.reopen
 
     data = tmp_path / "data"
     base = [sys.executable, str(ROOT / "bench" / "diagnosis_dem.py"), "--evaluator", "analytic", "--scenarios",
