@@ -672,3 +672,47 @@ def test_a_server_with_tokens_asks_for_one_and_the_page_sends_it(browser, tmp_pa
         assert not problems, problems
     finally:
         stop_service(svc.proc)
+
+
+def test_a_polish_for_a_missed_prior_says_why_and_lists_its_anchors(page, service, shots):
+    """Session 37: an added effect whose fit misses a measured parameter is polished on the batteries, with slopes
+    measured there and two anchors (the surfaces' optimum with the missed parameter held at its measured value,
+    and with every measured parameter held). The verdict card says why it polished, where the Jacobian came
+    from, and lists each anchor with its chi2 and whether the steps started there. The polish is the library
+    loop's in tier A seed 13's Hertz world (tests/service/polish_case.py), served in a real campaign's report."""
+    import time
+
+    from conftest_s2 import campaign_body
+    from polish_case import hertz_polish
+
+    polish = hertz_polish()
+    assert polish["jacobian"] == "batteries" and len(polish["anchors"]) == 2
+    material = service.api("GET", "/materials", params={"limit": 200}).json()["items"]
+    thesis = next(m for m in material if m["name"] == "thesis-coarse-aggregate")
+    cid = service.api("POST", "/campaigns", json=campaign_body(thesis["id"], name="polished")).json()["id"]
+    assert service.api("POST", f"/campaigns/{cid}/start").status_code < 300
+    deadline = time.monotonic() + TIMEOUT_MS / 1000
+    while service.api("GET", f"/campaigns/{cid}").json()["status"] != "completed":
+        assert time.monotonic() < deadline, "the campaign did not complete"
+        time.sleep(0.5)
+    report = service.api("GET", f"/campaigns/{cid}/report", params={"number": 1}).json()
+    page.route(re.compile(rf".*/api/v1/campaigns/{cid}/report\?number=1$"),
+               lambda route: route.fulfill(json={**report, "polish": polish}))
+    open_view(page, service, f"#/campaigns/{cid}")
+    expect_text(page, "section.verdict .polish p", "Polishing on the batteries: ")
+    line = page.locator("section.verdict .polish p").inner_text()
+    assert f"{polish['steps']} Gauss-Newton step(s), {polish['batteries']} batteries" in line
+    assert "Jacobian from the batteries" in line and f"why: {polish['why']}" in line
+
+    def three(value):  # core.js fmt(value, 3)
+        return f"{float(f'{value:.3g}'):g}"
+
+    items = page.locator("section.verdict .polish ul.anchors li")
+    assert items.count() == len(polish["anchors"])
+    for k, anchor in enumerate(polish["anchors"]):
+        text = items.nth(k).inner_text()
+        held = ", ".join(f"{name} {three(value)}" for name, value in anchor["held"].items())
+        assert text.startswith(f"held at the measured {held}: χ² {three(anchor['chi2'])}, "), text
+        assert ("the steps started here" in text) == bool(anchor.get("taken")), text
+        assert ("taken" in (items.nth(k).get_attribute("class") or "")) == bool(anchor.get("taken"))
+    section_shot(page, shots, "Verdict", "campaign-polish-anchors")

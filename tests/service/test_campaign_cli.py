@@ -280,3 +280,25 @@ def test_campaign_retry_of_a_campaign_that_did_not_fail_is_a_message(server, cap
     cid = json.loads(out)["id"]
     code, _, err = run(capsys, "campaign", "retry", str(cid), "--url", url)
     assert code == 2 and "HTTP 409" in err and "only a failed campaign is retried" in err
+
+
+def test_the_report_says_why_it_polished_and_prints_each_anchor(capsys, monkeypatch):
+    """``demcal campaign report`` on an iteration polished for a missed prior (session 37): the polish line says
+    why and where the Jacobian came from, and each anchor gets a line of its own. The report is the library
+    loop's in tier A seed 13's Hertz world (tests/service/polish_case.py), served in place of the HTTP call."""
+    from polish_case import hertz_polish, hertz_report
+
+    import service.cli_campaigns as cli
+
+    served = {**hertz_report(), "polish": hertz_polish(), "campaign_id": 7, "iteration": 2}
+    monkeypatch.setattr(cli, "_call", lambda args, method, path, **kw: served if path == "/campaigns/7/report" else None)
+    code, out, _ = run(capsys, "campaign", "report", "7", "--url", "http://127.0.0.1:9")
+    assert code == 0, out
+    polish = served["polish"]
+    head = next(line for line in out.splitlines() if line.startswith("polishing on the batteries: "))
+    assert "Jacobian from the batteries" in head and head.endswith(f"why: {polish['why']}")
+    anchors = [line.strip() for line in out.splitlines() if line.startswith("  held at the measured ")]
+    assert len(anchors) == len(polish["anchors"])
+    for line, anchor in zip(anchors, polish["anchors"]):
+        assert all(name in line for name in anchor["held"]), line
+        assert line.endswith("the steps started there") == bool(anchor.get("taken")), line

@@ -31,11 +31,25 @@ export function verdictSection(report) {
     // measurements stored despite a likely unit slip: repeated wherever they are used
     ...(report.warnings || []).map((w) => h("p", { className: "warning" }, w)),
     report.surrogate_check ? h("p", { className: "muted" }, h("b", {}, "Response surfaces at the optimum: "), `${report.surrogate_check.verdict}: ${humanText(report.surrogate_check.reason)}`) : "",
-    report.polish ? h("p", { className: "muted" }, h("b", {}, "Polishing on the batteries: "), report.polish.skipped
-      ? `skipped, the surfaces predicted the confirmation (${humanText(report.polish.skipped)})`
-      : `${report.polish.steps} Gauss-Newton step(s), ${report.polish.batteries} batteries, χ² ${fmt(report.polish.chi2_start, 3)} → ${fmt(report.polish.chi2, 3)}, Jacobian from the ${report.polish.jacobian || "batteries"}`
-        + (report.polish.why ? `; why: ${humanText(report.polish.why)}` : "")
-        + (report.polish.anchors || []).map((a) => `; held at the measured ${Object.entries(a.held).map(([k, v]) => `${k} ${fmt(v, 3)}`).join(", ")}: χ² ${fmt(a.chi2, 3)}, ${a.taken ? "the batteries preferred it" : "not better"}`).join("")) : "");
+    report.polish ? polishLines(report.polish) : "");
+}
+
+// How the optimum was polished on the batteries, and why; each anchor (a point of a missed measured
+// parameter's profile, run beside the Jacobian: calibration.analysis.anchored_points) on a line of its own.
+function polishLines(polish) {
+  if (polish.skipped) {
+    return h("p", { className: "muted polish" }, h("b", {}, "Polishing on the batteries: "),
+      `skipped, the surfaces predicted the confirmation (${humanText(polish.skipped)})`);
+  }
+  const held = (a) => Object.entries(a.held).map(([k, v]) => `${k} ${fmt(v, 3)}`).join(", ");
+  return h("div", { className: "polish" },
+    h("p", { className: "muted" }, h("b", {}, "Polishing on the batteries: "),
+      `${polish.steps} Gauss-Newton step(s), ${polish.batteries} batteries, χ² ${fmt(polish.chi2_start, 3)} → ${fmt(polish.chi2, 3)}, `
+      + `Jacobian from the ${polish.jacobian || "batteries"}` + (polish.why ? `; why: ${humanText(polish.why)}` : "")),
+    (polish.anchors || []).length ? h("ul", { className: "anchors muted" }, polish.anchors.map((a) => h("li", {
+      className: a.taken ? "taken" : "" }, `held at the measured ${held(a)}: `
+      + (a.chi2 === null || a.chi2 === undefined ? "its batteries have not run yet" : `χ² ${fmt(a.chi2, 3)}, `)
+      + (a.chi2 === null || a.chi2 === undefined ? "" : a.taken ? "the batteries preferred it: the steps started here" : "not better than the optimum")))) : "");
 }
 
 // Parity per test. Quantities of one test have different units, so each is divided by its own
