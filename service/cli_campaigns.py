@@ -311,10 +311,15 @@ def _next_text(c: dict, last: dict | None, effect: str | None) -> str:
 
 
 def _anchor(anchor: dict) -> str:
-    """One line of a polish's anchor: what was held, its batteries' chi2, whether the steps started there."""
+    """One line of a polish's anchor: what was held, its batteries' chi2, whether the steps started there, and
+    the step tried from it (calibration.polish._anchor_steps)."""
     held = ", ".join(f"{name} {_fmt(value)}" for name, value in anchor["held"].items())
-    return (f"held at the measured {held}: chi2 {_fmt(anchor.get('chi2'))}, "
+    line = (f"held at the measured {held}: chi2 {_fmt(anchor.get('chi2'))}, "
             + ("the batteries preferred it and the steps started there" if anchor.get("taken") else "not better"))
+    if anchor.get("step_chi2") is not None:
+        line += (f"; one step from it: chi2 {_fmt(anchor['step_chi2'])}, "
+                 + ("the best trial, the polish went on from there" if anchor.get("step_taken") else "not taken"))
+    return line
 
 
 def campaign_report(args) -> int:

@@ -715,4 +715,8 @@ def test_a_polish_for_a_missed_prior_says_why_and_lists_its_anchors(page, servic
         assert text.startswith(f"held at the measured {held}: χ² {three(anchor['chi2'])}, "), text
         assert ("the steps started here" in text) == bool(anchor.get("taken")), text
         assert ("taken" in (items.nth(k).get_attribute("class") or "")) == bool(anchor.get("taken"))
+        if anchor.get("step_chi2") is not None:  # an anchor not taken gets a step of its own (session 38)
+            assert f"; one step from it: χ² {three(anchor['step_chi2'])}, " in text, text
+            assert ("the polish went on from there" in text) == bool(anchor.get("step_taken")), text
+    assert any(a.get("step_chi2") is not None for a in polish["anchors"])
     section_shot(page, shots, "Verdict", "campaign-polish-anchors")

@@ -119,6 +119,10 @@ class PolishAnchor(Out):
     parameters: ParameterValues = Field(description=PARAMETERS)
     chi2: float | None = Field(None, description="chi2 of its batteries (priors included); None before they ran")
     taken: bool = Field(False, description="the steps started here: its batteries fit better than the optimum's")
+    step_chi2: float | None = Field(None, description="chi2 of one Gauss-Newton step from it, tried beside the "
+                                    "optimum's first step when it was not taken; None when none was tried")
+    step_taken: bool = Field(False, description="that step fitted the batteries best of the round's trials and "
+                             "the polish went on from there")
 
 
 class Polish(Out):

@@ -49,7 +49,9 @@ function polishLines(polish) {
     (polish.anchors || []).length ? h("ul", { className: "anchors muted" }, polish.anchors.map((a) => h("li", {
       className: a.taken ? "taken" : "" }, `held at the measured ${held(a)}: `
       + (a.chi2 === null || a.chi2 === undefined ? "its batteries have not run yet" : `χ² ${fmt(a.chi2, 3)}, `)
-      + (a.chi2 === null || a.chi2 === undefined ? "" : a.taken ? "the batteries preferred it: the steps started here" : "not better than the optimum")))) : "");
+      + (a.chi2 === null || a.chi2 === undefined ? "" : a.taken ? "the batteries preferred it: the steps started here" : "not better than the optimum")
+      + (a.step_chi2 === null || a.step_chi2 === undefined ? "" : `; one step from it: χ² ${fmt(a.step_chi2, 3)}, `
+        + (a.step_taken ? "the best trial: the polish went on from there" : "not taken"))))) : "");
 }
 
 // Parity per test. Quantities of one test have different units, so each is divided by its own
