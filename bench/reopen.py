@@ -12,11 +12,15 @@ battery today's code would not have run appears there as a difference. Session 3
 hertz_strong (docs/diagnosis.md).
 
 At the polish (``--phase polish``) only an iteration whose polish was skipped or took no step yet can be reopened: a polished one's
-optimum moved, and its confirmation batteries were no longer its final ones. At the report (``--phase report``) the
+optimum moved, and its confirmation batteries were no longer its final ones. ``--keep-jacobian`` keeps such a polish's
+first round (the Jacobian's points and the anchors, measured on the batteries) and drops only the rounds after it: the
+state goes back to that round finished, so today's rule decides the steps from the same batteries (session 38: the
+anchors' own steps, tried without rerunning hertz_strong's 48 batteries of round 0). At the report (``--phase report``) the
 polish is kept and the diagnosis batteries are dropped with the report: a change to how the diagnosis decides
 (``calibration.replicates``) is tried on the iteration's own optimum, its diagnosis batteries run again.
 
     python3 bench/reopen.py --data-dir /work/tierb/s37/hs2 --campaign 1 --iteration 2
+    python3 bench/reopen.py --data-dir /work/tierb/s38/hs --campaign 1 --iteration 2 --keep-jacobian
     python3 bench/reopen.py --data-dir /work/tierb/s37/weak --campaign 1 --iteration 1 --phase report
 """
 from __future__ import annotations
@@ -35,9 +39,27 @@ def _json(value):
     return json.loads(value) if isinstance(value, (str, bytes)) else value
 
 
-def reopen(url: str, campaign_id: int, number: int, phase: str = "polish") -> dict:
+# a polish run's std_order is round x ROUND + index + 1 (calibration.awaiting)
+ROUND = 1000
+
+
+def _rewound(polish: dict) -> dict:
+    """A polish state that took no step, back to its first round (the Jacobian's) queued: its start point, its
+    anchors as planned. ``calibration.polish.advance`` recomputes the Jacobian's target rows and the anchors' chi2
+    from that round's batteries, so nothing the later rounds decided is kept."""
+    if polish.get("steps") or polish.get("jacobian") != "batteries" or polish.get("stage") not in ("step", "done"):
+        raise SystemExit("--keep-jacobian: only a polish whose Jacobian round was measured on the batteries and "
+                         "that took no step can go back to that round")
+    state = {k: v for k, v in polish.items() if k not in ("direction", "shrink", "trials")}
+    state.update(stage="jacobian", round=0, batteries=0, steps=0)
+    if state.get("anchors"):
+        state["anchors"] = [{"held": a["held"], "parameters": a["parameters"]} for a in state["anchors"]]
+    return state
+
+
+def reopen(url: str, campaign_id: int, number: int, phase: str = "polish", keep_jacobian: bool = False) -> dict:
     """Reopen iteration ``number`` of campaign ``campaign_id`` at ``phase`` ("polish" or "report"); what was
-    dropped."""
+    dropped. ``keep_jacobian`` (at the polish): keep the polish's first round and its state at that round."""
     engine = create_engine(url)
     with engine.begin() as db:
         campaign = db.execute(text("select status from campaigns where id = :c"), {"c": campaign_id}).first()
@@ -51,9 +73,15 @@ def reopen(url: str, campaign_id: int, number: int, phase: str = "polish") -> di
             raise SystemExit(f"iteration {number} is at its {it[1]} phase: nothing to reopen before the {phase}")
         optimum = dict(_json(it[2]) or {})
         polish = (optimum.pop("polish", None) or {}) if phase == "polish" else (optimum.get("polish") or {})
-        if phase == "polish" and (polish.get("steps") or "surrogate_parameters" in optimum):
+        if phase == "polish" and (polish.get("steps") or "surrogate_parameters" in optimum) and not keep_jacobian:
             raise SystemExit(f"iteration {number} was polished (its optimum moved off the surfaces'): only a skipped "
                              "polish can be reopened")
+        if keep_jacobian:
+            if phase != "polish":
+                raise SystemExit("--keep-jacobian reopens at the polish")
+            # no step was taken, so the polished optimum is the surfaces' own
+            optimum["parameters"] = optimum.pop("surrogate_parameters", optimum.get("parameters"))
+            optimum["polish"] = _rewound(polish)
         dropped_kinds = ("polish", "diagnosis") if phase == "polish" else ("diagnosis",)
         later = [row[0] for row in db.execute(text(
             "select id from campaign_iterations where campaign_id = :c and number > :n"), {"c": campaign_id, "n": number})]
@@ -61,7 +89,8 @@ def reopen(url: str, campaign_id: int, number: int, phase: str = "polish") -> di
             "select id from campaign_runs where iteration_id in (select id from campaign_iterations where "
             "campaign_id = :c and number > :n)"), {"c": campaign_id, "n": number})]
         dropped += [row[0] for kind in dropped_kinds for row in db.execute(text(
-            "select id from campaign_runs where iteration_id = :i and kind = :k"), {"i": it[0], "k": kind})]
+            "select id from campaign_runs where iteration_id = :i and kind = :k and std_order >= :o"),
+            {"i": it[0], "k": kind, "o": ROUND if keep_jacobian and kind == "polish" else 0})]
         for run_id in dropped:
             # a run's job is queued under "campaign:C:run:R" (service.campaigns.runner), and SQLite gives a new run
             # the highest id again: the dropped run's job keeps its results under a key no new run can ask for
@@ -93,9 +122,12 @@ def main() -> None:
     ap.add_argument("--campaign", type=int, required=True)
     ap.add_argument("--iteration", type=int, required=True)
     ap.add_argument("--phase", choices=sorted(AFTER), default="polish", help="where the iteration starts again")
+    ap.add_argument("--keep-jacobian", action="store_true",
+                    help="at the polish: keep its first round (the Jacobian's batteries and the anchors) when it took "
+                         "no step, and decide the steps again from them")
     args = ap.parse_args()
     url = args.url or f"sqlite:///{Path(args.data_dir) / 'demcal.db'}"
-    print(json.dumps(reopen(url, args.campaign, args.iteration, args.phase), indent=1))
+    print(json.dumps(reopen(url, args.campaign, args.iteration, args.phase, args.keep_jacobian), indent=1))
 
 
 if __name__ == "__main__":
