@@ -199,3 +199,26 @@ def test_a_reopened_iteration_runs_on_to_the_same_campaign(tmp_path):
     assert rows[0]["campaign_id"] == rows[1]["campaign_id"] == 1
     with pytest.raises(SystemExit, match="has no iteration 9"):
         reopen(f"sqlite:///{data / 'demcal.db'}", 1, 9, "report")
+
+
+def test_keep_jacobian_rewinds_only_a_polish_that_took_no_step():
+    """``bench/reopen.py --keep-jacobian`` (session 38) sends a polish back to its first round finished: only one
+    whose Jacobian was measured on the batteries and that took no step (its optimum is still the surfaces', so the
+    round's batteries are what today's loop would queue again); what the later rounds decided is dropped."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_reopen", ROOT / "bench" / "reopen.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    done = {"stage": "done", "round": 3, "jacobian": "batteries", "steps": 0, "batteries": 72, "shrink": 2,
+            "direction": [0.1, -0.1], "theta": {"friction_pp": 0.9}, "chi2": 28.4, "chi2_start": 28.4,
+            "anchors": [{"held": {"friction_pp": 0.655}, "parameters": {"friction_pp": 0.655}, "chi2": 32.5,
+                         "step_chi2": 30.0}]}
+    state = module._rewound(done)
+    assert (state["stage"], state["round"], state["batteries"], state["steps"]) == ("jacobian", 0, 0, 0)
+    assert "direction" not in state and "shrink" not in state
+    assert state["anchors"] == [{"held": {"friction_pp": 0.655}, "parameters": {"friction_pp": 0.655}}]
+    assert state["theta"] == done["theta"] and state["chi2_start"] == done["chi2_start"]
+    for refused in ({**done, "steps": 1}, {**done, "jacobian": "surfaces"}, {**done, "stage": "jacobian"}):
+        with pytest.raises(SystemExit, match="keep-jacobian"):
+            module._rewound(refused)
