@@ -84,6 +84,24 @@ def section_shot(page, shots, title: str, name: str):
     card.screenshot(path=str(shots / f"{name}.png"))
 
 
+def thesis_campaign_completed(service, name: str) -> int:
+    """A campaign on the thesis aggregate (conftest_s2's settings) created, started and waited for through the API;
+    its id. For the tests that serve a page an iteration's report with one part made elsewhere."""
+    import time
+
+    from conftest_s2 import campaign_body
+
+    material = service.api("GET", "/materials", params={"limit": 200}).json()["items"]
+    thesis = next(m for m in material if m["name"] == "thesis-coarse-aggregate")
+    cid = service.api("POST", "/campaigns", json=campaign_body(thesis["id"], name=name)).json()["id"]
+    assert service.api("POST", f"/campaigns/{cid}/start").status_code < 300
+    deadline = time.monotonic() + TIMEOUT_MS / 1000
+    while service.api("GET", f"/campaigns/{cid}").json()["status"] != "completed":
+        assert time.monotonic() < deadline, "the campaign did not complete"
+        time.sleep(0.5)
+    return cid
+
+
 def test_campaign_loop_create_start_diagnose_add_effect_error_falls(page, service, shots):
     """The loop as a user walks it: form -> Start -> failing targets and the effect ranking -> add the
     effect -> iteration 2 completes on its own (live refresh) and its error is below iteration 1's."""
@@ -593,19 +611,9 @@ def test_a_candidate_its_probe_could_not_judge_is_marked_not_ruled_out(page, ser
     probes have no scatter, so the campaign's own diagnosis is served with its unseen Hertz row given the
     probe tier B's weak Hertz world measured (docs/results/tier_b_weak.json: scatter 1.17 of the signature,
     LM 0-259 at the top)."""
-    import time
-
     from calibration.unseen import detectable_lm
-    from conftest_s2 import campaign_body
 
-    material = service.api("GET", "/materials", params={"limit": 200}).json()["items"]
-    thesis = next(m for m in material if m["name"] == "thesis-coarse-aggregate")
-    cid = service.api("POST", "/campaigns", json=campaign_body(thesis["id"], name="noisy probe")).json()["id"]
-    assert service.api("POST", f"/campaigns/{cid}/start").status_code < 300
-    deadline = time.monotonic() + TIMEOUT_MS / 1000
-    while service.api("GET", f"/campaigns/{cid}").json()["status"] != "completed":
-        assert time.monotonic() < deadline, "the campaign did not complete"
-        time.sleep(0.5)
+    cid = thesis_campaign_completed(service, "noisy probe")
     report = service.api("GET", f"/campaigns/{cid}/report", params={"number": 1}).json()
     diagnosis = report["diagnosis"]
     significant = {r["effect"] for r in diagnosis["ranking"] if r["significant"]}
@@ -680,21 +688,11 @@ def test_a_polish_for_a_missed_prior_says_why_and_lists_its_anchors(page, servic
     and with every measured parameter held). The verdict card says why it polished, where the Jacobian came
     from, and lists each anchor with its chi2 and whether the steps started there. The polish is the library
     loop's in tier A seed 13's Hertz world (tests/service/polish_case.py), served in a real campaign's report."""
-    import time
-
-    from conftest_s2 import campaign_body
     from polish_case import hertz_polish
 
     polish = hertz_polish()
     assert polish["jacobian"] == "batteries" and len(polish["anchors"]) == 2
-    material = service.api("GET", "/materials", params={"limit": 200}).json()["items"]
-    thesis = next(m for m in material if m["name"] == "thesis-coarse-aggregate")
-    cid = service.api("POST", "/campaigns", json=campaign_body(thesis["id"], name="polished")).json()["id"]
-    assert service.api("POST", f"/campaigns/{cid}/start").status_code < 300
-    deadline = time.monotonic() + TIMEOUT_MS / 1000
-    while service.api("GET", f"/campaigns/{cid}").json()["status"] != "completed":
-        assert time.monotonic() < deadline, "the campaign did not complete"
-        time.sleep(0.5)
+    cid = thesis_campaign_completed(service, "polished")
     report = service.api("GET", f"/campaigns/{cid}/report", params={"number": 1}).json()
     page.route(re.compile(rf".*/api/v1/campaigns/{cid}/report\?number=1$"),
                lambda route: route.fulfill(json={**report, "polish": polish}))
