@@ -32,15 +32,14 @@ from pathlib import Path
 
 from sqlalchemy import create_engine, text
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from calibration.awaiting import ROUND  # noqa: E402  (a polish run's std_order: round x ROUND + index + 1)
+
 AFTER = {"polish": ("polish", "report", "diagnosis", "diagnosed", "done"), "report": ("diagnosis", "diagnosed", "done")}
 
 
 def _json(value):
     return json.loads(value) if isinstance(value, (str, bytes)) else value
-
-
-# a polish run's std_order is round x ROUND + index + 1 (calibration.awaiting)
-ROUND = 1000
 
 
 def _rewound(polish: dict) -> dict:
