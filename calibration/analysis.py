@@ -8,7 +8,7 @@ the results are the plain JSON an iteration stores, whoever stores it (``calibra
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from calibration import fits
 from calibration import stats
 from calibration.fitting import TargetModel
 from calibration.localise import ALPHA, localise
-from calibration.intervals import parameter_intervals
+from calibration.intervals import parameter_intervals, widen_to_measured
 from calibration.records import Measured
 from calibration.verdict import failing_tests, verdict
 from calibration.vocabulary import DiagnosisVerdict
@@ -104,9 +104,11 @@ def analyse(config, design_dict: dict, runs, targets) -> dict[str, Any]:
 
 
 def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[list[dict]],
-           confirmation_seeds: list[int]) -> dict[str, Any]:
+           confirmation_seeds: list[int], measured: Sequence[tuple[dict, list[list[dict]]]] = ()) -> dict[str, Any]:
     """The report step, on one fit: the surface check (doe.confirm), the localisation of the
-    confirmation batteries' mean (one record list per seed) against the measurements, and the one verdict."""
+    confirmation batteries' mean (one record list per seed) against the measurements, and the one verdict.
+    ``measured``: other points measured on batteries at the same seeds (natural parameters, one record list per
+    seed; ``polish.measured_points``), to which the intervals are widened where the data do not reject them."""
     design, models = fit(design_dict, runs, targets)
     modelled = [m for m in models if m.fit is not None]
     conf = cal.confirm(modelled, confirmation_records, confirmation_seeds)
@@ -122,10 +124,25 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
                                 seed=config.seed)
         intervals = parameter_intervals(residuals, design, theta, localisation.lack_of_fit,
                                         discrepancy=config.model_discrepancy)
+        intervals = widen_to_measured(intervals, design, theta, residuals.chi2(),
+                                      _measured_chi2(config, design, modelled, priors, measured, confirmation_seeds,
+                                                     len(residuals.keys)))
     return _json_safe({"surrogate_check": surrogate,
                        "localisation": localisation.to_dict() if localisation is not None else None,
                        "intervals": intervals if localisation is not None else None,
                        "simulator_sd": {m.key.name: conf.sim_sd.get(m.key) for m in modelled}})
+
+
+def _measured_chi2(config, design, modelled, priors, measured, seeds, n_targets: int) -> list[tuple[dict, float]]:
+    """(parameters, chi2 with the priors) of each measured point whose batteries gave every target the
+    optimum's did: the same objective as ``polish``'s, so the two compare."""
+    out = []
+    for natural, point_records in measured:
+        res = cal.residuals_at(design, modelled, dict(natural), cal.confirm(modelled, point_records, seeds), priors,
+                               config.default_relative_uncertainty, config.model_discrepancy)
+        if len(res.keys) == n_targets:
+            out.append((dict(natural), res.chi2()))
+    return out
 
 
 def _surrogate_check(config, modelled, optimum: dict, conf) -> dict[str, Any]:

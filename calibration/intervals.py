@@ -180,6 +180,52 @@ def parameter_intervals(res, design, theta: dict[str, float], lack_of_fit, level
                      + "; widened by chi2/dof when the lack of fit fails; cut at the factor's box"}
 
 
+def widen_to_measured(intervals: dict[str, Any], design, theta: dict[str, float], chi2_best: float,
+                      points: list[tuple[dict, float]]) -> dict[str, Any]:
+    """The intervals widened to every point measured on the batteries that the likelihood ratio does not reject.
+
+    The intervals above are Wald intervals on the surfaces' slopes at the optimum: they take the objective as
+    the quadratic those slopes define. Where a polish measured other points on the batteries themselves (the
+    surfaces' optimum, the Jacobian's points, the anchors, the steps tried; ``polish.measured_points``), each is a
+    measured section of the objective the slopes may not see: on DEM's hertz_strong the batteries fitted the
+    targets as well at friction_pp 0.655 as at 0.908, a valley along friction_pp-friction_pw that the surfaces'
+    curvature closed. A profile-likelihood interval at this level holds every value where the profile's chi2
+    stays within D = scale x quantile^2 of the best (3.84 for 95 % with a passing lack of fit: the Wald interval
+    +- quantile x sd of a quadratic objective); the profile lies at or below the chi2 of any point, so a point
+    within D of the best has each of its parameter values inside the profile interval, and the interval is
+    widened to hold it. A point beyond D is not: along the line from the best to it, a quadratic with its
+    minimum at the best (the Wald interval's own assumption, here on measured chi2) reaches D at the fraction
+    t = sqrt(D / (chi2_p - chi2_best)) of the way, and the interval is widened to that point of the line.
+    Nothing is extrapolated beyond a measured point, and the intervals stay cut at the factor's box.
+    ``points``: (natural parameters, the batteries' chi2 with the priors, as ``chi2_best``)."""
+    if not intervals or not points:
+        return intervals
+    out = dict(intervals)
+    out["parameters"] = {name: dict(row) for name, row in intervals["parameters"].items()}
+    threshold = float(intervals["scale"]) * float(intervals["quantile"]) ** 2
+    widened = set()
+    for natural, chi2 in points:
+        excess = float(chi2) - float(chi2_best)
+        t = 1.0 if excess <= threshold else math.sqrt(threshold / excess)
+        for name, row in out["parameters"].items():
+            if row.get("low") is None or name not in natural:
+                continue
+            f = design.factor(name)
+            reach = float(theta[name]) + t * (float(natural[name]) - float(theta[name]))
+            for side, beyond, clip in (("low", reach < row["low"], max(reach, f.low)),
+                                       ("high", reach > row["high"], min(reach, f.high))):
+                if beyond and clip != row[side]:
+                    row.setdefault("wald", {"low": row["low"], "high": row["high"]})
+                    row[side] = float(clip)
+                    widened.add(name)
+    out["measured_points"] = {"count": len(points), "chi2_best": float(chi2_best), "threshold": threshold,
+                              "widened": sorted(widened)}
+    out["about"] = intervals["about"] + ("; widened to every point measured on the batteries within the "
+                                         "likelihood ratio's threshold of the best, and along the line to each "
+                                         "point beyond it as far as a quadratic through the two would allow")
+    return out
+
+
 def covers(intervals: dict[str, Any], truth: dict[str, float]) -> dict[str, bool]:
     """For each parameter with an interval and a known true value: does the interval hold it?"""
     out = {}

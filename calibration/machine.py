@@ -257,8 +257,10 @@ def _report(ctx: Context, it) -> Transition:
     confirmations = polish.final_runs(it)
     seeds = [r.seed for r in confirmations]
     design_runs = runs_of(it, RunKind.DESIGN)
+    state = (it.optimum or {}).get("polish")
+    measured = [(natural, records(runs)) for natural, runs in polish.measured_points(state, it.runs)]
     assessment = analysis.assess(s, it.design["doe"], design_runs, ctx.targets, it.optimum,
-                                 records(confirmations), seeds)
+                                 records(confirmations), seeds, measured)
     polished = polish.summary((it.optimum or {}).get("polish"))
     assessment["polished"] = bool(polished and polished["steps"] > 0)
     report = build_report(s, it.models, it.optimum, confirmations, ctx.targets, assessment,

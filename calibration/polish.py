@@ -253,6 +253,26 @@ def final_runs(it) -> list:
     return sorted((r for r in it.runs if r.kind == RunKind.CONFIRMATION), key=lambda r: r.std_order)
 
 
+def measured_points(state: dict | None, runs) -> list[tuple[dict, list]]:
+    """Every point the polish measured at all of its seeds, the surfaces' optimum (its confirmation) first:
+    (natural parameters, its runs in seed order), for the report's intervals (``intervals.widen_to_measured``).
+    A point whose runs are not all there at the polish's seeds, with responses, is left out."""
+    if not state or "skipped" in state:
+        return []
+    seeds = seeds_of(state)
+    m = len(seeds)
+    groups: dict[tuple[int, int], list] = {}
+    for run in sorted((r for r in runs if r.kind == RunKind.POLISH), key=lambda r: r.std_order):
+        rnd = run.std_order // ROUND
+        groups.setdefault((rnd, (run.std_order - rnd * ROUND - 1) // m), []).append(run)
+    confirmation = sorted((r for r in runs if r.kind == RunKind.CONFIRMATION), key=lambda r: r.std_order)
+    out = []
+    for group in [confirmation] + [groups[k] for k in sorted(groups)]:
+        if [r.seed for r in group] == seeds and all(r.responses for r in group):
+            out.append((dict(group[0].natural), group))
+    return out
+
+
 def summary(state: dict | None) -> dict[str, Any] | None:
     """What the report shows of the polishing."""
     if not state:

@@ -79,6 +79,10 @@ def _parameters(report: dict[str, Any], factors: list[dict], parameter_std: dict
     if intervals.get("scaled_by_misfit"):
         text += (f'<p class="note">intervals widened by chi2/dof {escape(_f(intervals.get("scale")))}: the model '
                  "misses the measurements by more than their noise</p>")
+    measured = intervals.get("measured_points") or {}
+    if measured.get("widened"):
+        text += (f'<p class="note">widened to the points measured on the batteries that fit within chi2 '
+                 f'{escape(_f(measured.get("threshold")))} of the best: {escape(", ".join(measured["widened"]))}</p>')
     for trade in intervals.get("trades") or []:
         text += f'<p class="note">{escape(trade["message"])}</p>'
     if fixed:

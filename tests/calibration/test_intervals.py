@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats as sps
 
-from calibration.intervals import TRADE_CORRELATION, covers, parameter_intervals
+from calibration.intervals import TRADE_CORRELATION, covers, parameter_intervals, widen_to_measured
 from calibration.stats import LackOfFit
 
 
@@ -166,3 +166,61 @@ def test_surface_standard_error_at_the_centre_of_an_orthogonal_design():
     y = 5 + 2.0 * d.coded[:, 0] - 1.0 * d.coded[:, 1] + rng.normal(0, 0.3, d.n_runs)
     fit = fit_response(d, y, terms=["A", "B"], curvature=False)
     assert surface_standard_error(fit, {"a": 2.0, "b": 20.0}) == pytest.approx(math.sqrt(fit.mse / d.n_runs))
+
+
+def _valley():
+    """A quadratic objective chi2 = d^T H d (natural units) whose two parameters trade (correlation -0.95 of
+    H's inverse), and Wald intervals taken from its diagonal alone: the view of slopes that miss the valley."""
+    H = np.array([[4.0, 3.8], [3.8, 4.0]])
+    theta = {"friction_pp": 0.0, "friction_pw": 0.0}
+    design = _design(friction_pp=(-10.0, 10.0), friction_pw=(-10.0, 10.0))
+    # coded = natural / 10: J_coded = 10 sqrt(H_ii) gives sd_natural = 1 / sqrt(H_ii)
+    res = SimpleNamespace(free=list(theta), J=np.diag(10.0 * np.sqrt(np.diag(H))))
+    wald = parameter_intervals(res, design, theta, _lof(1.0, 5, 0.4), undetected=False)
+    return H, theta, design, wald
+
+
+def test_a_measured_point_beyond_the_threshold_widens_to_the_profile_bound_of_a_quadratic():
+    # the profile of friction_pp in a quadratic valley: chi2_profile(d) = d^2 / (H^-1)_11, so its 95 % bound is
+    # d = z sqrt((H^-1)_11), with b at -H_12 / H_22 d. A point measured twice as far along that line has
+    # chi2 = 4 z^2, and the quadratic through it and the best reaches z^2 half way: at the profile's bound.
+    H, theta, design, wald = _valley()
+    z = sps.norm.ppf(0.975)
+    bound = z * math.sqrt(np.linalg.inv(H)[0, 0])
+    assert wald["parameters"]["friction_pp"]["high"] < 0.5 * bound  # the diagonal's view is far too narrow
+    d = np.array([2.0 * bound, -H[0, 1] / H[1, 1] * 2.0 * bound])
+    point = {"friction_pp": d[0], "friction_pw": d[1]}
+    out = widen_to_measured(wald, design, theta, 0.0, [(point, float(d @ H @ d))])
+    row = out["parameters"]["friction_pp"]
+    assert float(d @ H @ d) == pytest.approx(4 * z * z)
+    assert row["high"] == pytest.approx(bound, rel=1e-12)
+    assert row["low"] == wald["parameters"]["friction_pp"]["low"]  # nothing measured on that side
+    assert row["wald"] == {"low": wald["parameters"]["friction_pp"]["low"],
+                           "high": wald["parameters"]["friction_pp"]["high"]}
+    assert out["measured_points"]["threshold"] == pytest.approx(z * z)
+    assert out["measured_points"]["widened"] == ["friction_pp", "friction_pw"]
+
+
+def test_a_measured_point_within_the_threshold_lies_inside_and_the_box_still_cuts():
+    H, theta, design, wald = _valley()
+    # chi2 1.0 above the best (below 3.84): the point itself, not beyond it
+    inside = {"friction_pp": -1.5, "friction_pw": 1.4}
+    out = widen_to_measured(wald, design, theta, 2.0, [(inside, 3.0)])
+    assert out["parameters"]["friction_pp"]["low"] == pytest.approx(-1.5)
+    assert out["parameters"]["friction_pw"]["high"] == pytest.approx(1.4)
+    # a point outside the factor's box (the box is the design's, nothing is known beyond it) is cut there
+    far = {"friction_pp": -30.0, "friction_pw": 0.0}
+    out = widen_to_measured(wald, design, theta, 2.0, [(far, 2.5)])
+    assert out["parameters"]["friction_pp"]["low"] == -10.0
+    # a failing lack of fit scales the threshold as it scales the Wald intervals (Birge's ratio, t quantile)
+    res = SimpleNamespace(free=list(theta), J=np.diag(10.0 * np.sqrt(np.diag(H))))
+    failing = parameter_intervals(res, design, theta, _lof(2.0, 5, 0.01), undetected=False)
+    threshold = 2.0 * sps.t.ppf(0.975, 5) ** 2  # 13.2
+    wider = {"friction_pp": -2.5, "friction_pw": 2.4}
+    assert failing["parameters"]["friction_pp"]["low"] > -2.5
+    scaled = widen_to_measured(failing, design, theta, 0.0, [(wider, 10.0)])
+    assert scaled["measured_points"]["threshold"] == pytest.approx(threshold)
+    assert scaled["parameters"]["friction_pp"]["low"] == pytest.approx(-2.5)
+    # the same excess with a passing fit (threshold 3.84) stops at sqrt(3.84 / 10) of the way
+    passing = widen_to_measured(wald, design, theta, 0.0, [(wider, 10.0)])
+    assert passing["parameters"]["friction_pp"]["low"] == pytest.approx(-2.5 * math.sqrt(sps.norm.ppf(0.975) ** 2 / 10))

@@ -95,3 +95,25 @@ def test_an_anchor_not_taken_gets_a_step_of_its_own_beside_the_first_step(hertz_
     first_step_round = [r for r in added.runs if r.kind == "polish" and 1000 <= r.std_order < 2000]
     # the taken anchor's own step and the other anchor's, at every seed
     assert len(first_step_round) == 2 * seeds
+
+
+def test_the_report_s_intervals_hold_every_polished_point_the_batteries_do_not_reject(hertz_case):
+    """Session 39: the intervals are Wald intervals on the surfaces' slopes, and the polish measured other points
+    on the batteries. Each point within the likelihood ratio's threshold of the best lies inside the report's
+    intervals (its parameter values are inside the profile interval), whatever the surfaces' curvature says."""
+    _, settings, result = hertz_case
+    added = result.iterations[1]
+    state = added.optimum["polish"]
+    intervals = added.report["intervals"]
+    measured = intervals["measured_points"]
+    polish_runs = [r for r in added.runs if r.kind == "polish"]
+    # the surfaces' optimum's confirmation and every polishing point, each at all the seeds
+    assert measured["count"] == 1 + len(polish_runs) // settings.confirmation_seeds
+    assert measured["chi2_best"] == pytest.approx(state["chi2"])
+    assert measured["threshold"] == pytest.approx(intervals["scale"] * intervals["quantile"] ** 2)
+    candidates = [(a["parameters"], a["chi2"]) for a in state["anchors"]]
+    inside = [p for p, chi2 in candidates if chi2 - state["chi2"] <= measured["threshold"]]
+    assert inside  # the friction_pp-alone anchor fits within the threshold
+    for point in inside:
+        for name, row in intervals["parameters"].items():
+            assert row["low"] - 1e-9 <= point[name] <= row["high"] + 1e-9, name

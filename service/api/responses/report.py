@@ -328,12 +328,28 @@ class Trends(Out):
     dilatancy: Trend | None = Field(None, description="dilatancy residual (deg) against normal stress (Pa)")
 
 
+class WaldInterval(Out):
+    low: float
+    high: float
+
+
+class MeasuredPoints(Out):
+    count: int = Field(description="points measured on the batteries at the final optimum's seeds (the surfaces' "
+                       "optimum, the polish's Jacobian points, anchors and steps)")
+    chi2_best: float = Field(description="the batteries' chi2 (priors included) at the final optimum")
+    threshold: float = Field(description="chi2 above the best that the likelihood ratio does not reject at the "
+                             "intervals' level: scale x quantile^2")
+    widened: list[str] = Field(description="parameters whose interval a measured point widened")
+
+
 class ParameterInterval(Out):
     value: float = Field(description="the optimum (natural units)")
     sd: float | None = Field(None, description="standard deviation; none when the data do not identify it")
     low: float | None = Field(None, description="lower end of the interval, cut at the factor's box")
     high: float | None = Field(None, description="upper end of the interval, cut at the factor's box")
     at_bound: list[str] | None = Field(None, description="sides where the interval was cut at the box")
+    wald: WaldInterval | None = Field(None, description="the interval from the surfaces' slopes alone, where points "
+                                      "measured on the batteries widened it (calibration.intervals.widen_to_measured)")
 
 
 class Trade(Out):
@@ -357,6 +373,9 @@ class Intervals(Out):
     correlation: dict[str, dict[str, float | None]]
     trades: list[Trade] = Field(description="parameter pairs the measurements fix only in combination")
     unidentified: list[str]
+    measured_points: MeasuredPoints | None = Field(None, description="the points measured on the batteries the "
+                                                   "intervals were widened to (none before a confirmation's report "
+                                                   "carried them)")
     about: str
 
 
