@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 pytestmark = pytest.mark.slow
@@ -222,3 +223,15 @@ def test_keep_jacobian_rewinds_only_a_polish_that_took_no_step():
     for refused in ({**done, "steps": 1}, {**done, "jacobian": "surfaces"}, {**done, "stage": "jacobian"}):
         with pytest.raises(SystemExit, match="keep-jacobian"):
             module._rewound(refused)
+
+
+def test_the_ratio_to_the_truth_floor_carries_the_seeds_scatter():
+    """``floor_ratio_noise`` by hand, two seeds and one target. Seeds that pair fully (the fit's standardised
+    residual twice the truth's at each seed) leave the ratio 2 with no scatter; a truth that does not move with
+    the seed (1, 1) against a fit at (1, 3): zbar 2 with standard error sd / sqrt(m) = 1, so ln RMS has standard
+    error 1/2 and the ratio 2 +- 1."""
+    noise = _bench("diagnosis_dem").floor_ratio_noise
+    paired = noise(np.array([[1.0], [3.0]]), np.array([[0.5], [1.5]]))
+    assert paired["floor_ratio"] == pytest.approx(2.0) and paired["floor_ratio_se"] == pytest.approx(0.0, abs=1e-12)
+    unpaired = noise(np.array([[1.0], [3.0]]), np.array([[1.0], [1.0]]))
+    assert unpaired["floor_ratio"] == pytest.approx(2.0) and unpaired["floor_ratio_se"] == pytest.approx(1.0)
