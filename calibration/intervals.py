@@ -220,9 +220,9 @@ def widen_to_measured(intervals: dict[str, Any], design, theta: dict[str, float]
                     widened.add(name)
     out["measured_points"] = {"count": len(points), "chi2_best": float(chi2_best), "threshold": threshold,
                               "widened": sorted(widened)}
-    out["about"] = intervals["about"] + ("; widened to every point measured on the batteries within the "
-                                         "likelihood ratio's threshold of the best, and along the line to each "
-                                         "point beyond it as far as a quadratic through the two would allow")
+    how = ("; widened to every point measured on the batteries within the likelihood ratio's threshold of the best, "
+           "and along the line to each point beyond it as far as a quadratic through the two would allow")
+    out["about"] = intervals["about"] if how in intervals["about"] else intervals["about"] + how
     return out
 
 

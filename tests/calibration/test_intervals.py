@@ -224,3 +224,10 @@ def test_a_measured_point_within_the_threshold_lies_inside_and_the_box_still_cut
     # the same excess with a passing fit (threshold 3.84) stops at sqrt(3.84 / 10) of the way
     passing = widen_to_measured(wald, design, theta, 0.0, [(wider, 10.0)])
     assert passing["parameters"]["friction_pp"]["low"] == pytest.approx(-2.5 * math.sqrt(sps.norm.ppf(0.975) ** 2 / 10))
+
+
+def test_widening_twice_says_how_once():
+    H, theta, design, wald = _valley()
+    once = widen_to_measured(wald, design, theta, 0.0, [({"friction_pp": 0.1, "friction_pw": 0.0}, 0.5)])
+    twice = widen_to_measured(once, design, theta, 0.0, [({"friction_pp": -0.1, "friction_pw": 0.0}, 0.5)])
+    assert twice["about"] == once["about"] and once["about"].count("likelihood ratio") == 1

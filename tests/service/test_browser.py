@@ -718,3 +718,35 @@ def test_a_polish_for_a_missed_prior_says_why_and_lists_its_anchors(page, servic
             assert ("the polish went on from there" in text) == bool(anchor.get("step_taken")), text
     assert any(a.get("step_chi2") is not None for a in polish["anchors"])
     section_shot(page, shots, "Verdict", "campaign-polish-anchors")
+
+
+def test_the_report_shows_each_parameter_s_interval_the_trade_and_an_interval_widened(page, service, shots):
+    """Issue 33 item 3: the page shows each calibrated parameter with its interval, says which pair trades rather
+    than letting one optimum stand as known, and marks an interval that points measured on the batteries widened,
+    with the surfaces' interval it replaced (session 39). The intervals are the library loop's in tier A seed 11's
+    rolling world (tests/service/intervals_case.py), served in a real campaign's report."""
+    from intervals_case import trading_intervals
+
+    intervals = trading_intervals()
+    cid = thesis_campaign_completed(service, "intervals")
+    report = service.api("GET", f"/campaigns/{cid}/report", params={"number": 1}).json()
+    page.route(re.compile(rf".*/api/v1/campaigns/{cid}/report\?number=1$"),
+               lambda route: route.fulfill(json={**report, "intervals": intervals}))
+    open_view(page, service, f"#/campaigns/{cid}")
+    expect_text(page, "section.parameters h3", "Parameters: optimum and 95 % interval")
+
+    def four(value):  # core.js fmt(value): four significant digits, exponent from 1e5
+        return f"{value:.3e}".replace("e+0", "e+") if abs(value) >= 1e5 else f"{float(f'{value:.4g}'):g}"
+
+    for name, row in intervals["parameters"].items():
+        cell = page.locator(f'section.parameters span.interval[data-parameter="{name}"]')
+        assert cell.inner_text() == f"{four(row['low'])} – {four(row['high'])}", name
+    trades = page.locator("section.parameters p.trade")
+    assert trades.count() == len(intervals["trades"])
+    assert trades.first.inner_text() == intervals["trades"][0]["message"]
+    (name,) = intervals["measured_points"]["widened"]
+    wald = intervals["parameters"][name]["wald"]
+    note = page.locator("section.parameters tr", has=page.locator(f'span.interval[data-parameter="{name}"]'))
+    assert (f"widened to the points measured on the batteries (the surfaces' alone: {four(wald['low'])} – "
+            f"{four(wald['high'])})") in note.inner_text()
+    section_shot(page, shots, "Parameters", "campaign-parameter-intervals")

@@ -4,7 +4,7 @@
 import { API, api, attempt, duration, fmt, h, optional, status, table } from "./core.js";
 import { humanText } from "./labels.js";
 import { refresh } from "./live.js";
-import { targetsSection, verdictSection } from "./campaign_report.js";
+import { parametersSection, targetsSection, verdictSection } from "./campaign_report.js";
 import { conditionsSection } from "./campaign_conditions.js";
 import { diagnosisSection } from "./campaign_diagnosis.js";
 import { historySection } from "./campaign_history.js";
@@ -117,7 +117,7 @@ export async function campaignPage(view, id, params) {
     const n = it.number;
     const [report, models] = await Promise.all([api(`/campaigns/${id}/report?number=${n}`), optional(`/campaigns/${id}/models?number=${n}`)]);
     const confirmation = report.confirmation_job_id ? await optional(`/jobs/${report.confirmation_job_id}/result`) : null;
-    parts.push(verdictSection(report), exportLinks(id, n), targetsSection(report), conditionsSection(report.targets, confirmation));
+    parts.push(verdictSection(report), exportLinks(id, n), parametersSection(report), targetsSection(report), conditionsSection(report.targets, confirmation));
     if (report.diagnosis) {
       parts.push(diagnosisSection(id, report.diagnosis, {
         canAdd: c.status === "completed" && n === latest, nextNumber: latest + 1,

@@ -117,6 +117,28 @@ function reachabilityBars(rows, cutoff) {
   { height: 60 + 26 * rows.length, label: "reachability" });
 }
 
+// The calibrated parameters with their 95 % intervals (calibration.intervals): what the measurements fix and
+// what they do not (pairs that trade), and where points measured on the batteries widened an interval beyond
+// the response surfaces' view (intervals.measured_points), with the interval it replaced.
+export function parametersSection(report) {
+  const iv = report.intervals;
+  if (!iv || !iv.parameters) return "";
+  const widened = new Set(iv.measured_points?.widened || []);
+  const notes = (name, p) => [
+    p.at_bound ? `cut at the box (${p.at_bound.join(", ")})` : "",
+    widened.has(name) && p.wald ? `widened to the points measured on the batteries (the surfaces' alone: ${fmt(p.wald.low)} – ${fmt(p.wald.high)})` : "",
+  ].filter(Boolean).join("; ") || "–";
+  return h("section", { className: "card parameters" }, h("h3", {}, `Parameters: optimum and ${fmt(100 * iv.level, 3)} % interval`),
+    wideTable(["Parameter", "Optimum", "sd", "Interval", "Note"], Object.entries(iv.parameters).map(([name, p]) => [
+      name, fmt(p.value), p.sd === null || p.sd === undefined ? "not identified" : fmt(p.sd, 3),
+      h("span", { className: "interval", "data-parameter": name }, p.low === null || p.low === undefined ? "–" : `${fmt(p.low)} – ${fmt(p.high)}`),
+      notes(name, p)])),
+    iv.scaled_by_misfit ? h("p", { className: "muted" }, `Intervals widened by χ²/dof ${fmt(iv.scale, 3)}: the model misses the measurements by more than their noise.`) : "",
+    ...(iv.trades || []).map((t) => h("p", { className: "bad trade" }, humanText(t.message))),
+    (iv.unidentified || []).length ? h("p", { className: "bad" }, `Not identified by these measurements: ${iv.unidentified.join(", ")}`) : "",
+    iv.about ? h("p", { className: "muted" }, `How: ${iv.about}.`) : "");
+}
+
 // what the "confirmed" values are: one battery, or the mean of several seeds' batteries
 function seedsText(report) {
   const m = report.confirmation_seeds?.length || 1;
