@@ -218,6 +218,9 @@ def widen_to_measured(intervals: dict[str, Any], design, theta: dict[str, float]
                     row.setdefault("wald", {"low": row["low"], "high": row["high"]})
                     row[side] = float(clip)
                     widened.add(name)
+                    if clip != reach:  # the widening reached the box: the interval is cut there now
+                        cut = set(row.get("at_bound") or []) | {side}
+                        row["at_bound"] = [s for s in ("low", "high") if s in cut]
     out["measured_points"] = {"count": len(points), "chi2_best": float(chi2_best), "threshold": threshold,
                               "widened": sorted(widened)}
     how = ("; widened to every point measured on the batteries within the likelihood ratio's threshold of the best, "

@@ -212,6 +212,7 @@ def test_a_measured_point_within_the_threshold_lies_inside_and_the_box_still_cut
     far = {"friction_pp": -30.0, "friction_pw": 0.0}
     out = widen_to_measured(wald, design, theta, 2.0, [(far, 2.5)])
     assert out["parameters"]["friction_pp"]["low"] == -10.0
+    assert out["parameters"]["friction_pp"]["at_bound"] == ["low"]
     # a failing lack of fit scales the threshold as it scales the Wald intervals (Birge's ratio, t quantile)
     res = SimpleNamespace(free=list(theta), J=np.diag(10.0 * np.sqrt(np.diag(H))))
     failing = parameter_intervals(res, design, theta, _lof(2.0, 5, 0.01), undetected=False)
