@@ -322,6 +322,28 @@ def _anchor(anchor: dict) -> str:
     return line
 
 
+def _intervals(intervals: dict | None) -> str:
+    """The report's parameters with their intervals (calibration.intervals): one row each, with a cut at the box or a
+    widening by points measured on the batteries noted; then each pair that trades, as the page shows them."""
+    if not intervals or not intervals.get("parameters"):
+        return ""
+    widened = set((intervals.get("measured_points") or {}).get("widened") or [])
+    rows = []
+    for name, p in intervals["parameters"].items():
+        notes = [f"cut at the box ({', '.join(p['at_bound'])})"] if p.get("at_bound") else []
+        if name in widened and p.get("wald"):
+            notes.append(f"widened to the points measured on the batteries (the surfaces' alone: "
+                         f"[{_fmt(p['wald']['low'])}, {_fmt(p['wald']['high'])}])")
+        rows.append([name, p["value"], "not identified" if p.get("sd") is None else p["sd"],
+                     "-" if p.get("low") is None else f"[{_fmt(p['low'])}, {_fmt(p['high'])}]", "; ".join(notes) or "-"])
+    text = f"\n\nparameters, {_fmt(100 * intervals['level'])} % intervals:\n" + _table(
+        ["parameter", "optimum", "sd", "interval", "note"], rows)
+    if intervals.get("scaled_by_misfit"):
+        text += (f"\nintervals widened by chi2/dof {_fmt(intervals['scale'])}: the model misses the measurements by "
+                 "more than their noise")
+    return text + "".join(f"\ntrade: {t['message']}" for t in intervals.get("trades") or [])
+
+
 def campaign_report(args) -> int:
     params = {"number": args.iteration} if args.iteration else None
     r = _call(args, "GET", f"/campaigns/{args.id}/report", params=params)
@@ -333,7 +355,8 @@ def campaign_report(args) -> int:
             + _table(["test", "quantity", "condition", "measured", "u", "predicted", "95% PI", "confirmed", "z",
                       "min|z| in box", "status"],
                      [[c if not isinstance(c, list) else "[" + ", ".join(_fmt(x) for x in c) + "]" for c in row]
-                      for row in rows]))
+                      for row in rows])
+            + _intervals(r.get("intervals")))
     if r.get("meaning"):
         text += f"\n\n{r['verdict']}: {r['meaning']}"
     lof = r.get("lack_of_fit")

@@ -305,3 +305,31 @@ def test_the_report_says_why_it_polished_and_prints_each_anchor(capsys, monkeypa
         if anchor.get("step_chi2") is not None:
             assert "one step from it: chi2 " in line
             assert line.endswith("the polish went on from there") == bool(anchor.get("step_taken")), line
+
+
+def test_the_report_prints_each_parameter_s_interval_its_widening_and_the_trade(capsys, monkeypatch):
+    """``demcal campaign report`` shows what the page's Parameters card shows (issue 33 item 3): each free
+    parameter's interval, which one points measured on the batteries widened (with the surfaces' interval it
+    replaced), and each pair that trades. The intervals are tests/service/intervals_case.py's (tier A seed 11's
+    rolling world, its friction_pp-rolling trade), served in place of the HTTP call."""
+    from intervals_case import trading_intervals
+    from polish_case import hertz_report
+
+    import service.cli_campaigns as cli
+    from service.cli_http import fmt
+
+    intervals = trading_intervals()
+    served = {**hertz_report(), "intervals": intervals, "campaign_id": 7, "iteration": 2}
+    monkeypatch.setattr(cli, "_call", lambda args, method, path, **kw: served if path == "/campaigns/7/report" else None)
+    code, out, _ = run(capsys, "campaign", "report", "7", "--url", "http://127.0.0.1:9")
+    assert code == 0, out
+    lines = out.splitlines()
+    assert "parameters, 95 % intervals:" in lines
+    for name, row in intervals["parameters"].items():
+        line = next(x for x in lines if x.startswith(name + " "))
+        assert f"[{fmt(row['low'])}, {fmt(row['high'])}]" in line, line
+    (name,) = intervals["measured_points"]["widened"]
+    wald = intervals["parameters"][name]["wald"]
+    line = next(x for x in lines if x.startswith(name + " "))
+    assert f"widened to the points measured on the batteries (the surfaces' alone: [{fmt(wald['low'])}, " in line
+    assert [x for x in lines if x.startswith("trade: ")] == [f"trade: {t['message']}" for t in intervals["trades"]]
