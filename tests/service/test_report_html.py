@@ -191,3 +191,24 @@ def test_the_page_links_the_report_and_the_file_reads_offline_in_chromium(server
             assert not errors, errors
         finally:
             browser.close()
+
+
+def test_the_parameters_table_notes_a_widened_interval_and_each_trade():
+    """The exported report says what the page says of the intervals (issue 33 item 3): which interval points
+    measured on the batteries widened, with the threshold, and each pair that trades (tests/service/
+    intervals_case.py's intervals, tier A seed 11's rolling trade)."""
+    from html import escape
+
+    from intervals_case import trading_intervals
+
+    from service.export.report_html import _parameters
+
+    intervals = trading_intervals()
+    report = {"optimum": {name: row["value"] for name, row in intervals["parameters"].items()}, "intervals": intervals}
+    text = _parameters(report, [], None)
+    (name,) = intervals["measured_points"]["widened"]
+    threshold = intervals["measured_points"]["threshold"]
+    assert (f"widened to the points measured on the batteries that fit within chi2 {escape(f'{threshold:.4g}')} of "
+            f"the best: {escape(name)}</p>") in text
+    for trade in intervals["trades"]:
+        assert escape(trade["message"]) in text
