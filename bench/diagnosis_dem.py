@@ -697,7 +697,25 @@ def truth_floors(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: f
         out.update(rms_truth_after=after["rms_truth"], chi2_truth_after=after["chi2_truth"],
                    truth_after_job_ids=after["truth_job_ids"])
         out.update({k: after[k] for k in ("floor_ratio", "floor_ratio_se") if k in after})
+        out.update(halving_noise(svc, cid, after_iteration, poll_s))
     return out
+
+
+def halving_noise(svc: Service, cid: int, after_iteration: int, poll_s: float) -> dict[str, float]:
+    """The kept fit's weighted RMS over the first iteration's, with the standard error the two confirmations' seeds
+    give it (``floor_ratio_noise``; their seeds differ, so nothing pairs): what "the RMS falls to half" can
+    resolve at this many seeds. {} where either report lacks its confirmation's jobs or their targets differ."""
+    arrays = []
+    for number in (after_iteration, 1):
+        report = svc.call("GET", f"/campaigns/{cid}/iterations/{number}")["report"]
+        ids = [i for i in report.get("confirmation_job_ids") or [] if i is not None]
+        if len(ids) < 2:
+            return {}
+        arrays.append(_standardised_per_seed(report, [responses_of(r) for r in _wait_jobs(svc, ids, poll_s)]))
+    if arrays[0].shape != arrays[1].shape:
+        return {}
+    noise = floor_ratio_noise(*arrays)
+    return {"rms_ratio_se": noise["floor_ratio_se"]}
 
 
 def _truth_after(o: dict, key: str = "rms_truth") -> float | None:
@@ -1094,7 +1112,8 @@ def _rms(o: dict) -> str:
         floor += f"; fit / truth {_f(o['floor_ratio'])} +- {_f(o['floor_ratio_se'])} (the seeds' scatter)"
     if after is None:
         return (_f(before) if o.get("rms_ratio") is None else _f(o["rms_ratio"])) + (f" ({floor[2:]})" if floor else "")
-    return f"{_f(before)} -> {_f(after)} ({_f(o.get('rms_ratio'))}{floor})"
+    ratio = _f(o.get("rms_ratio")) + (f" +- {_f(o['rms_ratio_se'])}" if o.get("rms_ratio_se") is not None else "")
+    return f"{_f(before)} -> {_f(after)} ({ratio}{floor})"
 
 
 def _detectability(o: dict) -> float | None:

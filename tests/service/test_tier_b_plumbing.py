@@ -23,9 +23,14 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_rolling_and_null_scenarios_through_a_live_service(tmp_path):
     out = subprocess.run(
         [sys.executable, str(ROOT / "bench" / "diagnosis_dem.py"), "--evaluator", "analytic",
-         "--scenarios", "rolling,null", "--workers", "1"],
+         "--scenarios", "rolling,null", "--workers", "1", "--truth-floor", "--json", str(tmp_path / "rows.json")],
         capture_output=True, text=True, timeout=900, cwd=tmp_path)
     assert out.returncode == 0, out.stderr[-2000:]
+    rows = {row["scenario"]: row for row in json.loads((tmp_path / "rows.json").read_text())}
+    # the effect's row: its truth floor and halving, each with the seeds' scatter (floor_ratio_noise)
+    rolling = rows["rolling"]
+    assert rolling["rms_ratio_se"] > 0 and rolling["floor_ratio_se"] > 0, rolling
+    assert rolling["floor_ratio"] == pytest.approx(rolling["rms_after"] / rolling["rms_truth_after"], rel=1e-6)
     last = out.stdout.strip().splitlines()[-1]
     figures = dict(item.split("=") for item in last.split())
     assert figures["n_effects"] == "1" and figures["n_null"] == "1", out.stdout
