@@ -7,6 +7,7 @@ targets, and a last machine-readable line.
 
     python3 bench/diagnosis_tier_a.py                 # 300 cases + 50 per bin below lambda 30 + 40 per other-form kind
     python3 bench/diagnosis_tier_a.py --cases 60 --jobs 1
+    python3 bench/diagnosis_tier_a.py --chaotic       # the same cases, no two runs sharing their scatter
 """
 from __future__ import annotations
 
@@ -21,11 +22,11 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 
 
 def _one(args):
-    seed, kind = args
+    seed, kind, chaotic = args
     from calibration.testbed import make_case, run_case
 
     started = time.perf_counter()
-    out = run_case(make_case(seed, kind))
+    out = run_case(make_case(seed, kind), chaotic=chaotic)
     out["wall_s"] = time.perf_counter() - started
     return out
 
@@ -38,6 +39,9 @@ def main(argv=None) -> int:
     ap.add_argument("--per-form-kind", type=int, default=40,
                     help="cases of each kind of another model form (FORM_KINDS: nulls with and without the "
                          "model-form discrepancy, strong single effects with it)")
+    ap.add_argument("--chaotic", action="store_true",
+                    help="each run's scatter drawn from its seed and parameters, as on the DEM engine, where one "
+                         "seed's packings at two parameter sets share little of it (StandinEvaluator.chaotic)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", help="write every case's outcome to this file")
     ap.add_argument("--from-json", help="print the table of outcomes written earlier by --json (no runs)")
@@ -54,7 +58,8 @@ def main(argv=None) -> int:
         print(machine_line(rows))
         return 0
 
-    work = list(enumerate(case_kinds(args.cases, args.per_weak_bin, args.per_form_kind)))
+    work = [(seed, kind, args.chaotic) for seed, kind in enumerate(case_kinds(args.cases, args.per_weak_bin,
+                                                                           args.per_form_kind))]
     started = time.perf_counter()
     outcomes = []
     ctx = mp.get_context("spawn")

@@ -248,8 +248,10 @@ def loop_settings(case: Case, max_iterations: int = 3, **overrides) -> LoopSetti
     return LoopSettings.model_validate({**settings, **overrides})
 
 
-def run_case(case: Case, max_iterations: int = 3) -> dict[str, Any]:
-    evaluator = StandinEvaluator(standin_conditions(OPTIONS))
+def run_case(case: Case, max_iterations: int = 3, chaotic: bool = False) -> dict[str, Any]:
+    """The case through the loop on the stand-in; ``chaotic``: each run's scatter drawn from its seed and parameters
+    (``StandinEvaluator.chaotic``), as the DEM engine's packings diverge, instead of shared by one seed's runs."""
+    evaluator = StandinEvaluator(standin_conditions(OPTIONS), chaotic=chaotic)
     result = CalibrationLoop(case.targets, evaluator, loop_settings(case, max_iterations)).run()
     return outcome(case, result, evaluator.runs)
 
