@@ -84,6 +84,17 @@ def section_shot(page, shots, title: str, name: str):
     card.screenshot(path=str(shots / f"{name}.png"))
 
 
+def open_report_serving(page, service, name: str, **parts) -> int:
+    """A completed thesis campaign's page, its first report served with ``parts`` (a polish, intervals) made by
+    the library loop in place of its own; the campaign's id."""
+    cid = thesis_campaign_completed(service, name)
+    report = service.api("GET", f"/campaigns/{cid}/report", params={"number": 1}).json()
+    page.route(re.compile(rf".*/api/v1/campaigns/{cid}/report\?number=1$"),
+               lambda route: route.fulfill(json={**report, **parts}))
+    open_view(page, service, f"#/campaigns/{cid}")
+    return cid
+
+
 def thesis_campaign_completed(service, name: str) -> int:
     """A campaign on the thesis aggregate (conftest_s2's settings) created, started and waited for through the API;
     its id. For the tests that serve a page an iteration's report with one part made elsewhere."""
@@ -692,11 +703,7 @@ def test_a_polish_for_a_missed_prior_says_why_and_lists_its_anchors(page, servic
 
     polish = hertz_polish()
     assert polish["jacobian"] == "batteries" and len(polish["anchors"]) == 2
-    cid = thesis_campaign_completed(service, "polished")
-    report = service.api("GET", f"/campaigns/{cid}/report", params={"number": 1}).json()
-    page.route(re.compile(rf".*/api/v1/campaigns/{cid}/report\?number=1$"),
-               lambda route: route.fulfill(json={**report, "polish": polish}))
-    open_view(page, service, f"#/campaigns/{cid}")
+    open_report_serving(page, service, "polished", polish=polish)
     expect_text(page, "section.verdict .polish p", "Polishing on the batteries: ")
     line = page.locator("section.verdict .polish p").inner_text()
     assert f"{polish['steps']} Gauss-Newton step(s), {polish['batteries']} batteries" in line
@@ -728,11 +735,7 @@ def test_the_report_shows_each_parameter_s_interval_the_trade_and_an_interval_wi
     from intervals_case import trading_intervals
 
     intervals = trading_intervals()
-    cid = thesis_campaign_completed(service, "intervals")
-    report = service.api("GET", f"/campaigns/{cid}/report", params={"number": 1}).json()
-    page.route(re.compile(rf".*/api/v1/campaigns/{cid}/report\?number=1$"),
-               lambda route: route.fulfill(json={**report, "intervals": intervals}))
-    open_view(page, service, f"#/campaigns/{cid}")
+    open_report_serving(page, service, "intervals", intervals=intervals)
     expect_text(page, "section.parameters h3", "Parameters: optimum and 95 % interval")
 
     def four(value):  # core.js fmt(value): four significant digits, exponent from 1e5
