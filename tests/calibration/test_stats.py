@@ -197,3 +197,18 @@ def test_a_test_within_its_own_noise_never_fails_however_exactly_the_fit_absorbs
     draws, unfitted = stats.null_residuals(M, df, seed=1), stats.null_residuals(np.eye(3), df, seed=1)
     assert stats.group_pvalue(r, first, M, draws) < 1e-3
     assert stats.own_check_pvalue(r, first, M, draws, unfitted) > 0.5
+
+
+def test_a_signature_s_noise_attenuates_the_share_it_explains_by_one_minus_its_noise_share():
+    """Errors in variables by hand: a residual r = t (the true signature, |t|^2 = 4) and a signature measured as
+    s = t + e with e orthogonal to t, |e|^2 = 1. LM / |r|^2 = (s.r)^2 / (|s|^2 |r|^2) = 16 / (5 x 4) = 0.8, while
+    the effect explains all of it; the noise share E|e|^2 / |s|^2 = 1/5, and 0.8 / (1 - 1/5) = 1."""
+    from calibration.attribute import MAX_CORRECTED_NOISE, explained_share
+
+    t = np.array([2.0, 0.0, 0.0])
+    s = t + np.array([0.0, 1.0, 0.0])
+    observed = stats.score_test(t, s, np.eye(3)).explained
+    assert observed == pytest.approx(0.8)
+    assert explained_share(observed, 1.0 / 5.0) == pytest.approx(1.0)
+    # a signature mostly noise is read as it stands, and a known-clean one is not touched
+    assert explained_share(0.2, MAX_CORRECTED_NOISE) == 0.2 and explained_share(0.2, 0.0) == 0.2

@@ -29,7 +29,10 @@ class RankedEffect(Out):
     lm: float | None = Field(description="Lagrange-multiplier score statistic")
     p_value: float | None
     p_holm: float | None = Field(description="p after Holm over the candidates")
-    explained: float | None = Field(description="share of the misfit the effect explains, 0..1")
+    explained: float | None = Field(description="share of the misfit the effect explains, 0..1, its signature's "
+                                    "own noise taken out (calibration.attribute.explained_share)")
+    explained_observed: float | None = Field(None, description="the same share as the noisy signature shows it "
+                                             "(absent in diagnoses made before session 39)")
     gamma: float | None = Field(description="the score's step along the signature")
     strength: float | None = Field(description="the strength the data ask for, in its unit")
     fraction_of_switch: float | None = Field(description="a switch-type effect: the fraction of its matched strength")
