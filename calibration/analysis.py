@@ -15,7 +15,7 @@ import numpy as np
 from calibration import calibrate as cal
 from calibration.attribute import signature_seeds
 from calibration import fits
-from calibration import stats
+from calibration import polish, stats
 from calibration.fitting import TargetModel
 from calibration.localise import ALPHA, localise
 from calibration.intervals import parameter_intervals, widen_to_measured
@@ -125,7 +125,7 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
         intervals = parameter_intervals(residuals, design, theta, localisation.lack_of_fit,
                                         discrepancy=config.model_discrepancy)
         intervals = widen_to_measured(intervals, design, theta, residuals.chi2(),
-                                      _measured_chi2(config, design, modelled, priors, measured, confirmation_seeds,
+                                      _measured_chi2(config, design, modelled, measured, confirmation_seeds,
                                                      len(residuals.keys)))
     return _json_safe({"surrogate_check": surrogate,
                        "localisation": localisation.to_dict() if localisation is not None else None,
@@ -133,13 +133,12 @@ def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation
                        "simulator_sd": {m.key.name: conf.sim_sd.get(m.key) for m in modelled}})
 
 
-def _measured_chi2(config, design, modelled, priors, measured, seeds, n_targets: int) -> list[tuple[dict, float]]:
+def _measured_chi2(config, design, modelled, measured, seeds, n_targets: int) -> list[tuple[dict, float]]:
     """(parameters, chi2 with the priors) of each measured point whose batteries gave every target the
     optimum's did: the same objective as ``polish``'s, so the two compare."""
     out = []
     for natural, point_records in measured:
-        res = cal.residuals_at(design, modelled, dict(natural), cal.confirm(modelled, point_records, seeds), priors,
-                               config.default_relative_uncertainty, config.model_discrepancy)
+        res = polish._residuals(config, design, modelled, dict(natural), point_records, seeds)
         if len(res.keys) == n_targets:
             out.append((dict(natural), res.chi2()))
     return out
