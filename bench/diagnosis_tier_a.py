@@ -60,6 +60,8 @@ def main(argv=None) -> int:
 
     work = [(seed, kind, args.chaotic) for seed, kind in enumerate(case_kinds(args.cases, args.per_weak_bin,
                                                                            args.per_form_kind))]
+    if not work:
+        ap.error("no cases: give --cases, --per-weak-bin or --per-form-kind above 0")
     started = time.perf_counter()
     outcomes = []
     ctx = mp.get_context("spawn")

@@ -69,6 +69,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--noise-scale", type=float, default=5.0, help="the stand-in's scatter x this (default 5)")
     ap.add_argument("--paired", action="store_true", help="the stand-in's own seeds, which pair every run")
     args = ap.parse_args(argv)
+    if args.cases < 1 or args.noise_scale < 0:
+        ap.error("--cases must be at least 1 and --noise-scale not negative")
     t0 = time.time()
     rows = []
     for seed in range(args.cases):
