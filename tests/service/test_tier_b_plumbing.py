@@ -23,7 +23,8 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_rolling_and_null_scenarios_through_a_live_service(tmp_path):
     out = subprocess.run(
         [sys.executable, str(ROOT / "bench" / "diagnosis_dem.py"), "--evaluator", "analytic",
-         "--scenarios", "rolling,null", "--workers", "1", "--truth-floor", "--json", str(tmp_path / "rows.json")],
+         "--scenarios", "rolling,null", "--workers", "1", "--truth-floor", "--json", str(tmp_path / "rows.json"),
+         "--data-dir", str(tmp_path / "data")],
         capture_output=True, text=True, timeout=900, cwd=tmp_path)
     assert out.returncode == 0, out.stderr[-2000:]
     rows = {row["scenario"]: row for row in json.loads((tmp_path / "rows.json").read_text())}
@@ -31,6 +32,20 @@ def test_rolling_and_null_scenarios_through_a_live_service(tmp_path):
     rolling = rows["rolling"]
     assert rolling["rms_ratio_se"] > 0 and rolling["floor_ratio_se"] > 0, rolling
     assert rolling["floor_ratio"] == pytest.approx(rolling["rms_after"] / rolling["rms_truth_after"], rel=1e-6)
+    # the final comparison again at two more seeds each (--more-seeds), on the same service's database
+    more = subprocess.run(
+        [sys.executable, str(ROOT / "bench" / "diagnosis_dem.py"), "--evaluator", "analytic", "--scenarios", "rolling",
+         "--workers", "1", "--truth-floor-for", str(tmp_path / "rows.json"), "--more-seeds", "2",
+         "--data-dir", str(tmp_path / "data")], capture_output=True, text=True, timeout=900, cwd=tmp_path)
+    assert more.returncode == 0, more.stderr[-2000:]
+    again = {row["scenario"]: row for row in json.loads((tmp_path / "rows.json").read_text())}
+    extra = again["rolling"]["more_seeds"]
+    assert extra["seeds"] == len(rolling["truth_after_job_ids"]) + 2 and len(extra["job_ids"]["truth"]) == 2, extra
+    assert extra["floor_ratio"] == pytest.approx(extra["rms_after"] / extra["rms_truth"], rel=1e-6)
+    assert extra["rms_ratio"] == pytest.approx(extra["rms_after"] / extra["rms_before"], rel=1e-6)
+    assert extra["floor_ratio_se"] > 0 and extra["rms_ratio_se"] > 0, extra
+    assert "null" in again and "more_seeds" not in again["null"]  # a row with nothing added keeps what it had
+    assert f"at {extra['seeds']} seeds (--more-seeds)" in more.stdout, more.stdout
     last = out.stdout.strip().splitlines()[-1]
     figures = dict(item.split("=") for item in last.split())
     assert figures["n_effects"] == "1" and figures["n_null"] == "1", out.stdout
@@ -240,3 +255,16 @@ def test_the_ratio_to_the_truth_floor_carries_the_seeds_scatter():
     assert paired["floor_ratio"] == pytest.approx(2.0) and paired["floor_ratio_se"] == pytest.approx(0.0, abs=1e-12)
     unpaired = noise(np.array([[1.0], [3.0]]), np.array([[1.0], [1.0]]))
     assert unpaired["floor_ratio"] == pytest.approx(2.0) and unpaired["floor_ratio_se"] == pytest.approx(1.0)
+
+
+def test_more_seeds_rescale_the_residual_s_sd_for_their_count():
+    """``_standardised_per_seed`` with ``seeds``: the report's residual sd is sqrt(u_meas^2 + s_sim^2 / m)
+    (calibration.report); at 16 seeds a target measured 10 +- 3 with a simulator sd of 8 has sd sqrt(9 + 4), and
+    at the report's own 4 seeds sqrt(9 + 16) = 5, the report's."""
+    module = _bench("diagnosis_dem")
+    report = {"targets": [{"status": "modelled", "test": "battery", "quantity": "bulk_density_kg_m3", "condition": {},
+                           "measured": 10.0, "measured_uncertainty": 3.0, "simulator_sd": 8.0, "residual_sd": 5.0}]}
+    runs = [{"rho": {"test": "battery", "quantity": "bulk_density_kg_m3", "condition": {}, "value": 13.0}}]
+    assert module._standardised_per_seed(report, runs)[0, 0] == pytest.approx(3.0 / 5.0)
+    assert module._standardised_per_seed(report, runs, seeds=4)[0, 0] == pytest.approx(3.0 / 5.0)
+    assert module._standardised_per_seed(report, runs, seeds=16)[0, 0] == pytest.approx(3.0 / np.sqrt(13.0))
