@@ -121,9 +121,17 @@ def explained_share(explained: float, noise: float) -> float:
     probe's batteries share no scatter with its baseline's, this dragged a strong effect below MIN_EXPLAINED:
     tier A's case 157 on a chaotic stand-in (Hertz, lambda 523) explained 29 % at a noise share of 0.26 (39 %
     corrected) and the loop ended "inconclusive" (docs/diagnosis.md, Tier A, session 39)."""
-    if 0.0 < noise < MAX_CORRECTED_NOISE:
-        return min(1.0, explained / (1.0 - noise))
-    return explained
+    reliability = attenuation(noise)
+    return explained if reliability == 1.0 else min(1.0, explained / reliability)
+
+
+def attenuation(noise: float) -> float:
+    """The factor a signature's noise share ``noise`` shrinks its score's share and step by in expectation,
+    1 - ``noise`` (the reliability ratio of a regressor measured with error; Fuller 1987, section 1.1), where the
+    share is below MAX_CORRECTED_NOISE; 1 otherwise (not known, or mostly noise and read as it stands).
+    Why the step too: gamma = s.r / |s|^2 with s = t + e keeps the true numerator while |s|^2 carries E|e|^2, so
+    the strength the diagnosis reads (and the range an added effect gets from it) falls short by the same factor."""
+    return 1.0 - noise if 0.0 < noise < MAX_CORRECTED_NOISE else 1.0
 
 
 def noise_share(M: np.ndarray, signature: np.ndarray, noise_var: np.ndarray | None) -> float:
@@ -363,18 +371,22 @@ def attribute(loc: Localisation, r: np.ndarray, M: np.ndarray, signatures: list[
         if len(probes) > 1:
             # the better of k probes: Bonferroni over them, so the candidate's p keeps its size
             score = stats.Score(score.gamma, score.lm, score.explained, min(1.0, len(probes) * score.p_value))
+        # the strength from the score's step, its signature's noise taken out (``attenuation``)
+        noise = noise_share(M, sig.vector, sig.noise_var)
+        gamma = score.gamma / attenuation(noise)
         if c.is_switch:
-            strength, fraction = (sig.reference if score.gamma > 0 else None), score.gamma
+            strength, fraction = (sig.reference if gamma > 0 else None), gamma
         else:
-            strength, fraction = (c.off_value or 0.0) + score.gamma, None
+            strength, fraction = (c.off_value or 0.0) + gamma, None
         detail = [] if len(probes) == 1 else [
             {"probe": s.probe, "strength_probed": (c.off_value or 0.0) + s.step if not c.is_switch else s.reference,
-             "lm": sc.lm, "explained": sc.explained, "strength": (c.off_value or 0.0) + sc.gamma if not c.is_switch else None}
+             "lm": sc.lm, "explained": sc.explained,
+             "strength": (c.off_value or 0.0) + sc.gamma / attenuation(noise_share(M, s.vector, s.noise_var))
+             if not c.is_switch else None}
             for s, sc in probes]
         ranked.append(Ranked(c.name, c.title, score, 1.0, strength, fraction,
                              _plausible(c, strength, fraction), projected=M @ sig.vector,
-                             signature_noise=noise_share(M, sig.vector, sig.noise_var), probe=sig.probe,
-                             probes=detail))
+                             signature_noise=noise, probe=sig.probe, probes=detail))
     for row, adj in zip(ranked, stats.holm([x.score.p_value for x in ranked])):
         row.p_holm = float(adj)
     ranked.sort(key=lambda x: (-(x.plausible and x.score.gamma > 0), -x.score.lm))

@@ -212,3 +212,29 @@ def test_a_signature_s_noise_attenuates_the_share_it_explains_by_one_minus_its_n
     assert explained_share(observed, 1.0 / 5.0) == pytest.approx(1.0)
     # a signature mostly noise is read as it stands, and a known-clean one is not touched
     assert explained_share(0.2, MAX_CORRECTED_NOISE) == 0.2 and explained_share(0.2, 0.0) == 0.2
+
+
+def test_a_signature_s_noise_shortens_the_strength_it_reads_by_the_same_factor():
+    """The same case for the step: gamma = s.r / |s|^2 = 4 / 5 where the true step is 1 (r = t, the signature per
+    unit strength), and 0.8 / attenuation(1/5) = 1. Then by simulation, where the reliability ratio holds (many
+    rows): t = 0.5 on 40 rows (|t|^2 = 10), e ~ N(0, 0.25^2) per row (E|e|^2 = 2.5), the plain step averages
+    10 / 12.5 = 0.8 and the step divided by attenuation(noise_share), the share read from each draw as the
+    diagnosis reads it, averages 1 within 2 %."""
+    from calibration.attribute import MAX_CORRECTED_NOISE, attenuation, noise_share
+
+    t = np.array([2.0, 0.0, 0.0])
+    s = t + np.array([0.0, 1.0, 0.0])
+    gamma = stats.score_test(t, s, np.eye(3)).gamma
+    assert gamma == pytest.approx(0.8)
+    assert gamma / attenuation(1.0 / 5.0) == pytest.approx(1.0)
+    assert attenuation(MAX_CORRECTED_NOISE) == 1.0 and attenuation(0.0) == 1.0
+    rng = np.random.default_rng(5)
+    t, M, noise_var = np.full(40, 0.5), np.eye(40), np.full(40, 0.25 ** 2)
+    plain, corrected = [], []
+    for _ in range(4000):
+        s = t + rng.normal(0.0, 0.25, 40)
+        g = stats.score_test(t, s, M).gamma
+        plain.append(g)
+        corrected.append(g / attenuation(noise_share(M, s, noise_var)))
+    assert np.mean(plain) == pytest.approx(0.8, rel=0.02)
+    assert np.mean(corrected) == pytest.approx(1.0, rel=0.02)

@@ -34,7 +34,9 @@ class RankedEffect(Out):
     explained_observed: float | None = Field(None, description="the same share as the noisy signature shows it "
                                              "(absent in diagnoses made before session 39)")
     gamma: float | None = Field(description="the score's step along the signature")
-    strength: float | None = Field(description="the strength the data ask for, in its unit")
+    strength: float | None = Field(description="the strength the data ask for, in its unit: off + gamma, gamma "
+                                   "divided by its signature's attenuation (calibration.attribute.attenuation; "
+                                   "diagnoses made before session 40 read gamma as it stands)")
     fraction_of_switch: float | None = Field(description="a switch-type effect: the fraction of its matched strength")
     plausible_range: list[float] = Field(description="[low, high], in its unit")
     proposed_range: list[float] | None = Field(None, description="[low, high] adding this effect gets by default "
