@@ -44,6 +44,10 @@ def test_rolling_and_null_scenarios_through_a_live_service(tmp_path):
     assert extra["floor_ratio"] == pytest.approx(extra["rms_after"] / extra["rms_truth"], rel=1e-6)
     assert extra["rms_ratio"] == pytest.approx(extra["rms_after"] / extra["rms_before"], rel=1e-6)
     assert extra["floor_ratio_se"] > 0 and extra["rms_ratio_se"] > 0, extra
+    new = extra["new_seeds_only"]  # the two new seeds apart: the same ratios on fewer batteries
+    assert new["floor_ratio"] == pytest.approx(new["rms_after"] / new["rms_truth"], rel=1e-6)
+    assert new["rms_ratio"] == pytest.approx(new["rms_after"] / new["rms_before"], rel=1e-6)
+    assert 0.0 <= new["lack_of_fit_p"] <= 1.0 and new["chi2_per_dof_after"] > 0, new
     assert "null" in again and "more_seeds" not in again["null"]  # a row with nothing added keeps what it had
     assert f"at {extra['seeds']} seeds (--more-seeds)" in more.stdout, more.stdout
     last = out.stdout.strip().splitlines()[-1]
