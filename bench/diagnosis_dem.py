@@ -45,6 +45,7 @@ their summed run time and the wall time; then the pass criteria of the issue and
     python3 bench/diagnosis_dem.py --scenarios null --json rows.json   # add the null's row to rows.json
     python3 bench/diagnosis_dem.py --from-json rows.json           # reprint the rows and criteria
     python3 bench/diagnosis_dem.py --data-dir ~/tierb --truth-floor-for rows.json  # the truth's own RMS per row
+    python3 bench/diagnosis_dem.py --data-dir ~/tierb --truth-floor-for rows.json --more-seeds 16  # ... at 16 more seeds
     python3 bench/diagnosis_dem.py --evaluator analytic --scenarios own_rig   # CI's own-rig path, on the stand-in
     python3 bench/diagnosis_dem.py --scenarios own_rig --grain-factor 2 --own-scale-factor 1.3 --data-dir ~/ownrig
 
