@@ -740,6 +740,8 @@ def more_seeds(svc: Service, sc: Scenario, o: dict, evaluator: str, poll_s: floa
     cid, after = o["campaign_id"], o.get("after_iteration")
     if not o.get("added") or after in (None, 1):
         return {}
+    if not o.get("truth_after_job_ids"):  # before any battery is queued
+        raise SystemExit(f"{sc.name}: no truth floor at the kept fit's seeds yet; run --truth-floor-for first")
     kept_report = svc.call("GET", f"/campaigns/{cid}/iterations/{after}")["report"]
     first_report = svc.call("GET", f"/campaigns/{cid}/iterations/1")["report"]
     seeds = [MORE_SEED_BASE + k for k in range(1, n + 1)]
@@ -762,8 +764,6 @@ def more_seeds(svc: Service, sc: Scenario, o: dict, evaluator: str, poll_s: floa
                                                  f"tierb-truth:{sc.name}:{evaluator}:{digest}:{job['seed']}"})["id"]
                  for job in truth_jobs]
     runs = lambda ids: [responses_of(r) for r in _wait_jobs(svc, ids, poll_s)]  # noqa: E731
-    if not o.get("truth_after_job_ids"):
-        raise SystemExit(f"{sc.name}: no truth floor at the kept fit's seeds yet; run --truth-floor-for first")
     m = len(kept_report["confirmation_seeds"]) + n
     old_runs = {"kept": runs(kept_report["confirmation_job_ids"]), "truth": runs(o["truth_after_job_ids"]),
                 "first": runs(first_report["confirmation_job_ids"])}
