@@ -640,10 +640,7 @@ def truth_floor(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: fl
     the fit kept is judged against the truth at its own iteration's seeds (``truth_floors``)."""
     report = svc.call("GET", f"/campaigns/{cid}/iterations/{number}")["report"]
     seeds = report["confirmation_seeds"]
-    jobs = [sc.measuring_job(seed, evaluator, options, reduced) for seed in seeds]
-    digest = _digest(jobs[0])
-    ids = [svc.call("POST", "/jobs", json={**job, "idempotency_key": f"tierb-truth:{sc.name}:{evaluator}:{digest}:{job['seed']}"})["id"]
-           for job in jobs]
+    ids = truth_jobs(svc, sc, seeds, evaluator, options, reduced)
     runs = [responses_of(result) for result in _wait_jobs(svc, ids, poll_s)]
     truth = _standardised_per_seed(report, runs)
     standardised = list(np.mean(truth, axis=0))
@@ -655,6 +652,16 @@ def truth_floor(svc: Service, sc: Scenario, cid: int, evaluator: str, poll_s: fl
         if kept.shape == truth.shape:
             out.update(floor_ratio_noise(kept, truth))
     return out
+
+
+def truth_jobs(svc: Service, sc: Scenario, seeds: list[int], evaluator: str, options: dict, reduced: bool) -> list[int]:
+    """The ids of the truth's batteries (the measuring world's job, its hidden effect on) at ``seeds``, queued
+    once: a key of scenario, evaluator, what it measures and seed, so the truth floor and --more-seeds share them."""
+    jobs = [sc.measuring_job(seed, evaluator, options, reduced) for seed in seeds]
+    digest = _digest(jobs[0])
+    return [svc.call("POST", "/jobs", json={**job, "idempotency_key":
+                                            f"tierb-truth:{sc.name}:{evaluator}:{digest}:{job['seed']}"})["id"]
+            for job in jobs]
 
 
 def _standardised_per_seed(report: dict, runs: list[dict], seeds: int | None = None) -> np.ndarray:
@@ -758,11 +765,7 @@ def more_seeds(svc: Service, sc: Scenario, o: dict, evaluator: str, poll_s: floa
 
     kept_ids = optimum_at_seeds(kept_report, after)
     first_ids = optimum_at_seeds(first_report, 1)
-    truth_jobs = [sc.measuring_job(seed, evaluator, options, reduced) for seed in seeds]
-    digest = _digest(truth_jobs[0])
-    truth_ids = [svc.call("POST", "/jobs", json={**job, "idempotency_key":
-                                                 f"tierb-truth:{sc.name}:{evaluator}:{digest}:{job['seed']}"})["id"]
-                 for job in truth_jobs]
+    truth_ids = truth_jobs(svc, sc, seeds, evaluator, options, reduced)
     runs = lambda ids: [responses_of(r) for r in _wait_jobs(svc, ids, poll_s)]  # noqa: E731
     m = len(kept_report["confirmation_seeds"]) + n
     old_runs = {"kept": runs(kept_report["confirmation_job_ids"]), "truth": runs(o["truth_after_job_ids"]),
