@@ -8,6 +8,7 @@ the results are the plain JSON an iteration stores, whoever stores it (``calibra
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -104,29 +105,29 @@ def analyse(config, design_dict: dict, runs, targets) -> dict[str, Any]:
 
 
 def assess(config, design_dict: dict, runs, targets, optimum: dict, confirmation_records: list[list[dict]],
-           confirmation_seeds: list[int], measured: Sequence[tuple[dict, list[list[dict]]]] = ()) -> dict[str, Any]:
+           confirmation_seeds: list[int], measured: Sequence[tuple[dict, list[list[dict]]]] = (),
+           measured_seeds: list[int] | None = None) -> dict[str, Any]:
     """The report step, on one fit: the surface check (doe.confirm), the localisation of the
     confirmation batteries' mean (one record list per seed) against the measurements, and the one verdict.
-    ``measured``: other points measured on batteries at the same seeds (natural parameters, one record list per
-    seed; ``polish.measured_points``), to which the intervals are widened where the data do not reject them."""
+    ``measured``: other points measured on batteries at ``measured_seeds`` (natural parameters, one record list
+    per seed; ``polish.measured_points``), to which the intervals are widened where the data do not reject them.
+    Where those seeds are not the confirmation's (a held-out confirmation, ``calibration.polish.hold_out``), the
+    likelihood ratio is taken among the measured points alone, from the best of them: chi2 of one point at two
+    sets of seeds differ by the packings' scatter, which is no evidence about the parameters."""
     design, models = fit(design_dict, runs, targets)
     modelled = [m for m in models if m.fit is not None]
     conf = cal.confirm(modelled, confirmation_records, confirmation_seeds)
     surrogate = _surrogate_check(config, modelled, optimum, conf)
     theta = dict(optimum["parameters"])
-    priors = [p.model_dump() for p in config.priors]
     localisation = None
     if surrogate["verdict"] != "not testable":  # a modelled response was confirmed
-        residuals = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty,
-                                     config.model_discrepancy)
-        localisation = localise(residuals, active_bounds=cal.active_bounds(design, theta),
-                                priors=cal.prior_rows(priors, theta), reachability=optimum.get("reachability", []),
-                                seed=config.seed)
+        residuals, localisation = _localised(config, design, modelled, optimum, conf)
         intervals = parameter_intervals(residuals, design, theta, localisation.lack_of_fit,
                                         discrepancy=config.model_discrepancy)
-        intervals = widen_to_measured(intervals, design, theta, residuals.chi2(),
-                                      _measured_chi2(config, design, modelled, measured, confirmation_seeds,
-                                                     len(residuals.keys)))
+        seeds = list(measured_seeds or confirmation_seeds)
+        points = _measured_chi2(config, design, modelled, measured, seeds, len(residuals.keys))
+        best = residuals.chi2() if seeds == list(confirmation_seeds) or not points else min(c for _, c in points)
+        intervals = widen_to_measured(intervals, design, theta, best, points)
     return _json_safe({"surrogate_check": surrogate,
                        "localisation": localisation.to_dict() if localisation is not None else None,
                        "intervals": intervals if localisation is not None else None,
@@ -228,6 +229,10 @@ def _localised(config, design, modelled, optimum: dict, conf):
     priors = [p.model_dump() for p in config.priors]
     res = cal.residuals_at(design, modelled, theta, conf, priors, config.default_relative_uncertainty,
                            config.model_discrepancy)
+    # the polish's held-out confirmation (calibration.polish.hold_out): judged on what no parameter absorbs
+    held = set((optimum.get("polish") or {}).get("holdout_seeds") or [])
+    if held and held.issuperset(conf.seeds):
+        res = replace(res, held_out=True)
     loc = localise(res, active_bounds=cal.active_bounds(design, theta), priors=cal.prior_rows(priors, theta),
                    reachability=optimum.get("reachability", []), seed=config.seed)
     return res, loc
@@ -244,8 +249,6 @@ def diagnosis_projection(res, design, theta: dict[str, float], priors=()):
     the room (``decisions.widened_box``). A signature along what the wider box would absorb is no evidence
     of missing physics: the founding case's E' deficit with the stiffness pinned is not Hertz-Mindlin's.
     Returns (M, the names of the parameters counted as absorbing for that reason only)."""
-    from dataclasses import replace
-
     from calibration.decisions import widened_box
 
     pinned = {b["parameter"]: b["side"] for b in cal.active_bounds(design, theta)}
@@ -359,7 +362,7 @@ def diagnose(config, design_dict: dict, runs, targets, optimum: dict, confirmati
             reference = next((v[c.factor] for n, v in candidate_points(config, optimum, {}) if n == name), None)
         signatures.append(Signature(c, vector, step, reference, noise, probe))
     M, room = diagnosis_projection(res, design, dict(optimum["parameters"]), config.priors)
-    left = stats.lack_of_fit(res.r, M, res.df, seed=config.seed) if room else None
+    left = stats.lack_of_fit(res.judged, M, res.df, seed=config.seed) if room else None
     att = attribute(loc, res.r, M, signatures, [k.label for k in res.keys],
                     room=(room, left.p_value if left is not None else 0.0))
     from calibration.replicates import simulator_share

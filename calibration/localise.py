@@ -45,6 +45,8 @@ class Residuals:
     # 0 where the surface has no error estimate). Not part of the lack of fit, which compares batteries with
     # measurements; it moves the optimum the surfaces were searched for, so the intervals carry it.
     surface_se: np.ndarray | None = None
+    # batteries at fresh seeds after a polish chose the point on others (``calibration.polish.hold_out``)
+    held_out: bool = False
 
     @property
     def sd(self) -> np.ndarray:
@@ -73,6 +75,21 @@ class Residuals:
     def chi2(self) -> float:
         r = self.r
         return float(r @ r)
+
+    @property
+    def judged(self) -> np.ndarray:
+        """The residuals the lack of fit and the tests' own checks judge: ``r``, or, on held-out batteries, the
+        part of it no parameter change absorbs (M r).
+
+        Why: the tests' null, r ~ M z, holds for residuals at the least-squares point of their own batteries.
+        At a point chosen on other batteries, r = M e_meas - eta_new + P eta_chosen (whitened; P = I - M): the
+        parameters' error, carried by the chosen batteries' scatter, adds (I - M) components, and |r|^2 exceeds
+        its n - p degrees of freedom by about twice p times the simulator's share of the variance (on the
+        chaotic stand-in, a true model's false alarms rose from 5 % to 11 %). M r has covariance
+        M (D_meas + D_sim) M = M whatever the shares: exactly the null the tests assume, and free of the
+        choice's scatter, which lies along the Jacobian's columns to first order. It is |r + J du|^2 at the
+        linearised best du on the held-out batteries: misfit that no parameter change would take away."""
+        return self.M() @ self.r if self.held_out else self.r
 
 
 @dataclass
@@ -182,19 +199,21 @@ def conflicts(active_bounds: list[dict], priors: list[dict]) -> dict[str, list[d
 
 
 def localise(res: Residuals, *, active_bounds=(), priors=(), reachability=(), seed: int = 0) -> Localisation:
-    r, M, df = res.r, res.M(), res.df
+    """The lack of fit, the tests' own checks and the rows a report shows. The rows keep the batteries' own
+    residuals (``res.r``); the tests judge ``res.judged`` (the same, except on held-out batteries)."""
+    raw, r, M, df = res.r, res.judged, res.M(), res.df
     draws = stats.null_residuals(M, df, seed=seed)
     lof = stats.lack_of_fit(r, M, df, draws=draws)
     rows = []
     for i, key in enumerate(res.keys):
         rows.append({"test": key.test, "quantity": key.quantity, "condition": key.condition_dict,
                      "label": key.label, "measured": float(res.measured[i]), "model": float(res.model[i]),
-                     "residual": float(res.measured[i] - res.model[i]), "standardised_residual": float(r[i]),
-                     "flagged": bool(abs(r[i]) > FLAG_LIMIT), "noise": res.noise[i].to_dict()})
+                     "residual": float(res.measured[i] - res.model[i]), "standardised_residual": float(raw[i]),
+                     "flagged": bool(abs(raw[i]) > FLAG_LIMIT), "noise": res.noise[i].to_dict()})
     for j, name in enumerate(res.prior_names):
         i = len(res.keys) + j
         rows.append({"test": "prior", "quantity": name, "condition": {}, "label": f"prior on {name}",
-                     "standardised_residual": float(r[i]), "flagged": bool(abs(r[i]) > FLAG_LIMIT)})
+                     "standardised_residual": float(raw[i]), "flagged": bool(abs(raw[i]) > FLAG_LIMIT)})
     total = float(r @ r)
     tests = []
     names = res.tests

@@ -3,7 +3,8 @@ advance to the next phase. The one home of every step of the loop.
 
 Phases of an iteration (``calibration.vocabulary.Phase``): design -> batteries -> analysis ->
 confirmation (``confirmation_seeds`` batteries at the optimum) -> polish (Gauss-Newton on the
-batteries, ``calibration.polish``, at the same seeds, when ``polish_when`` says so) -> report -> done;
+batteries, ``calibration.polish``, at the same seeds, when ``polish_when`` says so; after a step, the chosen
+point at as many fresh seeds, which the report reads: ``polish_holdout``) -> report -> done;
 when the report finds misfit (lack of fit, or a target out of reach) or a conflict (a parameter pinned
 at a bound, a prior pulled off), or with ``diagnose_always``: report -> diagnosis (a baseline at the
 optimum and each candidate effect, at seeds of their own; one seed first, ``calibration.replicates``) ->
@@ -39,6 +40,7 @@ from .vocabulary import MISFIT_VERDICTS, Phase, PolishJacobian, PolishRule, Poli
 SEED_MAX = 2**31 - 1
 DESIGN_SEED_STRIDE = 7919          # the design's seeds of iteration n start at seed + 7919 (n - 1)
 CONFIRMATION_SEED_STRIDE = 1_000_003
+HOLDOUT_SEED_OFFSET = 250_001      # the held-out round's seeds: the confirmation's base moved by this
 
 
 @dataclass
@@ -202,10 +204,16 @@ def _polish(ctx: Context, it) -> Transition:
             return Transition(Phase.POLISH, Phase.REPORT, {"optimum": {**it.optimum, "polish": state}})
         return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
                           _polish_runs(state, points))
-    state, points = polish.advance(s, design, modelled, state, round_runs(it, state), s.polish_steps)
-    if points:
-        return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
-                          _polish_runs(state, points))
+    if state["stage"] == PolishStage.HOLDOUT:
+        state = polish.held_out(s, design, modelled, state, round_runs(it, state))
+    else:
+        state, points = polish.advance(s, design, modelled, state, round_runs(it, state), s.polish_steps)
+        if not points and s.polish_holdout and state["steps"] > 0:
+            # the steps chose among noisy batteries: the report reads the chosen point at seeds it was not chosen on
+            state, points = polish.hold_out(design, state, _holdout_seeds(ctx, it, len(polish.seeds_of(state))))
+        if points:
+            return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
+                              _polish_runs(state, points))
     theta = state["theta"]
     optimum = {**it.optimum, "polish": state, "surrogate_parameters": it.optimum["parameters"],
                "parameters": theta, "coded": {f.name: float(f.to_coded(theta[f.name])) for f in design.factors}}
@@ -243,10 +251,28 @@ def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) 
     return None, []
 
 
+def _holdout_seeds(ctx: Context, it, m: int) -> list[int]:
+    """The held-out round's ``m`` seeds: from the confirmation's base moved by ``HOLDOUT_SEED_OFFSET``, skipping
+    every seed the iteration ran at. An alias refit takes its leader's base, as its confirmation does, so that
+    where both polished their held-out batteries share packings too (common random numbers)."""
+    s = ctx.settings
+    refit = automatic.refit_plan(ctx.iterations, it) if s.automatic else None
+    seed = (s.seed + CONFIRMATION_SEED_STRIDE * (refit["leader_iteration"] if refit else it.number)
+            + HOLDOUT_SEED_OFFSET) % SEED_MAX
+    taken = {r.seed for r in it.runs}
+    out = []
+    while len(out) < m:
+        while seed in taken:
+            seed = (seed + 1) % SEED_MAX
+        taken.add(seed)
+        out.append(seed)
+    return out
+
+
 def _polish_runs(state: dict, points) -> list[NewRun]:
     out = []
     for k, (natural, coded) in enumerate(points):
-        for j, seed in enumerate(polish.seeds_of(state)):
+        for j, seed in enumerate(polish.round_seeds(state)):
             order = polish.std_order(state, k, j)
             out.append(NewRun(RunKind.POLISH, order, order, natural, coded, seed))
     return out
@@ -260,7 +286,8 @@ def _report(ctx: Context, it) -> Transition:
     state = (it.optimum or {}).get("polish")
     measured = [(natural, records(runs)) for natural, runs in polish.measured_points(state, it.runs)]
     assessment = analysis.assess(s, it.design["doe"], design_runs, ctx.targets, it.optimum,
-                                 records(confirmations), seeds, measured)
+                                 records(confirmations), seeds, measured,
+                                 polish.seeds_of(state) if measured else None)
     polished = polish.summary((it.optimum or {}).get("polish"))
     assessment["polished"] = bool(polished and polished["steps"] > 0)
     report = build_report(s, it.models, it.optimum, confirmations, ctx.targets, assessment,

@@ -121,10 +121,12 @@ class StopReason(Word):
 
 
 class PolishStage(Word):
-    """Where a polishing round is: the Jacobian's points, a Gauss-Newton step's trial lengths, or done."""
+    """Where a polishing round is: the Jacobian's points, a Gauss-Newton step's trial lengths, the held-out
+    confirmation at the point the steps chose (``calibration.polish.hold_out``), or done."""
 
     JACOBIAN = "jacobian"
     STEP = "step"
+    HOLDOUT = "holdout"
     DONE = "done"
 
 

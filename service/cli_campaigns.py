@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 from calibration.awaiting import awaited
 from calibration.evaluator_registry import names as evaluator_names
-from calibration.vocabulary import Phase
+from calibration.vocabulary import Phase, PolishStage
 from service import cli_export
 from service.cli_http import CliError, bar, watch, watch_options
 from service.cli_http import call as _call
@@ -160,7 +160,9 @@ def _phase_progress(args, c: dict) -> str:
     failed = sum(r.status in (RunStatus.FAILED, RunStatus.CANCELLED) for r in runs)
     label = PHASE_RUNS[Phase(phase)]
     if phase == Phase.POLISH:
-        label += f" {((optimum or {}).get('polish') or {}).get('round', '')}".rstrip()
+        state = (optimum or {}).get("polish") or {}
+        label = ("held-out confirmation" if state.get("stage") == PolishStage.HOLDOUT
+                 else f"{label} {state.get('round', '')}".rstrip())
     return f"phase {phase}: {label} {bar(done, len(runs))}" + (f", {failed} failed" if failed else "")
 
 
@@ -383,6 +385,9 @@ def campaign_report(args) -> int:
             f"{polished['steps']} Gauss-Newton step(s), {polished['batteries']} batteries, "
             f"chi2 {_fmt(polished['chi2_start'])} -> {_fmt(polished['chi2'])}, Jacobian from the "
             f"{polished.get('jacobian') or 'batteries'}" + (f"; why: {polished['why']}" if polished.get("why") else "")
+            + (f"\n  held out: the chosen point again at {len(polished['holdout_seeds'])} fresh seed(s), chi2 "
+               f"{_fmt(polished.get('holdout_chi2'))}; the report reads these batteries"
+               if polished.get("holdout_seeds") else "")
             + "".join(f"\n  {_anchor(a)}" for a in polished.get("anchors") or [])))
     return _emit(args, r, text)
 

@@ -106,8 +106,10 @@ def test_the_report_s_intervals_hold_every_polished_point_the_batteries_do_not_r
     state = added.optimum["polish"]
     intervals = added.report["intervals"]
     measured = intervals["measured_points"]
-    polish_runs = [r for r in added.runs if r.kind == "polish"]
-    # the surfaces' optimum's confirmation and every polishing point, each at all the seeds
+    polish_runs = [r for r in added.runs if r.kind == "polish" and r.seed in state["seeds"]]
+    # the surfaces' optimum's confirmation and every polishing point, each at all the seeds; not the held-out
+    # round, the chosen point again at seeds of its own
+    assert state["holdout_seeds"] and not set(state["holdout_seeds"]) & set(state["seeds"])
     assert measured["count"] == 1 + len(polish_runs) // settings.confirmation_seeds
     assert measured["chi2_best"] == pytest.approx(state["chi2"])
     assert measured["threshold"] == pytest.approx(intervals["scale"] * intervals["quantile"] ** 2)

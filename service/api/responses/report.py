@@ -139,6 +139,13 @@ class Polish(Out):
     jacobian: str | None = Field(None, description="where the first Jacobian came from: 'surfaces' or 'batteries'")
     anchors: list[PolishAnchor] | None = Field(None, description="the surfaces' optimum with a missed measured "
                                                "parameter held at its measured value, run on the batteries")
+    seeds: list[int] | None = Field(None, description="the seeds every polishing point ran at (the confirmation's)")
+    holdout_seeds: list[int] | None = Field(None, description="after a step: the fresh seeds the chosen point ran at "
+                                            "once more (polish_holdout); the report and the diagnosis read these "
+                                            "batteries, on which no trial was chosen")
+    holdout_chi2: float | None = Field(None, description="chi2 (priors included) of the held-out batteries: beside "
+                                       "chi2, the steps' best on their own seeds, it shows how much of the polish's "
+                                       "gain was the noise of the batteries it chose on")
 
 
 class Adequacy(Out):

@@ -46,6 +46,9 @@ function polishLines(polish) {
     h("p", { className: "muted" }, h("b", {}, "Polishing on the batteries: "),
       `${polish.steps} Gauss-Newton step(s), ${polish.batteries} batteries, χ² ${fmt(polish.chi2_start, 3)} → ${fmt(polish.chi2, 3)}, `
       + `Jacobian from the ${polish.jacobian || "batteries"}` + (polish.why ? `; why: ${humanText(polish.why)}` : "")),
+    (polish.holdout_seeds || []).length ? h("p", { className: "muted holdout" }, h("b", {}, "Held out: "),
+      `the chosen point again at ${polish.holdout_seeds.length} fresh seed(s), χ² ${fmt(polish.holdout_chi2, 3)}; `
+      + "the report below reads these batteries, on which no step was chosen") : "",
     (polish.anchors || []).length ? h("ul", { className: "anchors muted" }, polish.anchors.map((a) => h("li", {
       className: a.taken ? "taken" : "" }, `held at the measured ${held(a)}: `
       + (a.chi2 === null || a.chi2 === undefined ? "its batteries have not run yet" : `χ² ${fmt(a.chi2, 3)}, `)
