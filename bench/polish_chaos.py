@@ -10,6 +10,12 @@ and its scatter scaled as on the engine. For every iteration that polished, the 
 the true misfit (chi2 with the priors, as the polish judges it) at the surfaces' optimum and at the polished
 point. Printed: how often the polish raised the true misfit, and the median ratio final / start.
 
+Since session 41 a polish that took a step runs the chosen point again at fresh seeds (``polish_holdout``), and
+the report reads those. Also printed, over the iterations with a step: the mean excess of a misfit on batteries
+over the true misfit at the chosen point, on the seeds the steps chose on and on the held-out ones. Both batteries
+carry the simulator's scatter, so both excesses would be the same positive number if the choice took nothing from
+the noise; the chosen seeds' excess falling short of the held-out's is the choice's flattery (a winner's curse).
+
     python3 bench/polish_chaos.py --cases 40 --noise-scale 5
 """
 from __future__ import annotations
@@ -57,6 +63,7 @@ def polished(case_seed: int, kind: str, noise_scale: float, chaotic: bool) -> li
         start = it.optimum.get("surrogate_parameters") or state["theta"]
         rows.append({"case": case_seed, "iteration": it.number, "steps": state["steps"],
                      "batteries": state["batteries"], "noisy": (state["chi2_start"], state["chi2"]),
+                     "holdout": state.get("holdout_chi2"),
                      "true": (true_chi2(evaluator, settings, loop.targets, it, start, seeds),
                               true_chi2(evaluator, settings, loop.targets, it, state["theta"], seeds))})
     return rows
@@ -78,10 +85,19 @@ def main(argv: list[str] | None = None) -> int:
             rows.append(row)
             (a, b), (n0, n1) = row["true"], row["noisy"]
             print(f"case {row['case']:3d} iteration {row['iteration']}: {row['steps']} step(s), {row['batteries']} "
-                  f"batteries; chi2 on the batteries {n0:.1f} -> {n1:.1f}, true {a:.1f} -> {b:.1f}", flush=True)
+                  f"batteries; chi2 on the batteries {n0:.1f} -> {n1:.1f}, true {a:.1f} -> {b:.1f}"
+                  + (f", held out {row['holdout']:.1f}" if row["holdout"] is not None else ""), flush=True)
     stepped = [r for r in rows if r["steps"]]
     raised = sum(r["true"][1] > r["true"][0] * (1 + 1e-9) for r in stepped)
     ratio = statistics.median(r["true"][1] / r["true"][0] for r in stepped) if stepped else float("nan")
+    held = [r for r in stepped if r["holdout"] is not None]
+    if held:
+        chosen = [r["noisy"][1] - r["true"][1] for r in held]
+        fresh = [r["holdout"] - r["true"][1] for r in held]
+        diff = [f - c for f, c in zip(fresh, chosen)]
+        print(f"excess over the true misfit at the chosen point, {len(held)} iterations: on the seeds chosen on "
+              f"{statistics.mean(chosen):.2f}, held out {statistics.mean(fresh):.2f}, held out - chosen "
+              f"{statistics.mean(diff):.2f} +- {statistics.stdev(diff) / len(diff) ** 0.5 if len(diff) > 1 else float('nan'):.2f}")
     print(f"polished_iterations={len(rows)} stepped={len(stepped)} true_chi2_raised={raised} "
           f"median_true_ratio={ratio:.3f} batteries={sum(r['batteries'] for r in rows)} "
           f"chaotic={not args.paired} noise_scale={args.noise_scale:g} wall_s={time.time() - t0:.0f}")

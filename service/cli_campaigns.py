@@ -115,6 +115,8 @@ def campaign_create(args) -> int:
         body["reuse"] = False
     if args.all_seeds:
         body["adaptive_replicates"] = False
+    if args.no_holdout:
+        body["polish_holdout"] = False
     if args.factor:
         body["factors"] = [_factor(f) for f in args.factor]
     if args.centre_runs is not None or args.generators:
@@ -483,6 +485,10 @@ def register(subparsers) -> None:
     create.add_argument("--polish-jacobian", choices=["surfaces", "batteries"],
                         help="the polishing's first Jacobian: the surfaces' slopes (default) or forward differences "
                              "on the batteries (one point per factor and seed)")
+    create.add_argument("--no-holdout", action="store_true",
+                        help="after a polish that took a step, let the report read the polish's own batteries "
+                             "instead of the chosen point run again at fresh seeds (which costs one battery per "
+                             "confirmation seed: the steps chose on their batteries, which then flatter the fit)")
     create.add_argument("--no-reuse", action="store_true",
                         help="run every design point of a later iteration, even where an earlier one ran it")
     create.add_argument("--all-seeds", action="store_true",

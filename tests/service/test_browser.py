@@ -704,8 +704,8 @@ def test_a_polish_for_a_missed_prior_says_why_and_lists_its_anchors(page, servic
     polish = hertz_polish()
     assert polish["jacobian"] == "batteries" and len(polish["anchors"]) == 2
     open_report_serving(page, service, "polished", polish=polish)
-    expect_text(page, "section.verdict .polish p", "Polishing on the batteries: ")
-    line = page.locator("section.verdict .polish p").inner_text()
+    expect_text(page, "section.verdict .polish p.muted:not(.holdout)", "Polishing on the batteries: ")
+    line = page.locator("section.verdict .polish p.muted:not(.holdout)").inner_text()
     assert f"{polish['steps']} Gauss-Newton step(s), {polish['batteries']} batteries" in line
     assert "Jacobian from the batteries" in line and f"why: {polish['why']}" in line
 
@@ -724,6 +724,11 @@ def test_a_polish_for_a_missed_prior_says_why_and_lists_its_anchors(page, servic
             assert f"; one step from it: χ² {three(anchor['step_chi2'])}, " in text, text
             assert ("the polish went on from there" in text) == bool(anchor.get("step_taken")), text
     assert any(a.get("step_chi2") is not None for a in polish["anchors"])
+    # session 41: the polish took steps, so the chosen point ran again at fresh seeds and the report reads those
+    assert len(polish["holdout_seeds"]) == 2 and polish["holdout_seeds"] != polish["seeds"]
+    held = page.locator("section.verdict .polish p.holdout").inner_text()
+    assert held.startswith(f"Held out: the chosen point again at 2 fresh seed(s), χ² {three(polish['holdout_chi2'])}; "), held
+    assert "the report reads these batteries, on which no step was chosen" in held
     section_shot(page, shots, "Verdict", "campaign-polish-anchors")
 
 

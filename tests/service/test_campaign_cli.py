@@ -86,9 +86,11 @@ def test_campaign_and_schedule_commands(server, capsys, tmp_path):
     assert campaign["config"]["confirmation_seeds"] == 3 and campaign["config"]["polish_steps"] == 0
     code, out, _ = run(capsys, "campaign", "create", "--url", url, "--name", "cli polish", "--material", "1",
                        "--evaluator", "analytic", "--fidelity", "thesis", "--factor", "friction_pp:0.3:1.0",
-                       "--polish-when", "always", "--polish-jacobian", "batteries", "--no-reuse", "--all-seeds", "--json")
+                       "--polish-when", "always", "--polish-jacobian", "batteries", "--no-reuse", "--all-seeds",
+                       "--no-holdout", "--json")
     config = json.loads(out)["config"]
     assert code == 0 and (config["polish_when"], config["polish_jacobian"]) == ("always", "batteries")
+    assert campaign["config"]["polish_holdout"] is True and config["polish_holdout"] is False
     assert config["reuse"] is False and config["adaptive_replicates"] is False
     code, _, err = run(capsys, "campaign", "start", str(cid), "--url", url)
     assert code == 2 and "HTTP 409" in err
@@ -289,6 +291,7 @@ def test_the_report_says_why_it_polished_and_prints_each_anchor(capsys, monkeypa
     from polish_case import hertz_polish, hertz_report
 
     import service.cli_campaigns as cli
+    from service.cli_http import fmt
 
     served = {**hertz_report(), "polish": hertz_polish(), "campaign_id": 7, "iteration": 2}
     monkeypatch.setattr(cli, "_call", lambda args, method, path, **kw: served if path == "/campaigns/7/report" else None)
@@ -297,6 +300,10 @@ def test_the_report_says_why_it_polished_and_prints_each_anchor(capsys, monkeypa
     polish = served["polish"]
     head = next(line for line in out.splitlines() if line.startswith("polishing on the batteries: "))
     assert "Jacobian from the batteries" in head and head.endswith(f"why: {polish['why']}")
+    # the polish took steps: the chosen point ran again at fresh seeds, and the report reads those (session 41)
+    held = next(line for line in out.splitlines() if line.startswith("  held out: "))
+    assert held == (f"  held out: the chosen point again at {len(polish['holdout_seeds'])} fresh seed(s), chi2 "
+                    f"{fmt(polish['holdout_chi2'])}; the report reads these batteries")
     anchors = [line.strip() for line in out.splitlines() if line.startswith("  held at the measured ")]
     assert len(anchors) == len(polish["anchors"])
     for line, anchor in zip(anchors, polish["anchors"]):

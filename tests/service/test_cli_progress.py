@@ -25,6 +25,12 @@ def _create(capsys, url, *extra) -> int:
     return int(out)  # -q: the id alone
 
 
+def _polish_summary(capsys, url, cid) -> dict:
+    code, out, err = run(capsys, "campaign", "report", str(cid), "--url", url, "--json")
+    assert code == 0, err
+    return json.loads(out).get("polish") or {}
+
+
 def _status(capsys, url, cid) -> str:
     code, out, err = run(capsys, "campaign", "status", str(cid), "--url", url)
     assert code == 0, err
@@ -53,13 +59,19 @@ def test_status_shows_each_phase_s_own_runs_and_watch_ends_with_the_campaign(ser
         if "phase polish: polish round " in out:  # a round's own runs, the round numbered
             seen.add("polish")
             assert re.search(r"polish round \d+ \[[#.]{24}\] 0/\d+", out), out
+        if "phase polish: held-out confirmation [" in out:  # the chosen point at fresh seeds, after a step
+            seen.add("holdout")
+            assert "held-out confirmation [" + "." * 24 + "] 0/2" in out, out
         if "phase diagnosis: diagnosis batteries [" in out:
             seen.add("diagnosis")
             code, _, err = run(capsys, "campaign", "diagnose", str(cid), "--url", url)
             assert code == 2 and "not done yet (phase diagnosis)" in err
         if "completed" in out:
             break
-    assert seen == {"polish", "diagnosis"} and "completed" in out
+    # the polish took a step here (the surfaces' optimum is not the stand-in's), so the held-out round ran
+    polished = _polish_summary(capsys, url, cid)
+    assert polished["steps"] >= 1 and len(polished["holdout_seeds"]) == 2
+    assert seen == {"polish", "holdout", "diagnosis"} and "completed" in out
     code, out, _ = run(capsys, "campaign", "status", str(cid), "--url", url, "--watch", "--interval", "0.05")
     assert code == 0 and out.count("\n") == 1 and "completed, iteration 1, phase done" in out
 

@@ -46,15 +46,16 @@ function polishLines(polish) {
     h("p", { className: "muted" }, h("b", {}, "Polishing on the batteries: "),
       `${polish.steps} Gauss-Newton step(s), ${polish.batteries} batteries, χ² ${fmt(polish.chi2_start, 3)} → ${fmt(polish.chi2, 3)}, `
       + `Jacobian from the ${polish.jacobian || "batteries"}` + (polish.why ? `; why: ${humanText(polish.why)}` : "")),
-    (polish.holdout_seeds || []).length ? h("p", { className: "muted holdout" }, h("b", {}, "Held out: "),
-      `the chosen point again at ${polish.holdout_seeds.length} fresh seed(s), χ² ${fmt(polish.holdout_chi2, 3)}; `
-      + "the report below reads these batteries, on which no step was chosen") : "",
     (polish.anchors || []).length ? h("ul", { className: "anchors muted" }, polish.anchors.map((a) => h("li", {
       className: a.taken ? "taken" : "" }, `held at the measured ${held(a)}: `
       + (a.chi2 === null || a.chi2 === undefined ? "its batteries have not run yet" : `χ² ${fmt(a.chi2, 3)}, `)
       + (a.chi2 === null || a.chi2 === undefined ? "" : a.taken ? "the batteries preferred it: the steps started here" : "not better than the optimum")
       + (a.step_chi2 === null || a.step_chi2 === undefined ? "" : `; one step from it: χ² ${fmt(a.step_chi2, 3)}, `
-        + (a.step_taken ? "the best trial: the polish went on from there" : "not taken"))))) : "");
+        + (a.step_taken ? "the best trial: the polish went on from there" : "not taken"))))) : "",
+    // after a step, the chosen point at fresh seeds: the verdict above reads these batteries (calibration.polish.hold_out)
+    (polish.holdout_seeds || []).length ? h("p", { className: "muted holdout" }, h("b", {}, "Held out: "),
+      `the chosen point again at ${polish.holdout_seeds.length} fresh seed(s), χ² ${fmt(polish.holdout_chi2, 3)}; `
+      + "the report reads these batteries, on which no step was chosen") : "");
 }
 
 // Parity per test. Quantities of one test have different units, so each is divided by its own
