@@ -42,6 +42,7 @@ their summed run time and the wall time; then the pass criteria of the issue and
     python3 bench/diagnosis_dem.py --reduced --scenarios rolling  # minutes: CI's DEM scenario
     python3 bench/diagnosis_dem.py --data-dir ~/tierb --scenarios rolling  # resumable across stops
     python3 bench/diagnosis_dem.py --confirmation-seeds 3 --polish-steps 0   # the session-11 DEM table
+    python3 bench/diagnosis_dem.py --data-dir ~/tierb --scenarios hertz_strong --polish-holdout on  # a new campaign
     python3 bench/diagnosis_dem.py --scenarios null --json rows.json   # add the null's row to rows.json
     python3 bench/diagnosis_dem.py --from-json rows.json           # reprint the rows and criteria
     python3 bench/diagnosis_dem.py --data-dir ~/tierb --truth-floor-for rows.json  # the truth's own RMS per row
@@ -451,7 +452,7 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
              polish_steps: int | None = None, confirmation_seeds: int | None = None,
              diagnose_always: bool = False, max_iterations: int = MAX_ITERATIONS,
              polish_when: str | None = None, more_iterations: int = 0,
-             retry_failed: bool = False) -> tuple[int, dict]:
+             retry_failed: bool = False, polish_holdout: bool | None = None) -> tuple[int, dict]:
     """The scenario's automatic campaign and the body it was created with: an existing one calibrating
     exactly this (same measurements, priors, design and options; its name carries their digest) is
     reused, so a rerun resumes it."""
@@ -476,6 +477,8 @@ def campaign(svc: Service, sc: Scenario, measurements: list[dict], evaluator: st
         body["polish_steps"] = polish_steps
     if polish_when is not None:
         body["polish_when"] = polish_when
+    if polish_holdout is not None:  # named only when asked: campaigns stored before the setting keep their digest
+        body["polish_holdout"] = polish_holdout
     if confirmation_seeds is not None:
         body["confirmation_seeds"] = confirmation_seeds
     if diagnose_always:
@@ -1019,6 +1022,10 @@ def main(argv=None) -> int:
     ap.add_argument("--polish-when", choices=["always", "surrogate_misses"], default=None,
                     help="polish every iteration, or only one whose confirmation the response surfaces did not "
                          "predict (the service's default; typically an added effect's iteration)")
+    ap.add_argument("--polish-holdout", choices=["on", "off"], default=None,
+                    help="after a polish that took a step, the report reads the chosen point at fresh seeds ('on', "
+                         "the service's default since session 41) or the polish's own batteries ('off'); naming it "
+                         "makes a campaign of its own beside one stored before the setting existed")
     ap.add_argument("--confirmation-seeds", type=int, default=None,
                     help="batteries at each optimum, one per seed (default: the service's, 2); the lack of fit "
                          "compares their mean, so the simulator's scatter counts divided by this number, and "
@@ -1131,7 +1138,8 @@ def main(argv=None) -> int:
             cid, body = campaign(svc, sc, measurements, args.evaluator, args.seed, args.density_bias, args.reduced,
                            args.polish_steps, args.confirmation_seeds or sc.confirmation_seeds, args.diagnose_always,
                            args.max_iterations,
-                           args.polish_when, args.more_iterations, args.retry_failed)
+                           args.polish_when, args.more_iterations, args.retry_failed,
+                           None if args.polish_holdout is None else args.polish_holdout == "on")
             final = _wait_campaign(svc, cid, poll_s)
             if final["status"] != "completed":
                 print(f"{name}: campaign {cid} {final['status']}: {final.get('error')}", flush=True)
@@ -1148,6 +1156,8 @@ def main(argv=None) -> int:
             o["confirmation_seeds"], o["polish_steps"] = args.confirmation_seeds or sc.confirmation_seeds, args.polish_steps
             o["measuring_packings"] = sc.measuring_packings
             o["diagnose_always"], o["polish_when"] = args.diagnose_always, args.polish_when
+            if args.polish_holdout is not None:
+                o["polish_holdout"] = args.polish_holdout == "on"
             # the stresses the scenario measured (its own options over the command's)
             measured_options = {**options, **sc.options}
             o["cct_window_stresses_pa"] = measured_options["cct_window_stresses_pa"]
