@@ -12,9 +12,10 @@ point. Printed: how often the polish raised the true misfit, and the median rati
 
 Since session 41 a polish that took a step runs the chosen point again at fresh seeds (``polish_holdout``), and
 the report reads those. Also printed, over the iterations with a step: the mean excess of a misfit on batteries
-over the true misfit at the chosen point, on the seeds the steps chose on and on the held-out ones. Both batteries
-carry the simulator's scatter, so both excesses would be the same positive number if the choice took nothing from
-the noise; the chosen seeds' excess falling short of the held-out's is the choice's flattery (a winner's curse).
+over the true misfit at the chosen point, on the seeds the steps chose on and on the held-out ones. Both are drawn
+alike (m batteries, the simulator's sd estimated from them, so the excess may be negative: the true misfit divides
+by the measurement's variance alone), so their means would agree if the choice took nothing from the noise; the
+chosen seeds' excess falling short of the held-out's is the choice's flattery (a winner's curse).
 
     python3 bench/polish_chaos.py --cases 40 --noise-scale 5
 """
