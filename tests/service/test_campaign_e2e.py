@@ -34,23 +34,31 @@ def test_analytic_campaign_from_creation_to_report(s2):
     assert len(confirmation_seeds) == 2
     # polishing on the batteries: one Jacobian point per factor, then one trial point per round (full
     # length, then shorter only if it failed), every point at the confirmation's seeds (common random numbers)
+    # after a step, the chosen point once more at two fresh seeds (the held-out round, polish_holdout)
+    optimum_now = client.get(f"{API}/campaigns/{cid}/optimum").json()
+    state = optimum_now["polish"]
+    assert state["steps"] >= 1
+    held = set(state["holdout_seeds"])
     polish_runs = [r for r in runs if r["kind"] == "polish"]
-    assert len(polish_runs) >= 6 and (len(polish_runs) - 6) % 2 == 0
-    assert {r["seed"] for r in polish_runs} == confirmation_seeds
+    assert len(polish_runs) >= 8 and (len(polish_runs) - 6) % 2 == 0
+    assert {r["seed"] for r in polish_runs} == confirmation_seeds | held
+    assert len(held) == 2 and not held & {r["seed"] for r in own}
     points: dict[int, list[dict]] = {}
     for r in polish_runs:  # a point's runs are consecutive in std_order, one per seed
         points.setdefault((r["std_order"] - 1) // 2, []).append(r)
     for runs_of_point in points.values():
-        assert {r["seed"] for r in runs_of_point} == confirmation_seeds
+        assert {r["seed"] for r in runs_of_point} in (confirmation_seeds, held)
         assert all(r["natural"] == runs_of_point[0]["natural"] for r in runs_of_point)
-    # the report is made on the final point's batteries, one per seed, at the optimum it reports
+    # the report is made on the held-out batteries, one per seed, at the optimum it reports
     final = client.get(f"{API}/campaigns/{cid}/confirmation").json()
-    assert {r["seed"] for r in final["runs"]} == confirmation_seeds
+    assert {r["seed"] for r in final["runs"]} == held
+    assert final["parameters"] == pytest.approx(state["theta"])
+    assert optimum_now["parameters"] == pytest.approx(state["theta"])
     # the diagnosis runs a baseline at the optimum and every candidate effect at two seeds of their own:
-    # as many as the confirmation's, none of them (the signatures' noise must not be the residuals')
+    # as many as the report's, none of any battery before it (the signatures' noise must not be the residuals')
     diagnosis_runs = [r for r in runs if r["kind"] == "diagnosis"]
     diagnosis_seeds = {r["seed"] for r in diagnosis_runs}
-    assert len(diagnosis_seeds) == 2 and not diagnosis_seeds & confirmation_seeds
+    assert len(diagnosis_seeds) == 2 and not diagnosis_seeds & (confirmation_seeds | held)
     # (every candidate the thesis fidelity builds: particle shape too, its round grains elongated)
     assert len(diagnosis_runs) == 2 * (1 + sum(c.applies_to("thesis") for c in candidates().values()))
     with app.state.session_factory() as session:
@@ -75,8 +83,8 @@ def test_analytic_campaign_from_creation_to_report(s2):
         assert factor["low"] <= optimum["parameters"][factor["name"]] <= factor["high"]
     confirmation = client.get(f"{API}/campaigns/{cid}/confirmation").json()
     assert confirmation["status"] == "succeeded" and confirmation["parameters"] == optimum["parameters"]
-    # the final optimum's batteries (polished or not) are at the confirmation's seeds
-    assert {r["seed"] for r in confirmation["runs"]} == confirmation_seeds
+    # the final optimum's batteries are at the held-out seeds (the polish took a step)
+    assert {r["seed"] for r in confirmation["runs"]} == held
 
     report = client.get(f"{API}/campaigns/{cid}/report").json()
     rows = {r["quantity"]: r for r in report["targets"]}
