@@ -154,17 +154,8 @@ def _analysis(ctx: Context, it) -> Transition:
     except analysis.AnalysisError as exc:
         raise LoopFailed(f"iteration {it.number}: {exc}") from exc
     opt = result["optimum"]
-    taken = {r.seed for r in it.runs}
-    # an alias fitted in place of an effect that passed confirms at that effect's seeds: the two fits are then
-    # compared on the same packings (common random numbers), not on two draws of the simulator's scatter
-    refit = automatic.refit_plan(ctx.iterations, it) if s.automatic else None
-    seed = (s.seed + CONFIRMATION_SEED_STRIDE * (refit["leader_iteration"] if refit else it.number)) % SEED_MAX
-    runs = []
-    for k in range(s.confirmation_seeds):
-        while seed in taken:
-            seed = (seed + 1) % SEED_MAX
-        taken.add(seed)
-        runs.append(NewRun(RunKind.CONFIRMATION, k, k, opt["parameters"], opt["coded"], seed))
+    runs = [NewRun(RunKind.CONFIRMATION, k, k, opt["parameters"], opt["coded"], seed)
+            for k, seed in enumerate(_fresh_seeds(ctx, it, s.confirmation_seeds, 0))]
     return Transition(Phase.ANALYSIS, Phase.CONFIRMATION, {"models": result["models"], "optimum": opt}, runs)
 
 
@@ -210,7 +201,8 @@ def _polish(ctx: Context, it) -> Transition:
         state, points = polish.advance(s, design, modelled, state, round_runs(it, state), s.polish_steps)
         if not points and s.polish_holdout and state["steps"] > 0:
             # the steps chose among noisy batteries: the report reads the chosen point at seeds it was not chosen on
-            state, points = polish.hold_out(design, state, _holdout_seeds(ctx, it, len(polish.seeds_of(state))))
+            state, points = polish.hold_out(design, state,
+                                            _fresh_seeds(ctx, it, len(polish.seeds_of(state)), HOLDOUT_SEED_OFFSET))
         if points:
             return Transition(Phase.POLISH, Phase.POLISH, {"optimum": {**it.optimum, "polish": state}},
                               _polish_runs(state, points))
@@ -251,14 +243,16 @@ def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) 
     return None, []
 
 
-def _holdout_seeds(ctx: Context, it, m: int) -> list[int]:
-    """The held-out round's ``m`` seeds: from the confirmation's base moved by ``HOLDOUT_SEED_OFFSET``, skipping
-    every seed the iteration ran at. An alias refit takes its leader's base, as its confirmation does, so that
-    where both polished their held-out batteries share packings too (common random numbers)."""
+def _fresh_seeds(ctx: Context, it, m: int, offset: int) -> list[int]:
+    """``m`` seeds the iteration has not run at, from its base (``CONFIRMATION_SEED_STRIDE`` times its number)
+    moved by ``offset``: 0 for the confirmation, ``HOLDOUT_SEED_OFFSET`` for the held-out round. An alias fitted
+    in place of an effect that passed takes its leader's base, so the two fits are compared on the same packings
+    (common random numbers), not on two draws of the simulator's scatter; where both polished, their held-out
+    batteries share packings too."""
     s = ctx.settings
     refit = automatic.refit_plan(ctx.iterations, it) if s.automatic else None
     seed = (s.seed + CONFIRMATION_SEED_STRIDE * (refit["leader_iteration"] if refit else it.number)
-            + HOLDOUT_SEED_OFFSET) % SEED_MAX
+            + offset) % SEED_MAX
     taken = {r.seed for r in it.runs}
     out = []
     while len(out) < m:
