@@ -229,6 +229,29 @@ def residuals_at(design: Design, models: Sequence[TargetModel], theta: dict[str,
                      J, free, absorbing, np.array(surface_se, float))
 
 
+def measurement_led(res: Residuals) -> list[str]:
+    """The measured parameters (the priors' rows of ``res``) that their own measurement pins more tightly than
+    the targets do: the prior's information (its row of J squared, coded units) above the targets' marginal
+    information about the parameter, what is left of J_t^T J_t on its diagonal once the other free parameters
+    have traded against it (the Schur complement). A parameter on a valley the targets cannot resolve (two
+    frictions that trade) has little of the latter, so its measurement is the better evidence; one a target
+    fixes (particle density through a bulk density measured to a fraction of a percent) is led by that target,
+    and holding it at a coarser measurement would throw the target's evidence away."""
+    n_targets = len(res.keys)
+    info = res.J[:n_targets].T @ res.J[:n_targets]
+    out = []
+    for name, row in zip(res.prior_names, res.J[n_targets:]):
+        j = res.free.index(name)
+        others = [k for k in range(len(res.free)) if k != j]
+        marginal = info[j, j]
+        if others:
+            cross = info[j, others]
+            marginal -= float(cross @ np.linalg.pinv(info[np.ix_(others, others)]) @ cross)
+        if row[j] ** 2 > marginal and name not in out:
+            out.append(name)
+    return out
+
+
 def surface_standard_error(fit, theta: dict[str, float]) -> float:
     """The standard error of the surface's mean prediction at ``theta`` (doe's se_mean: x^T cov(beta) x), 0 when
     the surface has no residual degrees of freedom to estimate it from (a saturated fit)."""

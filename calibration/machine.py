@@ -185,7 +185,8 @@ def _polish(ctx: Context, it) -> Transition:
                 # and a local slope cannot see across a saturating response's plateau: where a measured
                 # parameter is missed, the surfaces' optimum with it (and with every measured one) held at its
                 # measured value runs too
-                anchors = analysis.anchored_points(s, design, modelled, pulled)
+                anchors = analysis.anchored_points(s, design, modelled, pulled, it.optimum, records(confirmations),
+                                                   [r.seed for r in confirmations])
             else:
                 why = f"the surfaces missed the confirmation batteries ({check.get('reason')})"
         state, points = polish.start(s, design, modelled, dict(it.optimum["parameters"]),

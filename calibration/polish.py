@@ -15,7 +15,8 @@ not. The method is cut into rounds a driver can queue and resume (``calibration.
   then lead back to their own optimum, and the forward differences are taken whatever the setting.
   Where the reason is a directly measured parameter the optimum misses, the round also runs anchors,
   points of its profile: the surfaces' optimum with that parameter held at its measured value, and with
-  every measured parameter held (``analysis.anchored_points``); the steps start at the best of them if
+  every measured parameter held that its measurement pins better than the targets do
+  (``analysis.anchored_points``); the steps start at the best of them if
   the batteries prefer it to the optimum: a local slope cannot see across a saturating response's
   plateau to the fit the measurements point at. An anchor the batteries did not prefer gets one step of its
   own in the first step's round (the slopes carried to it by Broyden's update), beside the optimum's step: the

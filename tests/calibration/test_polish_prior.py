@@ -51,18 +51,20 @@ def test_a_prior_missed_after_the_added_effect_is_polished_with_slopes_from_the_
 def test_the_anchors_hold_the_measured_parameters_and_the_steps_start_where_the_batteries_fit_best(hertz_case):
     """A local slope at 0.69 cannot see across the friction angle's plateau. Two points of the profile run
     beside the Jacobian: the surfaces' optimum with friction_pp held at its tilt test (0.52), and with every
-    measured parameter held (density at its pycnometer, both frictions at their tilt tests). The steps start
-    from the better of the two if it beats the optimum; here the first, whose batteries fit better than the
-    optimum's (the second keeps friction_pw at a tilt test 1 sd below the truth)."""
+    measured parameter held whose measurement is the better evidence for it (both frictions at their tilt tests;
+    not the density, which the fill's bulk density fixes more tightly than the pycnometer: its bulk density is
+    the particle density times a solid fraction the frictions barely move). The steps start from the better of
+    the two if it beats the optimum."""
     _, settings, result = hertz_case
     state = result.iterations[1].optimum["polish"]
     measured = {p.parameter: p.value for p in settings.priors}
     alone, together = state["anchors"]
     assert alone["held"] == {FRICTION: pytest.approx(measured[FRICTION])}
     assert alone["parameters"][FRICTION] == pytest.approx(measured[FRICTION])
-    assert together["held"] == pytest.approx(measured)
-    assert alone["taken"] and alone["chi2"] < min(state["chi2_start"], together["chi2"])
-    assert not together.get("taken")
+    assert together["held"] == pytest.approx({name: measured[name] for name in (FRICTION, "friction_pw")})
+    taken = [a for a in (alone, together) if a.get("taken")]
+    assert len(taken) == 1
+    assert taken[0]["chi2"] == min(state["chi2_start"], alone["chi2"], together["chi2"])
 
 
 def test_the_polished_optimum_meets_the_prior_and_lies_nearer_the_truth(hertz_case):
@@ -83,14 +85,14 @@ def test_an_anchor_not_taken_gets_a_step_of_its_own_beside_the_first_step(hertz_
     need not share (on DEM, hertz_strong's anchor with every measured parameter held put the density at the
     pycnometer's 2 % error against a bulk density measured to 0.4 %). Before it is given up, one Gauss-Newton step
     from it (the battery slopes carried there by Broyden's update) runs in the first step's round beside the
-    current point's step, and the best trial that lowers the misfit is taken. Here the all-held anchor, 1 sd of
-    friction_pw off the truth, is the one not taken; its step must fit its batteries better than it did."""
+    current point's step, and the best trial that lowers the misfit is taken. The anchor not taken must have had
+    its step, and the step must fit its batteries better than the anchor did."""
     _, settings, result = hertz_case
     added = result.iterations[1]
     state = added.optimum["polish"]
-    _, together = state["anchors"]
-    assert not together.get("taken")
-    assert together["step_chi2"] is not None and together["step_chi2"] < together["chi2"]
+    not_taken = [a for a in state["anchors"] if not a.get("taken")]
+    assert len(not_taken) == 1
+    assert not_taken[0]["step_chi2"] is not None and not_taken[0]["step_chi2"] < not_taken[0]["chi2"]
     seeds = settings.confirmation_seeds
     first_step_round = [r for r in added.runs if r.kind == "polish" and 1000 <= r.std_order < 2000]
     # the taken anchor's own step and the other anchor's, at every seed
