@@ -183,8 +183,8 @@ def _polish(ctx: Context, it) -> Transition:
                 # left where it was): only slopes measured on the batteries can see past it
                 jacobian = PolishJacobian.BATTERIES
                 # and a local slope cannot see across a saturating response's plateau: where a measured
-                # parameter is missed, the surfaces' optimum with it (and with every measured one) held at its
-                # measured value runs too
+                # parameter is missed, the surfaces' optimum with it (and with the measured ones its measurement
+                # knows better than the targets do) held at its measured value runs too
                 anchors = analysis.anchored_points(s, design, modelled, pulled, it.optimum, records(confirmations),
                                                    [r.seed for r in confirmations])
             else:
@@ -217,7 +217,7 @@ def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) 
     """Why an iteration whose model has an added effect misses the measurements at the surfaces' optimum
     (a target out of their reach, a parameter pinned at a bound, the confirmation's lack of fit failing,
     a directly measured parameter missed by more than 2 sd), or None; and the priors missed (the
-    localisation's ``priors_pulled`` rows) when that is the reason. Such an iteration is judged against
+    localisation's ``priors_pulled`` rows, named in the reason too) whatever the reason, for the anchors. Such an iteration is judged against
     the one it was built on, and surfaces fitted on more points than they can follow (reused batteries
     widen their prediction intervals) may pass the surfaces' check with an optimum the batteries refute:
     the effect would be judged on the surfaces' error, not its own. A prior missed is the same sign: two
@@ -232,7 +232,7 @@ def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) 
                                              [r.seed for r in confirmations])
     # a missed prior is named whatever else is wrong: its anchors are the polish's way off a biased surface's
     # plateau, and a failing lack of fit is what such a plateau leaves (tier B's hertz_strong, session 42: its
-    # lack of fit failed, p 0.013, with friction_pp 3.8 sd above its tilt test, and the polish ran no anchor)
+    # lack of fit failed, p 0.013, with friction_pp 3.9 sd above its tilt test, and the polish ran no anchor)
     pulled = (loc.conflicts.get("priors_pulled") or []) if loc is not None else []
     missed = [p["meaning"] for p in pulled]
     if any(not row.get("reachable", True) for row in it.optimum.get("reachability") or []):
