@@ -50,10 +50,13 @@ def true_chi2(evaluator: StandinEvaluator, settings, targets, it, natural: dict,
     return polish._residuals(settings, design, modelled, natural, records, seeds).chi2()
 
 
-def polished(case_seed: int, kind: str, noise_scale: float, chaotic: bool) -> list[dict]:
-    """One tier A case run through the loop: a row per iteration whose polish took its batteries."""
+def polished(case_seed: int, kind: str, noise_scale: float, chaotic: bool, polish_steps: int | None = None) -> list[dict]:
+    """One tier A case run through the loop: a row per iteration whose polish took its batteries
+    (``polish_steps``: the loop's setting, None for its default)."""
     case = make_case(case_seed, kind)
     settings = loop_settings(case, 3)
+    if polish_steps is not None:
+        settings = settings.model_copy(update={"polish_steps": polish_steps})
     evaluator = StandinEvaluator(standin_conditions(OPTIONS), noise_scale=noise_scale, chaotic=chaotic)
     loop = CalibrationLoop(case.targets, evaluator, settings)
     result = loop.run()
@@ -83,13 +86,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--kind", default="single", help="tier A's kind of case (default single)")
     ap.add_argument("--noise-scale", type=float, default=5.0, help="the stand-in's scatter x this (default 5)")
     ap.add_argument("--paired", action="store_true", help="the stand-in's own seeds, which pair every run")
+    ap.add_argument("--polish-steps", type=int, default=None,
+                    help="Gauss-Newton steps the polish may take (default: the loop's, 3; at most 6)")
     args = ap.parse_args(argv)
     if args.cases < 1 or args.noise_scale < 0:
         ap.error("--cases must be at least 1 and --noise-scale not negative")
+    if args.polish_steps is not None and not 0 <= args.polish_steps <= 6:
+        ap.error("--polish-steps must be 0-6 (the loop's own bounds)")
     t0 = time.time()
     rows = []
     for seed in range(args.cases):
-        for row in polished(seed, args.kind, args.noise_scale, not args.paired):
+        for row in polished(seed, args.kind, args.noise_scale, not args.paired, args.polish_steps):
             rows.append(row)
             (a, b), (n0, n1) = row["true"], row["noisy"]
             print(f"case {row['case']:3d} iteration {row['iteration']}: {row['steps']} step(s), {row['batteries']} "
@@ -115,7 +122,8 @@ def main(argv: list[str] | None = None) -> int:
               f"above 2 x in {sum(g > 2.0 for g in gap)}")
     print(f"polished_iterations={len(rows)} stepped={len(stepped)} true_chi2_raised={raised} "
           f"median_true_ratio={ratio:.3f} batteries={sum(r['batteries'] for r in rows)} "
-          f"chaotic={not args.paired} noise_scale={args.noise_scale:g} wall_s={time.time() - t0:.0f}")
+          f"chaotic={not args.paired} noise_scale={args.noise_scale:g} polish_steps={'default' if args.polish_steps is None else args.polish_steps} "
+          f"wall_s={time.time() - t0:.0f}")
     return 0
 
 
