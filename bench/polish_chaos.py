@@ -50,7 +50,8 @@ def true_chi2(evaluator: StandinEvaluator, settings, targets, it, natural: dict,
     return polish._residuals(settings, design, modelled, natural, records, seeds).chi2()
 
 
-def polished(case_seed: int, kind: str, noise_scale: float, chaotic: bool, polish_steps: int | None = None) -> list[dict]:
+def polished(case_seed: int, kind: str, noise_scale: float, chaotic: bool,
+             polish_steps: int | None = None) -> list[dict]:
     """One tier A case run through the loop: a row per iteration whose polish took its batteries
     (``polish_steps``: the loop's setting, None for its default)."""
     case = make_case(case_seed, kind)
@@ -120,9 +121,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"the true model's iterations with a step, {len(true_model)}: true misfit at the polished point over "
               f"the truth's own, median {statistics.median(gap):.2f}, within 1.1 x in {sum(g <= 1.1 for g in gap)}, "
               f"above 2 x in {sum(g > 2.0 for g in gap)}")
+    steps = "default" if args.polish_steps is None else args.polish_steps
     print(f"polished_iterations={len(rows)} stepped={len(stepped)} true_chi2_raised={raised} "
           f"median_true_ratio={ratio:.3f} batteries={sum(r['batteries'] for r in rows)} "
-          f"chaotic={not args.paired} noise_scale={args.noise_scale:g} polish_steps={'default' if args.polish_steps is None else args.polish_steps} "
+          f"chaotic={not args.paired} noise_scale={args.noise_scale:g} polish_steps={steps} "
           f"wall_s={time.time() - t0:.0f}")
     return 0
 
