@@ -200,7 +200,7 @@ def _polish(ctx: Context, it) -> Transition:
         state = polish.held_out(s, design, modelled, state, round_runs(it, state))
     else:
         state, points = polish.advance(s, design, modelled, state, round_runs(it, state), s.polish_steps)
-        if not points and s.polish_holdout and state["steps"] > 0:
+        if not points and s.polish_holdout and polish.moved(state):
             # the steps chose among noisy batteries: the report reads the chosen point at seeds it was not chosen on
             state, points = polish.hold_out(design, state,
                                             _fresh_seeds(ctx, it, len(polish.seeds_of(state)), HOLDOUT_SEED_OFFSET))
@@ -287,8 +287,8 @@ def _report(ctx: Context, it) -> Transition:
     assessment = analysis.assess(s, it.design["doe"], design_runs, ctx.targets, it.optimum,
                                  records(confirmations), seeds, measured,
                                  polish.seeds_of(state) if measured else None)
-    polished = polish.summary((it.optimum or {}).get("polish"))
-    assessment["polished"] = bool(polished and polished["steps"] > 0)
+    polished = polish.summary(state)
+    assessment["polished"] = polish.moved(state)
     report = build_report(s, it.models, it.optimum, confirmations, ctx.targets, assessment,
                           suspect.reach(r.responses for r in it.runs if r.kind != RunKind.DIAGNOSIS))
     report["polish"] = polished

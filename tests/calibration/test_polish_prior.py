@@ -121,3 +121,19 @@ def test_the_report_s_intervals_hold_every_polished_point_the_batteries_do_not_r
     for point in inside:
         for name, row in intervals["parameters"].items():
             assert row["low"] - 1e-9 <= point[name] <= row["high"] + 1e-9, name
+
+
+def test_starting_at_an_anchor_is_not_one_of_the_steps(hertz_case):
+    """``polish_steps`` bounds the Gauss-Newton steps; the anchor the steps start from is where they start, not
+    one of them (session 43: counted as one, DEM's hertz_strong stopped with a step towards the tilt test still to
+    take). With one step allowed and an anchor taken, the round after the Jacobian's is that one step, and nothing
+    follows it but the held-out round."""
+    case, settings, _ = hertz_case
+    one = settings.model_copy(update={"polish_steps": 1})
+    result = CalibrationLoop(case.targets, StandinEvaluator(standin_conditions(OPTIONS)), one).run()
+    state = result.iterations[1].optimum["polish"]
+    assert any(a.get("taken") for a in state["anchors"])
+    rounds = sorted({r.std_order // 1000 for r in result.iterations[1].runs if r.kind == "polish"})
+    # Jacobian, then the step's trials at shrinking lengths until one lowers the misfit, then the held-out round
+    assert rounds[0] == 0 and rounds[-1] == state["holdout_round"] and len(rounds) >= 3
+    assert state["steps"] <= 1 and rounds[-1] - 1 <= 3
