@@ -25,9 +25,9 @@ not. The method is cut into rounds a driver can queue and resume (``calibration.
 * rounds 1..: the bounded Gauss-Newton step minimising |r + J du| in the box, tried at full length,
   then (only if that did not lower the batteries' misfit) at half and at quarter length, one round
   each; the first that lowers it is taken and J is updated by Broyden's rule; ``polish_steps`` steps
-  taken (starting at an anchor is not one), no improvement at quarter length, or a step below 1e-3 ends it. One point at a time: the
-  trials used to run side by side, three points per step whether the full step worked or not, and the
-  m seeds of one point already keep m workers busy.
+  taken (starting at an anchor is not one), no improvement at quarter length, or a step below 1e-3
+  ends it. One point at a time: the trials used to run side by side, three points per step whether
+  the full step worked or not, and the m seeds of one point already keep m workers busy.
 
 * the held-out round (``polish_holdout``, after a polish that took a step): the chosen point once more, at
   fresh seeds no trial was judged on (``hold_out``, ``held_out``). The steps keep whichever trial's batteries
@@ -263,8 +263,9 @@ def _anchor_steps(design, at_optimum: dict, measured: list) -> list[tuple[int, t
 def _take(design, state: dict, runs: list, res_k, step: bool = True) -> dict:
     """The state moved to the point ``runs`` ran at (their residuals ``res_k``), J updated along the move;
     ``step`` counts it among the Gauss-Newton steps (``polish_steps`` bounds those). Starting at an anchor is no
-    step: counted as one, it cost hertz_strong on DEM (session 42) one of its three steps, and the polish
-    stopped with a step of -0.17 coded in friction_pp, towards the measured value, still to take."""
+    step: counted as one, it cost hertz_strong on DEM (session 42) one of its three steps, and the polish stopped
+    with its misfit still falling (chi2 24.9 at the anchor, 22.0, 15.9); the third step (session 43) reached 13.4,
+    and at 24 seeds the fit's RMS came to 1.31 x the truth's from 2.35 x at 16."""
     natural = runs[0].natural
     du = np.array([float(design.factor(n).to_coded(natural[n]) - design.factor(n).to_coded(state["theta"][n]))
                    for n in state["free"]])

@@ -125,8 +125,8 @@ def test_the_report_s_intervals_hold_every_polished_point_the_batteries_do_not_r
 
 def test_starting_at_an_anchor_is_not_one_of_the_steps(hertz_case):
     """``polish_steps`` bounds the Gauss-Newton steps; the anchor the steps start from is where they start, not
-    one of them (session 43: counted as one, DEM's hertz_strong stopped with a step towards the tilt test still to
-    take). With one step allowed and an anchor taken, the round after the Jacobian's is that one step, and nothing
+    one of them (session 43: counted as one, DEM's hertz_strong stopped after two steps with its misfit still
+    falling). With one step allowed and an anchor taken, the round after the Jacobian's is that one step, and nothing
     follows it but the held-out round."""
     case, settings, _ = hertz_case
     one = settings.model_copy(update={"polish_steps": 1})

@@ -128,7 +128,7 @@ class PolishAnchor(Out):
 class Polish(Out):
     """Gauss-Newton steps on the batteries after the surfaces' optimum (calibration.polish.summary)."""
 
-    steps: int
+    steps: int = Field(description="Gauss-Newton steps taken; starting at an anchor (``anchors``, ``taken``) is not one")
     batteries: int
     chi2_start: float | None = None
     chi2: float | None = None
