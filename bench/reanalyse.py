@@ -67,13 +67,15 @@ def load(url: str, campaign_id: int, number: int):
 
 
 def stored_iteration(url: str, campaign_id: int, number: int):
-    """The iteration as the loop's phases read it: its runs (every kind, with ids), optimum and report."""
+    """The iteration as the loop's phases read it: its runs (every kind, with ids and parameters), optimum and
+    report."""
     with create_engine(url).connect() as db:
         it = db.execute(text("select id, optimum, report from campaign_iterations where campaign_id = :c and "
                              "number = :n"), {"c": campaign_id, "n": number}).first()
-        runs = [types.SimpleNamespace(id=r[0], kind=r[1], std_order=r[2], seed=r[3], responses=_json(r[4]))
-                for r in db.execute(text("select id, kind, std_order, seed, responses from campaign_runs where "
-                                         "iteration_id = :i order by id"), {"i": it[0]})]
+        runs = [types.SimpleNamespace(id=r[0], kind=r[1], std_order=r[2], seed=r[3], responses=_json(r[4]),
+                                      natural=_json(r[5]))
+                for r in db.execute(text("select id, kind, std_order, seed, responses, natural from campaign_runs "
+                                         "where iteration_id = :i order by id"), {"i": it[0]})]
     return types.SimpleNamespace(number=number, runs=runs, optimum=_json(it[1]), report=_json(it[2]) or {})
 
 
