@@ -30,10 +30,14 @@ from calibration import analysis, polish  # noqa: E402
 from calibration import parameters as factor_paths  # noqa: E402
 
 
-def _line(label: str, natural: dict, res, n_targets: int) -> str:
-    targets = float(res.r[:n_targets] @ res.r[:n_targets])
+def _targets_chi2(res) -> float:
+    return float(res.r_targets @ res.r_targets)
+
+
+def _line(label: str, natural: dict, res) -> str:
     values = " ".join(f"{name.split('.')[-1]} {value:.4g}" for name, value in natural.items())
-    return f"{label:8s} chi2 {res.chi2():7.2f} (targets {targets:6.2f}, priors {res.chi2() - targets:6.2f})  {values}"
+    return (f"{label:8s} chi2 {res.chi2():7.2f} (targets {_targets_chi2(res):6.2f}, priors "
+            f"{float(res.prior_r @ res.prior_r):6.2f})  {values}")
 
 
 def main() -> int:
@@ -43,6 +47,8 @@ def main() -> int:
     ap.add_argument("--scenario", required=True, choices=sorted(dd.SCENARIOS))
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args()
+    if not Path(args.rows).is_file() or not (Path(args.data_dir) / "demcal.db").is_file():
+        raise SystemExit(f"no {args.rows}, or no demcal.db in {args.data_dir}")
     rows = {o["scenario"]: o for o in json.loads(Path(args.rows).read_text())}
     if args.scenario not in rows:
         raise SystemExit(f"{args.rows} has no row for {args.scenario}")
@@ -54,7 +60,8 @@ def main() -> int:
     if not state or "skipped" in state or "seeds" not in state:
         raise SystemExit(f"campaign {cid}'s iteration {number} did not polish")
     seeds = polish.seeds_of(state)
-    options = {**dd.OPTIONS, "cct_window_stresses_pa": row.get("cct_window_stresses_pa") or dd.OPTIONS["cct_window_stresses_pa"]}
+    options = {**dd.OPTIONS,
+               "cct_window_stresses_pa": row.get("cct_window_stresses_pa") or dd.OPTIONS["cct_window_stresses_pa"]}
     svc = dd.Service(None, args.workers, args.data_dir)
     try:
         ids = dd.truth_jobs(svc, sc, seeds, row.get("evaluator") or "dem", options, row.get("form") == "reduced")
@@ -63,21 +70,21 @@ def main() -> int:
         svc.close()
     design, models = analysis.fit(design_dict["doe"], design_runs, targets)
     modelled = [m for m in models if m.fit is not None]
-    n_t = state["n_targets"]
     truth = {name: float(factor_paths.read(sc.parameters(), name)) for name in state["free"]}
     res_truth = polish._residuals(settings, design, modelled, truth, [list(r.values()) for r in truth_runs], seeds)
     print(f"{args.scenario}, campaign {cid} iteration {number}: the polish's objective at its {len(seeds)} seeds")
-    print(_line("truth", truth, res_truth, n_t))
+    print(_line("truth", truth, res_truth))
     chosen = None
     it = ra.stored_iteration(url, cid, number)
     for k, (natural, group) in enumerate(polish.measured_points(state, it.runs)):
-        res = polish._residuals(settings, design, modelled, natural, [list((g.responses or {}).values()) for g in group],
-                                seeds)
-        is_chosen = all(abs(natural[n] - state["theta"][n]) <= 1e-9 * max(1.0, abs(state["theta"][n])) for n in truth)
+        records = [list((g.responses or {}).values()) for g in group]
+        res = polish._residuals(settings, design, modelled, natural, records, seeds)
+        is_chosen = all(abs(natural[n] - state["theta"][n]) <= 1e-9 * max(1.0, abs(state["theta"][n]))
+                        for n in state["free"])
         chosen = res.chi2() if is_chosen else chosen
-        print(_line("chosen" if is_chosen else ("optimum" if k == 0 else f"point {k}"), natural, res, n_t))
+        print(_line("chosen" if is_chosen else ("optimum" if k == 0 else f"point {k}"), natural, res))
     print(f"truth_chi2={res_truth.chi2():.2f} chosen_chi2={chosen if chosen is None else round(chosen, 2)} "
-          f"truth_targets_chi2={float(res_truth.r[:n_t] @ res_truth.r[:n_t]):.2f} seeds={len(seeds)}")
+          f"truth_targets_chi2={_targets_chi2(res_truth):.2f} seeds={len(seeds)}")
     return 0
 
 

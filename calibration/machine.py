@@ -217,8 +217,8 @@ def _added_effect_misfits(s: LoopSettings, it, design, modelled, confirmations) 
     """Why an iteration whose model has an added effect misses the measurements at the surfaces' optimum
     (a target out of their reach, a parameter pinned at a bound, the confirmation's lack of fit failing,
     a directly measured parameter missed by more than 2 sd), or None; and the priors missed (the
-    localisation's ``priors_pulled`` rows, named in the reason too) whatever the reason, for the anchors. Such an iteration is judged against
-    the one it was built on, and surfaces fitted on more points than they can follow (reused batteries
+    localisation's ``priors_pulled`` rows, named in the reason too) whatever the reason, for the anchors.
+    Such an iteration is judged against the one it was built on, and surfaces fitted on more points than they can follow (reused batteries
     widen their prediction intervals) may pass the surfaces' check with an optimum the batteries refute:
     the effect would be judged on the surfaces' error, not its own. A prior missed is the same sign: two
     level surfaces over a wide box are biased for saturating responses (a friction angle against mu_pp),
